@@ -1,0 +1,73 @@
+//! The camera: what turns lengths on the sensor and angles in the scene into
+//! pixels.
+
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::psf::check_range;
+
+/// The camera that recorded (or renders) the image. Every field is optional
+/// in a config file; each is needed only by what uses it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// Width of the sensor (or film) in mm; the image width spans it.
+    pub sensor_width_mm: Option<f64>,
+    /// Focal length in mm: turns distances on the sensor into angles.
+    pub focal_length_mm: Option<f64>,
+    /// f-number N (focal length / pupil diameter), for diffraction.
+    pub f_number: Option<f64>,
+}
+
+impl Camera {
+    /// Checks every given field: positive and finite, f-number at least 0.5
+    /// (the limit of a lens in air).
+    pub fn validate(&self) -> Result<()> {
+        let positive = "a finite number above 0";
+        if let Some(v) = self.sensor_width_mm {
+            check_range("camera", "sensor_width_mm", v, v > 0.0, positive)?;
+        }
+        if let Some(v) = self.focal_length_mm {
+            check_range("camera", "focal_length_mm", v, v > 0.0, positive)?;
+        }
+        if let Some(v) = self.f_number {
+            check_range(
+                "camera",
+                "f_number",
+                v,
+                v >= 0.5,
+                "a finite number of at least 0.5",
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Pixel pitch in mm for an image `image_width_px` wide, if the sensor
+    /// width is known.
+    pub fn pixel_pitch_mm(&self, image_width_px: usize) -> Option<f64> {
+        self.sensor_width_mm.map(|w| w / image_width_px as f64)
+    }
+
+    /// Fields later set in `other` replace ours; the others stay.
+    pub fn merge(&mut self, other: &Camera) {
+        self.sensor_width_mm = other.sensor_width_mm.or(self.sensor_width_mm);
+        self.focal_length_mm = other.focal_length_mm.or(self.focal_length_mm);
+        self.f_number = other.f_number.or(self.f_number);
+    }
+
+    pub(crate) fn require_focal_length(&self, what: &str) -> Result<f64> {
+        self.focal_length_mm.ok_or_else(|| Error::NeedsCamera {
+            what: what.to_string(),
+            field: "focal_length_mm",
+            why: "angles from the optical axis come from the distance on the sensor and the focal length",
+        })
+    }
+
+    pub(crate) fn require_sensor_width(&self, what: &str) -> Result<f64> {
+        self.sensor_width_mm.ok_or_else(|| Error::NeedsCamera {
+            what: what.to_string(),
+            field: "sensor_width_mm",
+            why: "distances on the sensor come from pixels through the pixel pitch, sensor width / image width",
+        })
+    }
+}

@@ -1,0 +1,302 @@
+//! Configuration: TOML files and built-in presets, composed in order.
+//!
+//! A file may set `seed`, `threshold`, a `[camera]` table and any number of
+//! `[[effect]]` tables (see the README for the schema). Files compose: scalar
+//! settings and camera fields set by a later file replace earlier ones, and
+//! effects are appended to the optical chain.
+
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::kernel::{self, Extent, Kernel};
+use crate::psf::{check_range, Effect};
+
+/// What one config file or preset says; unset keys stay `None` so that
+/// files compose.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ConfigFile {
+    /// A one-line description (presets have one).
+    pub description: Option<String>,
+    /// Seed of the ray randomness.
+    pub seed: Option<u64>,
+    /// Luminance threshold in cd/m²: pixels at or below it are not spread.
+    pub threshold: Option<f64>,
+    /// Camera fields, if the file has a `[camera]` table.
+    pub camera: Option<Camera>,
+    /// The `[[effect]]` tables, in order.
+    pub effects: Vec<Effect>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFile {
+    description: Option<String>,
+    seed: Option<u64>,
+    threshold: Option<toml::Spanned<f64>>,
+    camera: Option<toml::Spanned<Camera>>,
+    #[serde(default)]
+    effect: Vec<toml::Spanned<toml::Table>>,
+}
+
+impl ConfigFile {
+    /// Parses and checks a config text; `source_name` (a file name, or
+    /// `preset NAME`) starts every error message, with the line and column.
+    pub fn parse(text: &str, source_name: &str) -> Result<ConfigFile> {
+        let located = |span: std::ops::Range<usize>, message: String| {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            Error::Config {
+                source_name: source_name.to_string(),
+                line,
+                column,
+                message,
+            }
+        };
+        let raw: RawFile = toml::from_str(text).map_err(|e| {
+            located(
+                e.span().unwrap_or(0..0),
+                e.message().trim().replace('\n', " "),
+            )
+        })?;
+
+        if let Some(threshold) = &raw.threshold {
+            check_range(
+                "config",
+                "threshold",
+                *threshold.get_ref(),
+                *threshold.get_ref() >= 0.0,
+                "a luminance in cd/m² of at least 0",
+            )
+            .map_err(|e| located(threshold.span(), e.to_string()))?;
+        }
+        if let Some(camera) = &raw.camera {
+            camera
+                .get_ref()
+                .validate()
+                .map_err(|e| located(camera.span(), e.to_string()))?;
+        }
+        let mut effects = Vec::with_capacity(raw.effect.len());
+        for (index, table) in raw.effect.into_iter().enumerate() {
+            let span = table.span();
+            let context = |kind: &str| format!("effect {} ({kind})", index + 1);
+            let kind = table
+                .get_ref()
+                .get("type")
+                .and_then(toml::Value::as_str)
+                .unwrap_or("without a type")
+                .to_string();
+            let effect =
+                Effect::deserialize(toml::Value::Table(table.into_inner())).map_err(|e| {
+                    let message = e.message().trim().replace('\n', " ");
+                    located(
+                        key_span(text, &span, &message),
+                        format!("{}: {message}", context(&kind)),
+                    )
+                })?;
+            effect
+                .validate()
+                .map_err(|e| located(span.clone(), format!("{}: {e}", context(effect.kind()))))?;
+            effects.push(effect);
+        }
+        Ok(ConfigFile {
+            description: raw.description,
+            seed: raw.seed,
+            threshold: raw.threshold.map(toml::Spanned::into_inner),
+            camera: raw.camera.map(toml::Spanned::into_inner),
+            effects,
+        })
+    }
+
+    /// Reads and parses a config file.
+    pub fn load(path: &Path) -> Result<ConfigFile> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        ConfigFile::parse(&text, &path.display().to_string())
+    }
+}
+
+/// Where, in the `[[effect]]` table whose header is at `header`, the key that
+/// `message` names (as serde quotes it: unknown field `radus`) is written;
+/// the header itself when the message names no key found there.
+fn key_span(text: &str, header: &std::ops::Range<usize>, message: &str) -> std::ops::Range<usize> {
+    let Some(key) = message.split('`').nth(1).filter(|k| !k.is_empty()) else {
+        return header.clone();
+    };
+    let mut offset = header.end;
+    for line in text.get(header.end..).unwrap_or("").split_inclusive('\n') {
+        let trimmed = line.trim_start();
+        if trimmed.starts_with('[') {
+            break;
+        }
+        if let Some(rest) = trimmed.strip_prefix(key) {
+            if rest.trim_start().starts_with('=') {
+                let start = offset + (line.len() - trimmed.len());
+                return start..start + key.len();
+            }
+        }
+        offset += line.len();
+    }
+    header.clone()
+}
+
+/// The composed configuration: everything needed to build a kernel and apply
+/// it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Config {
+    /// Seed of the ray randomness (default 1).
+    pub seed: u64,
+    /// Luminance threshold in cd/m² (default 0: every pixel is spread).
+    pub threshold: f64,
+    /// The camera (every field optional).
+    pub camera: Camera,
+    /// The optical chain, in order.
+    pub effects: Vec<Effect>,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            seed: 1,
+            threshold: 0.0,
+            camera: Camera::default(),
+            effects: Vec::new(),
+        }
+    }
+}
+
+impl Config {
+    /// Adds a file on top: its settings replace ours, its effects follow ours.
+    pub fn apply(&mut self, file: ConfigFile) {
+        self.seed = file.seed.unwrap_or(self.seed);
+        self.threshold = file.threshold.unwrap_or(self.threshold);
+        if let Some(camera) = &file.camera {
+            self.camera.merge(camera);
+        }
+        self.effects.extend(file.effects);
+    }
+
+    /// The kernel of the whole optical chain at `extent`.
+    pub fn kernel(&self, extent: &Extent) -> Result<Kernel> {
+        kernel::build(&self.camera, &self.effects, self.seed, extent)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::units::Length;
+
+    const SCHEMA: &str = r#"
+seed = 1
+threshold = 0.0
+
+[camera]
+sensor_width_mm = 36.0
+focal_length_mm = 50.0
+f_number = 8.0
+
+[[effect]]
+type = "bloom"
+epsilon = 0.005
+beta = 2.0
+radius = "10.4px"
+
+[[effect]]
+type = "corona"
+epsilon = 0.005
+rays = 14
+length = "15.6px"
+fadeout = 1.0
+width = "3px"
+spread = 1.0
+length_jitter = 0.25
+rotation_deg = 0.0
+
+[[effect]]
+type = "vos"
+epsilon = 0.05
+exponent = 2.0
+"#;
+
+    #[test]
+    fn parses_the_public_schema() {
+        let file = ConfigFile::parse(SCHEMA, "schema.toml").unwrap();
+        assert_eq!(file.seed, Some(1));
+        assert_eq!(file.camera.unwrap().focal_length_mm, Some(50.0));
+        let kinds: Vec<_> = file.effects.iter().map(Effect::kind).collect();
+        assert_eq!(kinds, ["bloom", "corona", "vos"]);
+        match &file.effects[0] {
+            Effect::Bloom(b) => assert_eq!(b.radius, Length::px(10.4)),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    fn error(text: &str) -> String {
+        ConfigFile::parse(text, "my.toml").unwrap_err().to_string()
+    }
+
+    #[test]
+    fn unknown_keys_list_what_is_allowed() {
+        let e = error("[[effect]]\ntype = \"bloom\"\nepsilon = 0.1\nbeta = 2.0\nradus = \"3px\"\n");
+        assert!(e.starts_with("my.toml:5:1: "), "{e}");
+        assert!(e.contains("radus") && e.contains("radius"), "{e}");
+        let e = error("sead = 3\n");
+        assert!(
+            e.contains("sead") && e.contains("seed") && e.contains("effect"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn unknown_effect_types_list_the_types() {
+        let e = error("[[effect]]\ntype = \"blom\"\nepsilon = 0.1\n");
+        assert!(e.starts_with("my.toml:"), "{e}");
+        for kind in crate::psf::EFFECT_TYPES {
+            assert!(e.contains(kind), "{e}");
+        }
+    }
+
+    #[test]
+    fn out_of_range_values_name_file_effect_and_parameter() {
+        let e =
+            error("[[effect]]\ntype = \"bloom\"\nepsilon = 0.1\nbeta = 0.5\nradius = \"3px\"\n");
+        assert!(e.starts_with("my.toml:1:"), "{e}");
+        assert!(
+            e.contains("effect 1 (bloom)") && e.contains("beta = 0.5"),
+            "{e}"
+        );
+        let e = error("threshold = -1.0\n");
+        assert!(
+            e.contains("threshold = -1") && e.contains("at least 0"),
+            "{e}"
+        );
+        let e = error("[camera]\nsensor_width_mm = 0.0\n");
+        assert!(e.contains("sensor_width_mm = 0"), "{e}");
+    }
+
+    #[test]
+    fn lengths_need_units() {
+        let e = error("[[effect]]\ntype = \"bloom\"\nepsilon = 0.1\nbeta = 2.0\nradius = 10.4\n");
+        assert!(e.contains("no unit") && e.contains("\"10.4px\""), "{e}");
+    }
+
+    #[test]
+    fn later_files_override_settings_and_append_effects() {
+        let mut config = Config::default();
+        config.apply(ConfigFile::parse(SCHEMA, "a").unwrap());
+        config.apply(
+            ConfigFile::parse(
+                "seed = 9\n[camera]\nf_number = 2.8\n[[effect]]\ntype = \"vos\"\nepsilon = 0.1\n",
+                "b",
+            )
+            .unwrap(),
+        );
+        assert_eq!(config.seed, 9);
+        assert_eq!(config.camera.f_number, Some(2.8));
+        assert_eq!(config.camera.focal_length_mm, Some(50.0));
+        assert_eq!(config.effects.len(), 4);
+    }
+}

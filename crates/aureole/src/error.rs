@@ -1,0 +1,134 @@
+//! Typed errors of the library. Every message is one line that names what was
+//! wrong (a parameter, a key, a file), the value found and what is allowed.
+
+use std::path::PathBuf;
+
+/// Everything the library can refuse or fail at.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A physical parameter outside its allowed range.
+    #[error("{effect}: {name} = {value} is not allowed: {allowed}")]
+    Parameter {
+        /// The effect (or section) the parameter belongs to, e.g. `bloom` or `camera`.
+        effect: String,
+        /// The parameter's name as written in a config file.
+        name: &'static str,
+        /// The offending value, as the user wrote it.
+        value: String,
+        /// The allowed range, in words.
+        allowed: &'static str,
+    },
+
+    /// A length string that is not a number followed by a known unit.
+    #[error("length {text:?} is not valid: {reason}; write a number followed by px, um (or µm) or mm, e.g. \"10.4px\" or \"60um\"")]
+    LengthSyntax {
+        /// What the user wrote.
+        text: String,
+        /// Why it was refused.
+        reason: &'static str,
+    },
+
+    /// A physical length (µm, mm) or an angle was asked for without the camera
+    /// data that turns it into pixels.
+    #[error("{what} needs [camera] {field}: {why}")]
+    NeedsCamera {
+        /// What asked, e.g. `bloom radius "60um"`.
+        what: String,
+        /// The missing camera key.
+        field: &'static str,
+        /// Why that key is needed.
+        why: &'static str,
+    },
+
+    /// A configuration file (or preset) that does not follow the schema.
+    #[error("{source_name}:{line}:{column}: {message}")]
+    Config {
+        /// The file name, or `preset NAME`.
+        source_name: String,
+        /// 1-based line of the offending key or value.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// What is wrong and what is allowed.
+        message: String,
+    },
+
+    /// A preset name that is not built in.
+    #[error("unknown preset {name:?}; the presets are: {available}")]
+    UnknownPreset {
+        /// The name asked for.
+        name: String,
+        /// The built-in names, comma separated.
+        available: String,
+    },
+
+    /// A kernel size that is zero or too large to allocate.
+    #[error("kernel size {width}x{height} is not allowed: {allowed}")]
+    KernelSize {
+        /// Requested width in pixels.
+        width: usize,
+        /// Requested height in pixels.
+        height: usize,
+        /// The allowed range.
+        allowed: &'static str,
+    },
+
+    /// No effect was given, so there is no PSF to build.
+    #[error(
+        "no effect to build: give at least one [[effect]] (through a preset or a config file)"
+    )]
+    NoEffect,
+
+    /// An output path whose extension names no format we write.
+    #[error("{path}: unknown output extension {extension:?}; allowed: {allowed}")]
+    OutputFormat {
+        /// The output path.
+        path: PathBuf,
+        /// The extension found (empty if none).
+        extension: String,
+        /// The allowed extensions.
+        allowed: &'static str,
+    },
+
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The underlying failure.
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// A file whose content is not what its format requires.
+    #[error("{path}: {message}")]
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, and where.
+        message: String,
+    },
+
+    /// An encoder (PNG, EXR, plot) failed while writing `path`.
+    #[error("{path}: cannot encode {format}: {message}")]
+    Encode {
+        /// The output file.
+        path: PathBuf,
+        /// The format being written.
+        format: &'static str,
+        /// The encoder's message.
+        message: String,
+    },
+}
+
+/// Result with the library's [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,34 @@
+//! Atomic writes: a temporary file in the destination's folder, renamed over
+//! the destination only once it is complete, so that an interrupted or
+//! failed run leaves no partial file.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use crate::error::{Error, Result};
+
+/// Writes `path` through `fill`, which gets a buffered writer on a temporary
+/// file; the file takes the name `path` only when `fill` succeeded.
+pub fn write_atomic<F>(path: &Path, fill: F) -> Result<()>
+where
+    F: FnOnce(&mut BufWriter<&mut File>) -> Result<()>,
+{
+    let folder = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let mut temp = tempfile::Builder::new()
+        .prefix(".aureole-")
+        .suffix(".part")
+        .tempfile_in(folder)
+        .map_err(|e| Error::io(path, e))?;
+    {
+        let mut writer = BufWriter::new(temp.as_file_mut());
+        fill(&mut writer)?;
+        writer.flush().map_err(|e| Error::io(path, e))?;
+    }
+    temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
+    temp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    Ok(())
+}

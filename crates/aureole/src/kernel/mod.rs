@@ -1,0 +1,316 @@
+//! Discrete, normalised convolution kernels from PSFs (MODEL.md §2).
+//!
+//! Each effect's f is averaged over every pixel's area (supersampled where it
+//! changes fast), normalised in discrete space and weighted by ε, with the
+//! unspread (1 − ε) at the centre: K = (1 − ε)·[centre] + ε·F/ΣF, so ΣK = 1.
+//! The effects of a chain compose by convolution.
+
+pub mod profile;
+
+use rayon::prelude::*;
+
+use crate::camera::Camera;
+use crate::convolve::fft::convolve_same;
+use crate::error::{Error, Result};
+use crate::psf::{Effect, SpreadShape};
+
+/// The most pixels a kernel may have (2²⁸: 2 GiB per f64 plane while it is
+/// built).
+pub const MAX_KERNEL_PIXELS: usize = 1 << 28;
+
+/// The size of a kernel, and the width of the image it is meant for (which
+/// sets the pixel pitch, sensor width / image width, for physical lengths).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Extent {
+    /// Kernel width in pixels; the centre is at column `width / 2`.
+    pub width: usize,
+    /// Kernel height in pixels; the centre is at row `height / 2` from the top.
+    pub height: usize,
+    /// Width in pixels of the image the kernel is for.
+    pub image_width: usize,
+}
+
+impl Extent {
+    /// A `width`×`height` kernel for an image as wide as the kernel.
+    pub fn new(width: usize, height: usize) -> Result<Extent> {
+        let refuse = |allowed| Error::KernelSize {
+            width,
+            height,
+            allowed,
+        };
+        if width == 0 || height == 0 {
+            return Err(refuse("width and height must be at least 1"));
+        }
+        if width.saturating_mul(height) > MAX_KERNEL_PIXELS {
+            return Err(refuse("at most 2^28 (268 million) pixels"));
+        }
+        Ok(Extent {
+            width,
+            height,
+            image_width: width,
+        })
+    }
+
+    /// The kernel an `image_width`×`image_height` image needs so that light
+    /// from any pixel can reach every other: (2W − 1)×(2H − 1).
+    pub fn for_image(image_width: usize, image_height: usize) -> Result<Extent> {
+        let extent = Extent::new(
+            (2 * image_width).saturating_sub(1),
+            (2 * image_height).saturating_sub(1),
+        )?;
+        Ok(extent.with_image_width(image_width))
+    }
+
+    /// The same kernel size for an image `image_width` pixels wide.
+    pub fn with_image_width(self, image_width: usize) -> Extent {
+        Extent {
+            image_width: image_width.max(1),
+            ..self
+        }
+    }
+
+    /// At most `max_width`×`max_height`, keeping the centre in the middle.
+    pub fn capped(self, max_width: usize, max_height: usize) -> Extent {
+        let cap = |n: usize, max: usize| if n > max { max.max(1) } else { n };
+        Extent {
+            width: cap(self.width, max_width),
+            height: cap(self.height, max_height),
+            ..self
+        }
+    }
+
+    fn centre(&self) -> (usize, usize) {
+        (self.width / 2, self.height / 2)
+    }
+}
+
+/// A convolution kernel: one plane per channel (one for an achromatic PSF,
+/// three, linear Rec.709 R, G, B, for a coloured one), each summing to 1.
+/// Planes are row-major, top row first; the centre is at column `width / 2`,
+/// row `height / 2`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Kernel {
+    width: usize,
+    height: usize,
+    channels: Vec<Vec<f32>>,
+}
+
+impl Kernel {
+    /// Width in pixels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Column and row (from the top) of the centre.
+    pub fn centre(&self) -> (usize, usize) {
+        (self.width / 2, self.height / 2)
+    }
+
+    /// The planes, one per channel.
+    pub fn channels(&self) -> &[Vec<f32>] {
+        &self.channels
+    }
+
+    /// Whether the kernel has a plane per colour channel.
+    pub fn is_coloured(&self) -> bool {
+        self.channels.len() > 1
+    }
+
+    /// The weight at offset (dx, dy) pixels from the centre, y up; 0 outside.
+    pub fn at(&self, channel: usize, dx: i64, dy: i64) -> f32 {
+        let (cx, cy) = self.centre();
+        let (i, j) = (cx as i64 + dx, cy as i64 - dy);
+        if i < 0 || j < 0 || i >= self.width as i64 || j >= self.height as i64 {
+            return 0.0;
+        }
+        self.channels[channel][j as usize * self.width + i as usize]
+    }
+
+    /// ΣK of one channel, in f64.
+    pub fn sum(&self, channel: usize) -> f64 {
+        self.channels[channel].iter().map(|&v| f64::from(v)).sum()
+    }
+}
+
+/// Builds the kernel of the optical chain `effects`, in order, at `extent`.
+/// `seed` drives the corona rays.
+pub fn build(camera: &Camera, effects: &[Effect], seed: u64, extent: &Extent) -> Result<Kernel> {
+    if effects.is_empty() {
+        return Err(Error::NoEffect);
+    }
+    camera.validate()?;
+    let pitch = camera.pixel_pitch_mm(extent.image_width);
+    let mut coronas = 0;
+    let mut chain: Option<Psf> = None;
+    for effect in effects {
+        let shape = effect.shape(camera, pitch, seed, coronas)?;
+        if matches!(effect, Effect::Corona(_)) {
+            coronas += 1;
+        }
+        let psf = Psf::from_shape(effect.epsilon(), shape.as_ref(), extent);
+        chain = Some(match chain {
+            None => psf,
+            Some(before) => before.then(&psf),
+        });
+    }
+    chain.map(Psf::into_kernel).ok_or(Error::NoEffect)
+}
+
+/// A PSF on the kernel grid, kept as (unspread weight at the centre) +
+/// (spread plane) per channel, so that composing never mixes the large
+/// centre weight into the round-off of the small spread values.
+struct Psf {
+    extent: Extent,
+    channels: Vec<Layer>,
+}
+
+struct Layer {
+    centre: f64,
+    spread: Vec<f64>,
+}
+
+impl Psf {
+    fn from_shape(epsilon: f64, shape: &dyn SpreadShape, extent: &Extent) -> Psf {
+        let layer = match rasterise(shape, extent) {
+            Some(f) => Layer {
+                centre: 1.0 - epsilon,
+                spread: f.into_iter().map(|v| epsilon * v).collect(),
+            },
+            // Nowhere to spread within the extent: all light stays.
+            None => Layer {
+                centre: 1.0,
+                spread: vec![0.0; extent.width * extent.height],
+            },
+        };
+        Psf {
+            extent: *extent,
+            channels: vec![layer],
+        }
+    }
+
+    /// This PSF followed by `next` in the optical chain: their convolution.
+    /// (a δ + S) ⊛ (b δ + T) = ab δ + a T + b S + S ⊛ T, where S ⊛ T keeps the
+    /// mass ΣS·ΣT within the extent, like any spread light. A plane of one
+    /// channel pairs with every channel of the other.
+    fn then(&self, next: &Psf) -> Psf {
+        let count = self.channels.len().max(next.channels.len());
+        let channels = (0..count)
+            .map(|c| {
+                let a = &self.channels[c.min(self.channels.len() - 1)];
+                let b = &next.channels[c.min(next.channels.len() - 1)];
+                let mut spread: Vec<f64> = a
+                    .spread
+                    .iter()
+                    .zip(&b.spread)
+                    .map(|(s, t)| a.centre * t + b.centre * s)
+                    .collect();
+                let mass = a.spread.iter().sum::<f64>() * b.spread.iter().sum::<f64>();
+                if mass > 0.0 {
+                    let twice =
+                        convolve_same(&a.spread, &b.spread, self.extent.width, self.extent.height);
+                    // FFT round-off leaves tiny negatives where the true
+                    // value is ~0; light is never negative.
+                    let kept: f64 = twice.iter().map(|v| v.max(0.0)).sum();
+                    if kept > 0.0 {
+                        let scale = mass / kept;
+                        for (s, t) in spread.iter_mut().zip(&twice) {
+                            *s += t.max(0.0) * scale;
+                        }
+                    }
+                }
+                Layer {
+                    centre: a.centre * b.centre,
+                    spread,
+                }
+            })
+            .collect();
+        Psf {
+            extent: self.extent,
+            channels,
+        }
+    }
+
+    fn into_kernel(self) -> Kernel {
+        let extent = self.extent;
+        let (cx, cy) = extent.centre();
+        let centre = cy * extent.width + cx;
+        let channels = self
+            .channels
+            .into_iter()
+            .map(|layer| {
+                let mut plane: Vec<f32> = layer.spread.iter().map(|&v| v as f32).collect();
+                plane[centre] = (layer.spread[centre] + layer.centre) as f32;
+                plane
+            })
+            .collect();
+        Kernel {
+            width: extent.width,
+            height: extent.height,
+            channels,
+        }
+    }
+}
+
+/// f averaged over every pixel's area and normalised to ΣF = 1; `None` when
+/// f puts nothing inside the extent.
+fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f64>> {
+    let (width, height) = (extent.width, extent.height);
+    let (cx, cy) = extent.centre();
+    let mut plane = vec![0.0; width * height];
+    plane
+        .par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(j, row)| {
+            let y = cy as f64 - j as f64;
+            for (i, value) in row.iter_mut().enumerate() {
+                let x = i as f64 - cx as f64;
+                *value = if (i, j) == (cx, cy) {
+                    if shape.spreads_centre() {
+                        // An even count keeps samples off r = 0, where the
+                        // direction φ is undefined.
+                        let m = shape.samples(x, y).max(16);
+                        pixel_average(shape, x, y, m + m % 2)
+                    } else {
+                        0.0
+                    }
+                } else {
+                    pixel_average(shape, x, y, shape.samples(x, y))
+                };
+            }
+        });
+    // Row sums in parallel, added in row order: the same bits on every run.
+    let row_sums: Vec<f64> = plane
+        .par_chunks(width)
+        .map(|row| row.iter().sum())
+        .collect();
+    let total: f64 = row_sums.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return None;
+    }
+    let scale = 1.0 / total;
+    plane.par_iter_mut().for_each(|v| *v *= scale);
+    Some(plane)
+}
+
+/// The mean of f over the pixel centred at (x, y), by the midpoint rule on
+/// an m×m grid.
+fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, m: u32) -> f64 {
+    if m <= 1 {
+        return shape.density(x, y);
+    }
+    let step = 1.0 / f64::from(m);
+    let mut sum = 0.0;
+    for a in 0..m {
+        let sy = y - 0.5 + (f64::from(a) + 0.5) * step;
+        for b in 0..m {
+            let sx = x - 0.5 + (f64::from(b) + 0.5) * step;
+            sum += shape.density(sx, sy);
+        }
+    }
+    sum / f64::from(m * m)
+}

@@ -1,0 +1,39 @@
+//! # aureole
+//!
+//! What a real camera adds around bright lights, computed from physics, for
+//! HDR images whose pixels hold luminance in cd/m²: **bloom** (light
+//! scattered in the lens and the emulsion), **corona** (star rays from
+//! diffraction on the stop and on filters) and human-eye **glare** after Vos.
+//! The model is Ďurikovič and Kolchin's, "Physically-Based Model of
+//! Photographic Effects for Night and Day Scenes", read through MODEL.md.
+//!
+//! A PSF is P(r, φ) = (1 − ε) δ(r) + ε f(r, φ); each effect gives ε and f,
+//! and a [`Kernel`] is the PSF averaged over pixel areas with ΣK = 1.
+//!
+//! ```
+//! use aureole::{presets, Config, Extent};
+//!
+//! let mut config = Config::default();
+//! config.apply(presets::find("paper-fig5-both")?.config()?);
+//! let kernel = config.kernel(&Extent::new(129, 129)?)?;
+//! assert!((kernel.sum(0) - 1.0).abs() < 1e-5);
+//! # Ok::<(), aureole::Error>(())
+//! ```
+
+pub mod camera;
+pub mod config;
+pub mod convolve;
+pub mod error;
+pub mod io;
+pub mod kernel;
+pub mod plot;
+pub mod presets;
+pub mod psf;
+pub mod units;
+
+pub use camera::Camera;
+pub use config::{Config, ConfigFile};
+pub use error::{Error, Result};
+pub use kernel::{Extent, Kernel};
+pub use psf::{Bloom, Corona, Effect, Vos};
+pub use units::{Length, Unit};

@@ -1,0 +1,101 @@
+//! Built-in presets: TOML files compiled into the library, each a config
+//! file a user can print and start from.
+
+use crate::config::ConfigFile;
+use crate::error::{Error, Result};
+
+/// A built-in preset.
+#[derive(Debug, Clone, Copy)]
+pub struct Preset {
+    /// Its name, as given to `--preset`.
+    pub name: &'static str,
+    /// Its TOML text.
+    pub toml: &'static str,
+}
+
+macro_rules! presets {
+    ($($name:literal),* $(,)?) => {
+        &[$(Preset { name: $name, toml: include_str!(concat!("../presets/", $name, ".toml")) }),*]
+    };
+}
+
+/// Every built-in preset, in the order they are listed.
+pub const PRESETS: &[Preset] = presets!(
+    "paper-fig4-bloom",
+    "paper-fig5-corona",
+    "paper-fig5-both",
+    "paper-fig6a",
+    "paper-fig6b",
+    "paper-fig6c",
+    "paper-fig6d",
+    "human-eye-vos",
+);
+
+impl Preset {
+    /// The preset's parsed configuration.
+    pub fn config(&self) -> Result<ConfigFile> {
+        ConfigFile::parse(self.toml, &format!("preset {}", self.name))
+    }
+
+    /// Its one-line description.
+    pub fn description(&self) -> String {
+        self.config()
+            .ok()
+            .and_then(|c| c.description)
+            .unwrap_or_default()
+    }
+}
+
+/// The preset called `name`, or an error listing them all.
+pub fn find(name: &str) -> Result<&'static Preset> {
+    PRESETS
+        .iter()
+        .find(|p| p.name == name)
+        .ok_or_else(|| Error::UnknownPreset {
+            name: name.to_string(),
+            available: PRESETS
+                .iter()
+                .map(|p| p.name)
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_preset_parses_and_has_a_description() {
+        for preset in PRESETS {
+            let config = preset.config().unwrap();
+            assert!(!config.effects.is_empty(), "{}", preset.name);
+            let description = preset.description();
+            assert!(
+                !description.is_empty() && !description.contains('\n'),
+                "{}",
+                preset.name
+            );
+        }
+    }
+
+    #[test]
+    fn the_issue_names_are_there() {
+        for name in [
+            "paper-fig4-bloom",
+            "paper-fig5-corona",
+            "paper-fig5-both",
+            "paper-fig6a",
+            "paper-fig6b",
+            "paper-fig6c",
+            "paper-fig6d",
+        ] {
+            find(name).unwrap();
+        }
+        let e = find("paper-fig7").unwrap_err().to_string();
+        assert!(
+            e.contains("paper-fig7") && e.contains("paper-fig4-bloom"),
+            "{e}"
+        );
+    }
+}

@@ -1,0 +1,360 @@
+//! Corona: star rays around bright lights (paper Eq. 7, MODEL.md §4).
+//!
+//! f_c(r, φ) = C · l(r) · |cos(k (φ − φ₀) / 2)|^n(r), with
+//! l(r) = exp(−σ r / l_m) and n(r) = −1 / ln(cos ω), ω = (r / w)^(s − 1);
+//! n = 0 where ω ≥ π/2 (the isotropic core). Each ray m has its own length
+//! l_m = l·(1 + j·ξ_m), and optionally its own width and intensity, drawn from
+//! one seed.
+
+use std::f64::consts::{FRAC_PI_2, TAU};
+
+use rand_core::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+use serde::Deserialize;
+
+use super::{check_epsilon, check_range, SpreadShape};
+use crate::error::{Error, Result};
+use crate::units::Length;
+
+/// The most rays a corona may have.
+pub const MAX_RAYS: u32 = 1024;
+
+/// A jittered factor never goes below this fraction of its mean, so that a
+/// ray's length, width and intensity stay positive.
+const JITTER_FLOOR: f64 = 0.05;
+
+/// Corona parameters, as in an `[[effect]]` table with `type = "corona"`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Corona {
+    /// ε: fraction of the light that goes into the rays, 0…1.
+    pub epsilon: f64,
+    /// k: number of rays (a stop with n blades makes n rays for even n, 2n
+    /// for odd n).
+    pub rays: u32,
+    /// l: mean ray length, the distance over which a ray fades by e^−σ.
+    pub length: Length,
+    /// σ: fade-out along the ray, > 0.
+    #[serde(default = "one")]
+    pub fadeout: f64,
+    /// w: ray width parameter.
+    #[serde(default = "three_px")]
+    pub width: Length,
+    /// s: spread. 0: constant width; < 0: rays converge; > 0: they diverge;
+    /// 1: constant angular width (w has no effect).
+    #[serde(default = "one")]
+    pub spread: f64,
+    /// Relative standard deviation of each ray's length (0.25 in the paper).
+    #[serde(default = "quarter")]
+    pub length_jitter: f64,
+    /// Relative standard deviation of each ray's width.
+    #[serde(default)]
+    pub width_jitter: f64,
+    /// Relative standard deviation of each ray's intensity.
+    #[serde(default)]
+    pub intensity_jitter: f64,
+    /// φ₀: direction of the first ray, degrees counter-clockwise from the +x
+    /// axis (to the right on the displayed image).
+    #[serde(default)]
+    pub rotation_deg: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn quarter() -> f64 {
+    0.25
+}
+fn three_px() -> Length {
+    Length::px(3.0)
+}
+
+/// The random factors of one ray: its length, width and intensity relative
+/// to the corona's mean values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RayFactors {
+    /// l_m / l.
+    pub length: f64,
+    /// w_m / w.
+    pub width: f64,
+    /// Relative intensity of the ray.
+    pub intensity: f64,
+}
+
+impl Corona {
+    /// Checks every parameter's range.
+    pub fn validate(&self) -> Result<()> {
+        const NAME: &str = "corona";
+        check_epsilon(NAME, self.epsilon)?;
+        if self.rays < 1 || self.rays > MAX_RAYS {
+            return Err(Error::Parameter {
+                effect: NAME.to_string(),
+                name: "rays",
+                value: self.rays.to_string(),
+                allowed: "a whole number of rays from 1 to 1024",
+            });
+        }
+        check_range(
+            NAME,
+            "fadeout",
+            self.fadeout,
+            self.fadeout > 0.0,
+            "a number above 0 (without fade-out a ray carries infinite energy)",
+        )?;
+        check_range(
+            NAME,
+            "spread",
+            self.spread,
+            self.spread.abs() <= 10.0,
+            "a number from -10 to 10",
+        )?;
+        let jitter = "a relative deviation from 0 to 1";
+        check_range(
+            NAME,
+            "length_jitter",
+            self.length_jitter,
+            (0.0..=1.0).contains(&self.length_jitter),
+            jitter,
+        )?;
+        check_range(
+            NAME,
+            "width_jitter",
+            self.width_jitter,
+            (0.0..=1.0).contains(&self.width_jitter),
+            jitter,
+        )?;
+        check_range(
+            NAME,
+            "intensity_jitter",
+            self.intensity_jitter,
+            (0.0..=1.0).contains(&self.intensity_jitter),
+            jitter,
+        )?;
+        check_range(
+            NAME,
+            "rotation_deg",
+            self.rotation_deg,
+            true,
+            "a finite angle in degrees",
+        )
+    }
+
+    /// Each ray's random factors, ray 0 first (ray m points at
+    /// φ₀ + 2πm/k). The same `seed` and `corona_index` (the number of coronas
+    /// before this one in the chain) give the same factors on every machine.
+    pub fn ray_factors(&self, seed: u64, corona_index: usize) -> Vec<RayFactors> {
+        let stream = seed.wrapping_add((corona_index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let mut rng = Pcg64::seed_from_u64(stream);
+        let jittered = |jitter: f64, xi: f64| (1.0 + jitter * xi).max(JITTER_FLOOR);
+        (0..self.rays)
+            .map(|_| {
+                // All three deviates are drawn for every ray, so that turning
+                // one jitter on leaves the other factors as they were.
+                let (xl, xw, xi) = (
+                    standard_normal(&mut rng),
+                    standard_normal(&mut rng),
+                    standard_normal(&mut rng),
+                );
+                RayFactors {
+                    length: jittered(self.length_jitter, xl),
+                    width: jittered(self.width_jitter, xw),
+                    intensity: jittered(self.intensity_jitter, xi),
+                }
+            })
+            .collect()
+    }
+
+    pub(crate) fn shape(
+        &self,
+        pitch_mm: Option<f64>,
+        seed: u64,
+        corona_index: usize,
+    ) -> Result<CoronaShape> {
+        self.validate()?;
+        let length = self.length.to_px(pitch_mm, "corona length")?;
+        let width = self.width.to_px(pitch_mm, "corona width")?;
+        let rays = self
+            .ray_factors(seed, corona_index)
+            .into_iter()
+            .map(|f| Ray {
+                fade_per_px: self.fadeout / (length * f.length),
+                width: width * f.width,
+                intensity: f.intensity,
+            })
+            .collect();
+        Ok(CoronaShape {
+            k: f64::from(self.rays),
+            rotation: self.rotation_deg.to_radians(),
+            spread: self.spread,
+            rays,
+        })
+    }
+}
+
+/// A standard normal deviate by Box–Muller, with libm so that every
+/// platform computes the same bits.
+fn standard_normal(rng: &mut Pcg64) -> f64 {
+    let unit = |bits: u64| (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    let u1 = 1.0 - unit(rng.next_u64()); // (0, 1]: the logarithm stays finite
+    let u2 = unit(rng.next_u64());
+    libm::sqrt(-2.0 * libm::log(u1)) * libm::cos(TAU * u2)
+}
+
+struct Ray {
+    /// σ / l_m in px⁻¹.
+    fade_per_px: f64,
+    /// w_m in px.
+    width: f64,
+    intensity: f64,
+}
+
+pub(crate) struct CoronaShape {
+    k: f64,
+    rotation: f64,
+    spread: f64,
+    rays: Vec<Ray>,
+}
+
+impl CoronaShape {
+    /// The nearest ray to direction φ (relative to φ₀) and the angle from its
+    /// axis, in (−π/k, π/k].
+    fn nearest_ray(&self, phi: f64) -> (&Ray, f64) {
+        let period = TAU / self.k;
+        let u = (phi - self.rotation).rem_euclid(TAU);
+        let m = (u / period).round();
+        let offset = u - m * period;
+        let index = (m as usize) % self.rays.len();
+        (&self.rays[index], offset)
+    }
+
+    /// n(r) of MODEL.md §4 for a ray of width `width`; 0 where ω ≥ π/2.
+    fn exponent(&self, r: f64, width: f64) -> f64 {
+        let omega = libm::pow(r / width, self.spread - 1.0);
+        if omega >= FRAC_PI_2 || omega.is_nan() {
+            return 0.0;
+        }
+        // ln cos ω = ln(1 − 2 sin²(ω/2)), exact for small ω where cos ω
+        // rounds to 1.
+        let half = libm::sin(0.5 * omega);
+        let ln_cos = libm::log1p(-2.0 * half * half);
+        if ln_cos >= 0.0 {
+            f64::INFINITY
+        } else {
+            -1.0 / ln_cos
+        }
+    }
+}
+
+impl SpreadShape for CoronaShape {
+    fn density(&self, x: f64, y: f64) -> f64 {
+        let r = (x * x + y * y).sqrt();
+        let (ray, offset) = self.nearest_ray(libm::atan2(y, x));
+        let n = self.exponent(r, ray.width);
+        let lobe = if n == 0.0 {
+            1.0
+        } else {
+            let c = libm::fabs(libm::cos(0.5 * self.k * offset));
+            if c == 0.0 {
+                0.0
+            } else {
+                libm::exp(n * libm::log(c))
+            }
+        };
+        ray.intensity * libm::exp(-ray.fade_per_px * r) * lobe
+    }
+
+    fn samples(&self, x: f64, y: f64) -> u32 {
+        let r = (x * x + y * y).sqrt();
+        if r < 2.0 {
+            // Every ray meets here, within a pixel or two.
+            return 8;
+        }
+        let (ray, offset) = self.nearest_ray(libm::atan2(y, x));
+        // Along the ray, l(r) changes by a factor e^(σ/l_m) per pixel.
+        let radial = (6.5 * ray.fade_per_px).ceil() as u32;
+        // Across it, |cos(kδ/2)|^n ≈ exp(−n k² δ²/8): a Gaussian of standard
+        // deviation t = 2r / (k √n) pixels across the ray.
+        let n = self.exponent(r, ray.width).max(1.0);
+        let t = 2.0 * r / (self.k * n.sqrt());
+        let across = r * libm::fabs(libm::sin(offset));
+        let transverse = if across > 0.75 + 6.0 * t {
+            1
+        } else if t.is_finite() && t > 0.0 {
+            // Sample spacing t/1.5 sums a Gaussian profile to ~10⁻⁹.
+            ((1.5 / t).ceil() as u32).clamp(2, 48)
+        } else {
+            48
+        };
+        radial.clamp(transverse, 64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn corona() -> Corona {
+        Corona {
+            epsilon: 0.005,
+            rays: 14,
+            length: Length::px(15.6),
+            fadeout: 1.0,
+            width: Length::px(3.0),
+            spread: 1.0,
+            length_jitter: 0.25,
+            width_jitter: 0.0,
+            intensity_jitter: 0.0,
+            rotation_deg: 0.0,
+        }
+    }
+
+    #[test]
+    fn ray_lengths_are_reproducible_and_seed_dependent() {
+        let c = corona();
+        assert_eq!(c.ray_factors(7, 0), c.ray_factors(7, 0));
+        assert_ne!(c.ray_factors(7, 0), c.ray_factors(8, 0));
+        assert_ne!(c.ray_factors(7, 0), c.ray_factors(7, 1));
+    }
+
+    #[test]
+    fn ray_length_deviation_follows_the_jitter() {
+        // Many rays: the sample mean and deviation of l_m/l are 1 and j.
+        let c = Corona {
+            rays: 1024,
+            length_jitter: 0.2,
+            ..corona()
+        };
+        let lengths: Vec<f64> = c.ray_factors(3, 0).iter().map(|f| f.length).collect();
+        let mean = lengths.iter().sum::<f64>() / lengths.len() as f64;
+        let var = lengths.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lengths.len() as f64;
+        assert!((mean - 1.0).abs() < 0.02, "mean {mean}");
+        assert!((var.sqrt() - 0.2).abs() < 0.02, "deviation {}", var.sqrt());
+    }
+
+    #[test]
+    fn jitter_off_gives_unit_factors() {
+        let c = Corona {
+            length_jitter: 0.0,
+            ..corona()
+        };
+        for f in c.ray_factors(1, 0) {
+            assert_eq!((f.length, f.width, f.intensity), (1.0, 1.0, 1.0));
+        }
+    }
+
+    #[test]
+    fn exponent_is_zero_in_the_core_and_grows_outside() {
+        let shape = Corona {
+            spread: 0.0,
+            ..corona()
+        }
+        .shape(None, 1, 0)
+        .unwrap();
+        // s = 0: ω = w/r ≥ π/2 for r ≤ 2w/π.
+        assert_eq!(shape.exponent(1.0, 3.0), 0.0);
+        let (n10, n100) = (shape.exponent(10.0, 3.0), shape.exponent(100.0, 3.0));
+        assert!(n10 > 0.0 && n100 > n10);
+        // Far out, n ≈ 2/ω² = 2 r²/w².
+        assert!((n100 / (2.0 * 100.0f64.powi(2) / 9.0) - 1.0).abs() < 1e-3);
+    }
+}

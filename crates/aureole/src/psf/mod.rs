@@ -1,0 +1,143 @@
+//! The paper's point spread functions (MODEL.md §2–5).
+//!
+//! A PSF is P(r, φ) = (1 − ε) δ(r) + ε f(r, φ): a fraction ε of the light is
+//! spread by f, the rest stays where it fell. Each effect here gives ε and the
+//! shape of f; [`crate::kernel`] averages f over pixel areas and normalises it
+//! in discrete space, so constant factors of f never matter.
+
+pub mod bloom;
+pub mod corona;
+pub mod vos;
+
+pub use bloom::Bloom;
+pub use corona::{Corona, RayFactors};
+pub use vos::Vos;
+
+use serde::Deserialize;
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+
+/// One optical element of the camera's chain. A config file writes it as an
+/// `[[effect]]` table whose `type` is `bloom`, `corona` or `vos`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum Effect {
+    /// Scattering in the lens and the emulsion (paper Eq. 6).
+    Bloom(Bloom),
+    /// Star rays (paper Eq. 7).
+    Corona(Corona),
+    /// Human-eye glare after Vos (paper §3).
+    Vos(Vos),
+}
+
+/// The effect types a config file may name.
+pub const EFFECT_TYPES: &[&str] = &["bloom", "corona", "vos"];
+
+impl Effect {
+    /// The effect's type as written in a config file.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Effect::Bloom(_) => "bloom",
+            Effect::Corona(_) => "corona",
+            Effect::Vos(_) => "vos",
+        }
+    }
+
+    /// ε: the fraction of the light this effect spreads.
+    pub fn epsilon(&self) -> f64 {
+        match self {
+            Effect::Bloom(b) => b.epsilon,
+            Effect::Corona(c) => c.epsilon,
+            Effect::Vos(v) => v.epsilon,
+        }
+    }
+
+    /// Checks every parameter against its allowed range.
+    pub fn validate(&self) -> Result<()> {
+        match self {
+            Effect::Bloom(b) => b.validate(),
+            Effect::Corona(c) => c.validate(),
+            Effect::Vos(v) => v.validate(),
+        }
+    }
+
+    /// The spread function f in pixel units, ready to be rasterised.
+    /// `pitch_mm` is the pixel pitch of the image the kernel is for;
+    /// `corona_index` counts the coronas before this one, so that each corona
+    /// of a chain draws its own rays from the one seed.
+    pub(crate) fn shape(
+        &self,
+        camera: &Camera,
+        pitch_mm: Option<f64>,
+        seed: u64,
+        corona_index: usize,
+    ) -> Result<Box<dyn SpreadShape>> {
+        Ok(match self {
+            Effect::Bloom(b) => Box::new(b.shape(pitch_mm)?),
+            Effect::Corona(c) => Box::new(c.shape(pitch_mm, seed, corona_index)?),
+            Effect::Vos(v) => Box::new(v.shape(camera, pitch_mm)?),
+        })
+    }
+}
+
+/// The spread function f of an effect, in pixel coordinates, as the kernel
+/// rasteriser needs it.
+pub(crate) trait SpreadShape: Sync {
+    /// f at (x, y) pixels from the centre, y up, up to a constant factor.
+    fn density(&self, x: f64, y: f64) -> f64;
+
+    /// Samples per axis needed to average f over the pixel centred at
+    /// (x, y): more where f changes fast within a pixel.
+    fn samples(&self, x: f64, y: f64) -> u32;
+
+    /// Whether f puts light in the centre pixel. A PSF singular at the
+    /// centre leaves the light that moves by less than half a pixel in the
+    /// unspread part.
+    fn spreads_centre(&self) -> bool {
+        true
+    }
+}
+
+/// Refuses `value` unless it is finite and `ok` holds, naming the parameter
+/// and the allowed range.
+pub(crate) fn check_range(
+    effect: &str,
+    name: &'static str,
+    value: f64,
+    ok: bool,
+    allowed: &'static str,
+) -> Result<()> {
+    if value.is_finite() && ok {
+        Ok(())
+    } else {
+        Err(Error::Parameter {
+            effect: effect.to_string(),
+            name,
+            value: value.to_string(),
+            allowed,
+        })
+    }
+}
+
+pub(crate) fn check_epsilon(effect: &str, epsilon: f64) -> Result<()> {
+    check_range(
+        effect,
+        "epsilon",
+        epsilon,
+        (0.0..=1.0).contains(&epsilon),
+        "a fraction of the light from 0 to 1",
+    )
+}
+
+/// Samples per axis so that the midpoint rule's relative error, about
+/// (h²/24)·|f''/f| with h = 1/m, stays near 10⁻³ for a curvature
+/// `relative_curvature` = |f''/f| in px⁻².
+pub(crate) fn samples_for_curvature(relative_curvature: f64, max: u32) -> u32 {
+    let m = (relative_curvature / 0.024).sqrt().ceil();
+    if m.is_finite() {
+        (m as u32).clamp(1, max)
+    } else {
+        max
+    }
+}

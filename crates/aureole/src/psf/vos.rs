@@ -1,0 +1,82 @@
+//! Human-eye glare after Vos (paper §3, MODEL.md §5).
+//!
+//! P(θ) = a δ(θ) + k / θⁿ on the hemisphere, θ the angle from the optical
+//! axis. A pixel at r px from the centre sees θ = atan(r · pitch / f) and
+//! covers a solid angle ∝ cos³θ, so the kernel's spread part is
+//! θ⁻ⁿ cos³θ, normalised in discrete space (a = 1 − ε).
+
+use serde::Deserialize;
+
+use super::{check_epsilon, check_range, samples_for_curvature, SpreadShape};
+use crate::camera::Camera;
+use crate::error::Result;
+
+/// Vos glare parameters, as in an `[[effect]]` table with `type = "vos"`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Vos {
+    /// ε: fraction of the light that is scattered, 0…1.
+    pub epsilon: f64,
+    /// n: the falloff exponent of k / θⁿ, from 1.5 to 3.
+    #[serde(default = "two")]
+    pub exponent: f64,
+}
+
+fn two() -> f64 {
+    2.0
+}
+
+impl Vos {
+    /// Checks ε ∈ [0, 1] and n ∈ [1.5, 3].
+    pub fn validate(&self) -> Result<()> {
+        check_epsilon("vos", self.epsilon)?;
+        check_range(
+            "vos",
+            "exponent",
+            self.exponent,
+            (1.5..=3.0).contains(&self.exponent),
+            "a number from 1.5 to 3 (Vos's range for k/θⁿ)",
+        )
+    }
+
+    pub(crate) fn shape(&self, camera: &Camera, pitch_mm: Option<f64>) -> Result<VosShape> {
+        self.validate()?;
+        let focal = camera.require_focal_length("vos glare")?;
+        camera.require_sensor_width("vos glare")?;
+        let pitch = pitch_mm.unwrap_or(f64::NAN);
+        Ok(VosShape {
+            radians_per_px: pitch / focal,
+            exponent: self.exponent,
+        })
+    }
+}
+
+pub(crate) struct VosShape {
+    /// tan θ per pixel of distance: pitch / focal length.
+    radians_per_px: f64,
+    exponent: f64,
+}
+
+impl SpreadShape for VosShape {
+    fn density(&self, x: f64, y: f64) -> f64 {
+        let theta = libm::atan((x * x + y * y).sqrt() * self.radians_per_px);
+        let c = libm::cos(theta);
+        libm::pow(theta, -self.exponent) * c * c * c
+    }
+
+    fn samples(&self, x: f64, y: f64) -> u32 {
+        // |f''/f| of r⁻ⁿ is about n(n + 1)/r², largest at the pixel's nearest
+        // point to the centre.
+        let r_near = ((x * x + y * y).sqrt() - std::f64::consts::FRAC_1_SQRT_2).max(0.25);
+        samples_for_curvature(
+            self.exponent * (self.exponent + 1.0) / (r_near * r_near),
+            32,
+        )
+    }
+
+    fn spreads_centre(&self) -> bool {
+        // ∫ θ⁻ⁿ θ dθ diverges at 0 for n ≥ 2: the formula holds outside the
+        // centre pixel, and what stays within half a pixel is unspread light.
+        false
+    }
+}
