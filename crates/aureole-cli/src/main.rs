@@ -1,1 +1,95 @@
-fn main() {}
+//! `aureole`: the command-line shell over the aureole library.
+
+mod presets;
+mod psf;
+
+use std::process::ExitCode;
+
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
+
+/// Physically based camera bloom, corona and glare for HDR images in cd/m².
+#[derive(Parser)]
+#[command(name = "aureole", version, about, long_about = None)]
+struct Cli {
+    /// Print nothing on stderr but errors.
+    #[arg(long, short, global = true)]
+    quiet: bool,
+
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Write the camera's PSF as a convolution kernel (PFM, EXR or a PNG picture).
+    Psf(psf::Args),
+    /// List the built-in presets, or print one as TOML to start a config from.
+    Presets(presets::Args),
+}
+
+/// How a run failed: a usage or configuration error (exit 2) or a failure
+/// while running (exit 1).
+pub enum Failure {
+    Usage(anyhow::Error),
+    Run(anyhow::Error),
+}
+
+impl Failure {
+    /// Sorts a library error: what the user wrote is wrong (2), or the work
+    /// itself failed (1).
+    fn from_library(error: aureole::Error) -> Failure {
+        use aureole::Error as E;
+        match error {
+            E::Io { .. } | E::Encode { .. } | E::Decode { .. } => Failure::Run(error.into()),
+            _ => Failure::Usage(error.into()),
+        }
+    }
+}
+
+impl From<aureole::Error> for Failure {
+    fn from(error: aureole::Error) -> Self {
+        Failure::from_library(error)
+    }
+}
+
+fn main() -> ExitCode {
+    let parsed = Cli::command()
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m).map(|cli| (m, cli)));
+    let (matches, cli) = match parsed {
+        Ok(parsed) => parsed,
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => {
+            // Clap's message is followed by a hint; one line is what the
+            // user (and a log scanner) needs.
+            let rendered = e.render().to_string();
+            let line = rendered
+                .lines()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("");
+            eprintln!("aureole: {line}");
+            return ExitCode::from(2);
+        }
+    };
+    let result = match &cli.command {
+        Command::Psf(args) => {
+            let order = matches
+                .subcommand_matches("psf")
+                .map(psf::source_order)
+                .unwrap_or_default();
+            psf::run(args, &order, cli.quiet)
+        }
+        Command::Presets(args) => presets::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Usage(e)) => {
+            eprintln!("aureole: error: {e:#}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Run(e)) => {
+            eprintln!("aureole: error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}

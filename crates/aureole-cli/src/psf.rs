@@ -1,0 +1,179 @@
+//! `aureole psf`: build the kernel of the configured optical chain and write it.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::anyhow;
+use aureole::io::{extension, write_kernel, KERNEL_EXTENSIONS};
+use aureole::{presets, Config, ConfigFile, Extent};
+use clap::ArgMatches;
+
+use crate::Failure;
+
+#[derive(clap::Args)]
+#[command(
+    after_help = "Presets and config files compose in the order given: later settings \
+replace earlier ones and effects are appended to the optical chain, which composes by \
+convolution. The kernel is normalised over the pixels it writes (ΣK = 1), its centre at \
+column floor(W/2) and row floor(H/2) counted from the top."
+)]
+pub struct Args {
+    /// A built-in preset (see `aureole presets`); repeatable.
+    #[arg(long, value_name = "NAME")]
+    preset: Vec<String>,
+
+    /// A TOML config file (seed, [camera], [[effect]] …); repeatable.
+    #[arg(long, value_name = "FILE")]
+    config: Vec<PathBuf>,
+
+    /// Seed of the random ray lengths (and widths, intensities) of a corona;
+    /// overrides the config's `seed`.
+    #[arg(long, value_name = "N")]
+    seed: Option<u64>,
+
+    /// Kernel extent in pixels: W (square) or WxH. An image of W×H pixels
+    /// needs (2W-1)x(2H-1) for light to reach across the whole frame.
+    #[arg(long, value_name = "W[xH]", value_parser = parse_size)]
+    size: (usize, usize),
+
+    /// Width in pixels of the image the kernel is meant for: sets the pixel
+    /// pitch (sensor width / image width) that turns µm and mm into pixels.
+    /// Default: the kernel's width.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    image_width: Option<u32>,
+
+    /// Output file: .pfm (float32, `Pf` or `PF`), .exr (float32) or .png (a
+    /// log-scaled picture spanning 6 decades).
+    #[arg(short, long, value_name = "OUT")]
+    output: PathBuf,
+
+    /// Also draw the radial profile and the angular profile into this PNG.
+    #[arg(long, value_name = "PLOT.png")]
+    profile: Option<PathBuf>,
+
+    /// Radius in pixels of the angular profile (default: a quarter of the
+    /// kernel's smaller half-size).
+    #[arg(long, value_name = "PX", requires = "profile")]
+    profile_radius: Option<f64>,
+}
+
+/// Where each --preset and --config stands on the command line, so that they
+/// compose in the order the user gave them.
+#[derive(Default)]
+pub struct SourceOrder {
+    presets: Vec<usize>,
+    configs: Vec<usize>,
+}
+
+pub fn source_order(matches: &ArgMatches) -> SourceOrder {
+    let indices = |id| {
+        matches
+            .indices_of(id)
+            .map(|i| i.collect())
+            .unwrap_or_default()
+    };
+    SourceOrder {
+        presets: indices("preset"),
+        configs: indices("config"),
+    }
+}
+
+fn parse_size(text: &str) -> Result<(usize, usize), String> {
+    let number = |s: &str| {
+        s.trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| format!("{s:?} is not a whole number of pixels above 0 (write W or WxH, e.g. 257 or 511x255)"))
+    };
+    match text.split_once(['x', 'X']) {
+        Some((w, h)) => Ok((number(w)?, number(h)?)),
+        None => number(text).map(|n| (n, n)),
+    }
+}
+
+pub fn run(args: &Args, order: &SourceOrder, quiet: bool) -> Result<(), Failure> {
+    check_output(&args.output, &["pfm", "exr", "png"], KERNEL_EXTENSIONS)?;
+    if let Some(plot) = &args.profile {
+        check_output(plot, &["png"], ".png")?;
+    }
+    let config = compose(args, order)?;
+    let (width, height) = args.size;
+    let mut extent = Extent::new(width, height)?;
+    if let Some(n) = args.image_width {
+        extent = extent.with_image_width(n as usize);
+    }
+
+    let start = Instant::now();
+    let kernel = config.kernel(&extent)?;
+    write_kernel(&args.output, &kernel)?;
+    if let Some(plot) = &args.profile {
+        let (cx, cy) = kernel.centre();
+        let radius = args
+            .profile_radius
+            .unwrap_or_else(|| (cx.min(cy) as f64 / 4.0).max(1.0));
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(Failure::Usage(anyhow!(
+                "--profile-radius {radius} is not allowed: a radius in pixels above 0"
+            )));
+        }
+        aureole::plot::write_profile_plot(plot, &kernel, radius)?;
+    }
+    if !quiet {
+        let sums: Vec<String> = (0..kernel.channels().len())
+            .map(|c| format!("{:.6}", kernel.sum(c)))
+            .collect();
+        eprintln!(
+            "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, {:.2} s",
+            args.output.display(),
+            kernel.width(),
+            kernel.height(),
+            kernel.channels().len(),
+            if kernel.is_coloured() { "s" } else { "" },
+            sums.join(" "),
+            kernel.centre().0,
+            kernel.centre().1,
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// Refuses an output whose extension we do not write before any work is done.
+fn check_output(path: &Path, allowed: &[&str], listed: &'static str) -> Result<(), Failure> {
+    let found = extension(path);
+    if allowed.contains(&found.as_str()) {
+        Ok(())
+    } else {
+        Err(aureole::Error::OutputFormat {
+            path: path.to_path_buf(),
+            extension: found,
+            allowed: listed,
+        }
+        .into())
+    }
+}
+
+fn compose(args: &Args, order: &SourceOrder) -> Result<Config, Failure> {
+    let mut sources: Vec<(usize, ConfigFile)> = Vec::new();
+    for (name, &index) in args.preset.iter().zip(&order.presets) {
+        sources.push((index, presets::find(name)?.config()?));
+    }
+    for (path, &index) in args.config.iter().zip(&order.configs) {
+        // Any failure to read the config is the user's to fix: exit 2.
+        let file = ConfigFile::load(path).map_err(|e| Failure::Usage(e.into()))?;
+        sources.push((index, file));
+    }
+    sources.sort_by_key(|(index, _)| *index);
+    let mut config = Config::default();
+    for (_, file) in sources {
+        config.apply(file);
+    }
+    if let Some(seed) = args.seed {
+        config.seed = seed;
+    }
+    if config.effects.is_empty() {
+        return Err(aureole::Error::NoEffect.into());
+    }
+    Ok(config)
+}

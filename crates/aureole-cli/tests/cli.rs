@@ -1,0 +1,441 @@
+//! The `aureole` command as a user runs it.
+
+use std::path::Path;
+
+use assert_cmd::Command;
+use aureole::io::pfm;
+use aureole::{presets, Config, Extent};
+use predicates::prelude::*;
+
+fn aureole() -> Command {
+    Command::cargo_bin("aureole").unwrap()
+}
+
+/// The kernel the library builds for these presets/config texts, in order.
+fn library_kernel(sources: &[&str], size: usize) -> aureole::Kernel {
+    let mut config = Config::default();
+    for text in sources {
+        let file = match presets::find(text) {
+            Ok(p) => p.config().unwrap(),
+            Err(_) => aureole::ConfigFile::parse(text, "inline").unwrap(),
+        };
+        config.apply(file);
+    }
+    config.kernel(&Extent::new(size, size).unwrap()).unwrap()
+}
+
+fn one_line(stderr: &[u8]) -> String {
+    let text = String::from_utf8_lossy(stderr).into_owned();
+    assert_eq!(text.trim_end().lines().count(), 1, "{text}");
+    text
+}
+
+#[test]
+fn psf_writes_a_normalised_pfm_centred_at_half_the_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("k.pfm");
+    aureole()
+        .args([
+            "psf",
+            "--preset",
+            "paper-fig5-both",
+            "--size",
+            "64x48",
+            "-o",
+        ])
+        .arg(&out)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("64x48 kernel"));
+    let bytes = std::fs::read(&out).unwrap();
+    assert!(bytes.starts_with(b"Pf\n64 48\n-1.0\n"));
+    let kernel = pfm::read(&out).unwrap();
+    assert_eq!(
+        (kernel.width, kernel.height, kernel.channels.len()),
+        (64, 48, 1)
+    );
+    let plane = &kernel.channels[0];
+    let sum: f64 = plane.iter().map(|&v| f64::from(v)).sum();
+    assert!((sum - 1.0).abs() < 1e-5, "sum {sum}");
+    let peak = plane.iter().cloned().fold(0f32, f32::max);
+    assert_eq!(plane[24 * 64 + 32], peak);
+}
+
+#[test]
+fn psf_output_matches_the_library_and_is_deterministic() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.pfm"), dir.path().join("b.pfm"));
+    for out in [&a, &b] {
+        aureole()
+            .args([
+                "psf",
+                "--preset",
+                "paper-fig5-corona",
+                "--size",
+                "65",
+                "--quiet",
+                "-o",
+            ])
+            .arg(out)
+            .assert()
+            .success()
+            .stderr("");
+    }
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    let expected = library_kernel(&["paper-fig5-corona"], 65);
+    assert_eq!(pfm::read(&a).unwrap().channels[0], expected.channels()[0]);
+}
+
+#[test]
+fn psf_writes_exr_and_png_pictures_with_a_profile_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr_path = dir.path().join("k.exr");
+    aureole()
+        .args(["psf", "--preset", "paper-fig6b", "--size", "101x81", "-o"])
+        .arg(&exr_path)
+        .assert()
+        .success();
+    let image = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
+    let layer = &image.layer_data[0];
+    assert_eq!((layer.size.0, layer.size.1), (101, 81));
+    assert_eq!(layer.channel_data.list.len(), 1);
+    assert_eq!(layer.channel_data.list[0].name.to_string(), "Y");
+    let sum: f64 = layer.channel_data.list[0]
+        .sample_data
+        .values_as_f32()
+        .map(f64::from)
+        .sum();
+    assert!((sum - 1.0).abs() < 1e-5);
+
+    let (png, plot) = (dir.path().join("k.png"), dir.path().join("plot.png"));
+    aureole()
+        .args(["psf", "--preset", "paper-fig6b", "--size", "101", "-o"])
+        .arg(&png)
+        .arg("--profile")
+        .arg(&plot)
+        .args(["--profile-radius", "30"])
+        .assert()
+        .success();
+    for path in [&png, &plot] {
+        assert!(std::fs::read(path)
+            .unwrap()
+            .starts_with(b"\x89PNG\r\n\x1a\n"));
+    }
+}
+
+#[test]
+fn presets_and_configs_compose_in_command_line_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let lens85 = dir.path().join("85mm.toml");
+    std::fs::write(&lens85, "[camera]\nfocal_length_mm = 85.0\n").unwrap();
+    let build = |args: &[&str]| {
+        let out = dir.path().join("k.pfm");
+        aureole()
+            .arg("psf")
+            .args(args)
+            .args(["--size", "41", "-o"])
+            .arg(&out)
+            .assert()
+            .success();
+        pfm::read(&out).unwrap().channels.remove(0)
+    };
+    let cfg = lens85.to_str().unwrap();
+    let later_config = build(&["--preset", "human-eye-vos", "--config", cfg]);
+    let later_preset = build(&["--config", cfg, "--preset", "human-eye-vos"]);
+    let text85 = "[camera]\nfocal_length_mm = 85.0\n";
+    assert_eq!(
+        later_config,
+        library_kernel(&["human-eye-vos", text85], 41).channels()[0]
+    );
+    assert_eq!(
+        later_preset,
+        library_kernel(&[text85, "human-eye-vos"], 41).channels()[0]
+    );
+    assert_ne!(later_config, later_preset);
+}
+
+#[test]
+fn seed_option_overrides_the_config() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |name: &str| dir.path().join(name);
+    for (name, seed) in [("1.pfm", "1"), ("2.pfm", "2")] {
+        aureole()
+            .args([
+                "psf",
+                "--preset",
+                "paper-fig5-corona",
+                "--size",
+                "61",
+                "--seed",
+                seed,
+                "-o",
+            ])
+            .arg(out(name))
+            .assert()
+            .success();
+    }
+    let (a, b) = (
+        pfm::read(&out("1.pfm")).unwrap(),
+        pfm::read(&out("2.pfm")).unwrap(),
+    );
+    assert_ne!(a, b);
+}
+
+#[test]
+fn physical_units_use_the_image_width() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("um.toml");
+    std::fs::write(
+        &config,
+        "[camera]\nsensor_width_mm = 36.0\n[[effect]]\ntype = \"bloom\"\nepsilon = 0.01\nbeta = 3.0\nradius = \"60um\"\n",
+    )
+    .unwrap();
+    let run = |image_width: &str| {
+        let out = dir.path().join(format!("{image_width}.pfm"));
+        aureole()
+            .args([
+                "psf",
+                "--size",
+                "101",
+                "--image-width",
+                image_width,
+                "--config",
+            ])
+            .arg(&config)
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .success();
+        pfm::read(&out).unwrap().channels.remove(0)
+    };
+    // 36 mm over 3600 px: 10 µm pitch, R = 6 px; over 1800 px, R = 3 px.
+    let (wide, narrow) = (run("3600"), run("1800"));
+    let px = |r: &str| {
+        library_kernel(
+            &[&format!(
+                "[[effect]]\ntype = \"bloom\"\nepsilon = 0.01\nbeta = 3.0\nradius = \"{r}\"\n"
+            )],
+            101,
+        )
+        .channels()[0]
+            .clone()
+    };
+    for (got, want) in [(wide, px("6px")), (narrow, px("3px"))] {
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() <= 1e-6 * w.abs().max(1e-12));
+        }
+    }
+}
+
+#[test]
+fn presets_lists_every_preset_and_prints_one_as_toml() {
+    let listing = aureole()
+        .arg("presets")
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let listing = String::from_utf8(listing).unwrap();
+    for preset in presets::PRESETS {
+        assert!(
+            listing
+                .lines()
+                .any(|l| l.starts_with(preset.name) && l.contains(&preset.description())),
+            "{listing}"
+        );
+    }
+    let toml = aureole()
+        .args(["presets", "paper-fig6a"])
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let parsed = aureole::ConfigFile::parse(std::str::from_utf8(&toml).unwrap(), "out").unwrap();
+    assert_eq!(
+        parsed,
+        presets::find("paper-fig6a").unwrap().config().unwrap()
+    );
+}
+
+fn assert_refused(args: &[&str], code: i32, expected: &[&str], out: Option<&Path>) {
+    let assert = aureole().args(args).assert().failure().code(code);
+    let line = one_line(&assert.get_output().stderr);
+    for e in expected {
+        assert!(line.contains(e), "{args:?}: {line}");
+    }
+    if let Some(out) = out {
+        assert!(!out.exists(), "{} was written", out.display());
+    }
+}
+
+#[test]
+fn bad_arguments_get_one_clear_line_and_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("k.pfm");
+    let o = out.to_str().unwrap();
+    let um = dir.path().join("um.toml");
+    std::fs::write(
+        &um,
+        "[[effect]]\ntype = \"bloom\"\nepsilon = 0.1\nbeta = 2.0\nradius = \"60um\"\n",
+    )
+    .unwrap();
+    let typo = dir.path().join("typo.toml");
+    std::fs::write(
+        &typo,
+        "[[effect]]\ntype = \"corona\"\nepsilon = 0.1\nrays = 6\nlenght = \"9px\"\n",
+    )
+    .unwrap();
+    let missing = dir.path().join("missing.toml");
+
+    assert_refused(
+        &["psf", "--preset", "paper-fig9", "--size", "9", "-o", o],
+        2,
+        &["paper-fig9", "paper-fig4-bloom"],
+        Some(&out),
+    );
+    assert_refused(
+        &[
+            "psf",
+            "--preset",
+            "paper-fig4-bloom",
+            "--size",
+            "0",
+            "-o",
+            o,
+        ],
+        2,
+        &["--size", "above 0"],
+        Some(&out),
+    );
+    assert_refused(
+        &[
+            "psf",
+            "--preset",
+            "paper-fig4-bloom",
+            "--size",
+            "9x",
+            "-o",
+            o,
+        ],
+        2,
+        &["--size"],
+        Some(&out),
+    );
+    let jpg = dir.path().join("k.jpg");
+    assert_refused(
+        &[
+            "psf",
+            "--preset",
+            "paper-fig4-bloom",
+            "--size",
+            "9",
+            "-o",
+            jpg.to_str().unwrap(),
+        ],
+        2,
+        &["k.jpg", "\"jpg\"", ".pfm"],
+        Some(&jpg),
+    );
+    assert_refused(
+        &[
+            "psf",
+            "--config",
+            um.to_str().unwrap(),
+            "--size",
+            "9",
+            "-o",
+            o,
+        ],
+        2,
+        &["60um", "sensor_width_mm"],
+        Some(&out),
+    );
+    assert_refused(
+        &[
+            "psf",
+            "--config",
+            typo.to_str().unwrap(),
+            "--size",
+            "9",
+            "-o",
+            o,
+        ],
+        2,
+        &["typo.toml:5:1", "lenght", "length"],
+        Some(&out),
+    );
+    assert_refused(
+        &[
+            "psf",
+            "--config",
+            missing.to_str().unwrap(),
+            "--size",
+            "9",
+            "-o",
+            o,
+        ],
+        2,
+        &["missing.toml"],
+        Some(&out),
+    );
+    assert_refused(
+        &["psf", "--size", "9", "-o", o],
+        2,
+        &["no effect"],
+        Some(&out),
+    );
+    assert_refused(
+        &["presets", "nope"],
+        2,
+        &["nope", "paper-fig5-corona"],
+        None,
+    );
+
+    let nowhere = dir.path().join("no-such-folder").join("k.pfm");
+    assert_refused(
+        &[
+            "psf",
+            "--preset",
+            "paper-fig4-bloom",
+            "--size",
+            "9",
+            "-o",
+            nowhere.to_str().unwrap(),
+        ],
+        1,
+        &["no-such-folder"],
+        Some(&nowhere),
+    );
+    // Only the two configs are there: no output and no temporary file.
+    let mut left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["typo.toml", "um.toml"]);
+}
+
+#[test]
+fn help_explains_options_with_their_units() {
+    let help = aureole()
+        .args(["psf", "--help"])
+        .assert()
+        .success()
+        .get_output()
+        .stdout
+        .clone();
+    let help = String::from_utf8(help).unwrap();
+    for phrase in [
+        "--size",
+        "pixels",
+        "pixel pitch",
+        "µm",
+        "--profile",
+        "--seed",
+        "ΣK = 1",
+    ] {
+        assert!(help.contains(phrase), "{phrase} missing from:\n{help}");
+    }
+}
