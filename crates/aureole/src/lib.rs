@@ -37,3 +37,8 @@ pub use error::{Error, Result};
 pub use kernel::{Extent, Kernel};
 pub use psf::{Bloom, Corona, Effect, Vos};
 pub use units::{Length, Unit};
+
+/// The README's Rust examples, run as doctests so that they stay true.
+#[doc = include_str!("../../../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -50,8 +50,18 @@ fn camera(sensor_mm: f64, focal_mm: f64) -> Camera {
 
 // ---------------------------------------------------------------- ΣK = 1
 
+/// Property tests draw their cases from a fixed seed: CI reruns the same
+/// cases on every machine.
+fn cases(count: u32) -> ProptestConfig {
+    ProptestConfig {
+        cases: count,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x0061_7572_656f_6c65),
+        ..ProptestConfig::default()
+    }
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(24))]
+    #![proptest_config(cases(64))]
 
     #[test]
     fn every_kernel_sums_to_one(
@@ -153,37 +163,43 @@ fn bloom_radius_on_the_film_goes_through_the_pixel_pitch() {
 
 // ---------------------------------------------------------------- corona, Eq. 7
 
-/// Runs of the circular angular profile above the geometric mean of its
-/// extremes: one per ray. Returns the angle of each run's maximum.
+/// The rays seen in the angular profile at `radius`: local maxima whose
+/// prominence (how far the profile falls on both sides before rising higher)
+/// is at least 5 % of their height, as angles in degrees. Peaks under 10⁻³ of
+/// the strongest are background: at r = l even a ray 3σ shorter than the
+/// mean keeps 3·10⁻² of the longest's intensity.
 fn ray_peaks(k: &Kernel, radius: f64) -> Vec<f64> {
     let profile = angular_profile(k, 0, radius, 3600);
-    let max = profile.iter().map(|p| p.1).fold(0.0, f64::max);
-    let min = profile
-        .iter()
-        .map(|p| p.1)
-        .fold(f64::INFINITY, f64::min)
-        .max(max * 1e-12);
-    let level = (max * min).sqrt();
-    // Start the scan at a point below the level, so that no run is split.
-    let start = profile.iter().position(|p| p.1 < level).unwrap();
+    let n = profile.len();
+    let value = |i: usize| profile[i % n].1;
+    let floor = 1e-3 * profile.iter().map(|p| p.1).fold(0.0, f64::max);
     let mut peaks = Vec::new();
-    let mut best: Option<(f64, f64)> = None;
-    for i in 0..profile.len() {
-        let (angle, value) = profile[(start + i) % profile.len()];
-        if value > level {
-            if best.is_none_or(|(_, v)| value > v) {
-                best = Some((angle, value));
+    for (i, &(angle, here)) in profile.iter().enumerate() {
+        if here < floor || !(here > value(i + n - 1) && here >= value(i + 1)) {
+            continue;
+        }
+        // Lowest point on each side before the profile exceeds this peak.
+        let lowest = |forward: bool| {
+            let mut low = here;
+            for j in 1..n {
+                let v = value(i + if forward { j } else { n - j });
+                if v > here {
+                    break;
+                }
+                low = low.min(v);
             }
-        } else if let Some((angle, _)) = best.take() {
+            low
+        };
+        let prominence = here - lowest(true).max(lowest(false));
+        if prominence >= 0.05 * here {
             peaks.push(angle);
         }
     }
-    peaks.extend(best.map(|b| b.0));
     peaks
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(16))]
+    #![proptest_config(cases(64))]
 
     #[test]
     fn corona_has_k_rays_where_the_model_puts_them(

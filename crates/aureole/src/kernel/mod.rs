@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::convolve::fft::convolve_same;
 use crate::error::{Error, Result};
-use crate::psf::{Effect, SpreadShape};
+use crate::psf::{Effect, Samples, SpreadShape};
 
 /// The most pixels a kernel may have (2²⁸: 2 GiB per f64 plane while it is
 /// built).
@@ -273,8 +273,13 @@ fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f64>> {
                     if shape.spreads_centre() {
                         // An even count keeps samples off r = 0, where the
                         // direction φ is undefined.
-                        let m = shape.samples(x, y).max(16);
-                        pixel_average(shape, x, y, m + m % 2)
+                        let m = shape.samples(x, y);
+                        let even = |n: u32| n.max(16) + n.max(16) % 2;
+                        let grid = Samples {
+                            x: even(m.x),
+                            y: even(m.y),
+                        };
+                        pixel_average(shape, x, y, grid)
                     } else {
                         0.0
                     }
@@ -298,19 +303,20 @@ fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f64>> {
 }
 
 /// The mean of f over the pixel centred at (x, y), by the midpoint rule on
-/// an m×m grid.
-fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, m: u32) -> f64 {
-    if m <= 1 {
+/// the given grid.
+fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, grid: Samples) -> f64 {
+    if grid.x <= 1 && grid.y <= 1 {
         return shape.density(x, y);
     }
-    let step = 1.0 / f64::from(m);
+    let (mx, my) = (grid.x.max(1), grid.y.max(1));
+    let (step_x, step_y) = (1.0 / f64::from(mx), 1.0 / f64::from(my));
     let mut sum = 0.0;
-    for a in 0..m {
-        let sy = y - 0.5 + (f64::from(a) + 0.5) * step;
-        for b in 0..m {
-            let sx = x - 0.5 + (f64::from(b) + 0.5) * step;
+    for a in 0..my {
+        let sy = y - 0.5 + (f64::from(a) + 0.5) * step_y;
+        for b in 0..mx {
+            let sx = x - 0.5 + (f64::from(b) + 0.5) * step_x;
             sum += shape.density(sx, sy);
         }
     }
-    sum / f64::from(m * m)
+    sum / f64::from(mx * my)
 }

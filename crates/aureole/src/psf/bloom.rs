@@ -6,7 +6,7 @@
 
 use serde::Deserialize;
 
-use super::{check_epsilon, check_range, samples_for_curvature, SpreadShape};
+use super::{check_epsilon, check_range, samples_for_curvature, Samples, SpreadShape};
 use crate::error::Result;
 use crate::units::Length;
 
@@ -72,12 +72,12 @@ impl SpreadShape for BloomShape {
         libm::pow(1.0 + q2, -self.beta)
     }
 
-    fn samples(&self, x: f64, y: f64) -> u32 {
+    fn samples(&self, x: f64, y: f64) -> Samples {
         // |f''/f| of (1 + r²/R²)^−β is at most about 2β(2β + 1)/(R² + r²),
         // taken at the pixel's nearest point to the centre.
         let r_near = ((x * x + y * y).sqrt() - std::f64::consts::FRAC_1_SQRT_2).max(0.0);
         let curvature = 2.0 * self.beta * (2.0 * self.beta + 1.0)
             / (self.radius * self.radius + r_near * r_near);
-        samples_for_curvature(curvature, 64)
+        Samples::square(samples_for_curvature(curvature, 64))
     }
 }

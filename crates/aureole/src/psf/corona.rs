@@ -12,12 +12,16 @@ use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::Deserialize;
 
-use super::{check_epsilon, check_range, SpreadShape};
+use super::{check_epsilon, check_range, Samples, SpreadShape};
 use crate::error::{Error, Result};
 use crate::units::Length;
 
 /// The most rays a corona may have.
 pub const MAX_RAYS: u32 = 1024;
+
+/// Below this fraction of its start a ray carries no light worth resolving:
+/// there its pixels are sampled once.
+const FADED: f64 = 1e-9;
 
 /// A jittered factor never goes below this fraction of its mean, so that a
 /// ray's length, width and intensity stay positive.
@@ -181,8 +185,13 @@ impl Corona {
                 width: width * f.width,
                 intensity: f.intensity,
             })
-            .collect();
+            .collect::<Vec<Ray>>();
         Ok(CoronaShape {
+            slowest_fade: rays
+                .iter()
+                .map(|r| r.fade_per_px)
+                .fold(f64::INFINITY, f64::min),
+            brightest: rays.iter().map(|r| r.intensity).fold(0.0, f64::max),
             k: f64::from(self.rays),
             rotation: self.rotation_deg.to_radians(),
             spread: self.spread,
@@ -209,6 +218,10 @@ struct Ray {
 }
 
 pub(crate) struct CoronaShape {
+    /// The slowest fade of any ray, σ / max l_m, in px⁻¹.
+    slowest_fade: f64,
+    /// The largest ray intensity.
+    brightest: f64,
     k: f64,
     rotation: f64,
     spread: f64,
@@ -263,29 +276,48 @@ impl SpreadShape for CoronaShape {
         ray.intensity * libm::exp(-ray.fade_per_px * r) * lobe
     }
 
-    fn samples(&self, x: f64, y: f64) -> u32 {
+    fn samples(&self, x: f64, y: f64) -> Samples {
         let r = (x * x + y * y).sqrt();
         if r < 2.0 {
             // Every ray meets here, within a pixel or two.
-            return 8;
+            return Samples::square(8);
         }
-        let (ray, offset) = self.nearest_ray(libm::atan2(y, x));
+        if libm::exp(-self.slowest_fade * r) * self.brightest < FADED {
+            return Samples::square(1);
+        }
+        let phi = libm::atan2(y, x);
+        let (ray, offset) = self.nearest_ray(phi);
         // Along the ray, l(r) changes by a factor e^(σ/l_m) per pixel.
-        let radial = (6.5 * ray.fade_per_px).ceil() as u32;
+        let along = ((6.5 * ray.fade_per_px).ceil() as u32).clamp(1, 64);
         // Across it, |cos(kδ/2)|^n ≈ exp(−n k² δ²/8): a Gaussian of standard
-        // deviation t = 2r / (k √n) pixels across the ray.
+        // deviation t = 2r / (k √n) pixels across the ray. A spacing of t/6.5
+        // keeps the midpoint rule within 10⁻³ of the pixel's mean (and sums
+        // the profile far better).
         let n = self.exponent(r, ray.width).max(1.0);
         let t = 2.0 * r / (self.k * n.sqrt());
-        let across = r * libm::fabs(libm::sin(offset));
-        let transverse = if across > 0.75 + 6.0 * t {
+        let distance = r * libm::fabs(libm::sin(offset));
+        let across = if distance > 0.75 + 6.0 * t {
             1
         } else if t.is_finite() && t > 0.0 {
-            // Sample spacing t/1.5 sums a Gaussian profile to ~10⁻⁹.
-            ((1.5 / t).ceil() as u32).clamp(2, 48)
+            ((6.5 / t).ceil() as u32).clamp(1, 64)
         } else {
-            48
+            64
         };
-        radial.clamp(transverse, 64)
+        if across <= along {
+            return Samples::square(along);
+        }
+        // A thin ray needs fine steps only across itself: along the pixel
+        // axis nearer its normal (a step there moves at least 1/√2 of it
+        // across the ray), while each line of samples along the other axis
+        // still crosses the whole profile.
+        let fine = ((f64::from(across) * std::f64::consts::SQRT_2).ceil() as u32).min(96);
+        let coarse = along.max(2);
+        let axis = phi - offset;
+        if libm::fabs(libm::cos(axis)) >= libm::fabs(libm::sin(axis)) {
+            Samples { x: coarse, y: fine }
+        } else {
+            Samples { x: fine, y: coarse }
+        }
     }
 }
 

@@ -87,15 +87,30 @@ pub(crate) trait SpreadShape: Sync {
     /// f at (x, y) pixels from the centre, y up, up to a constant factor.
     fn density(&self, x: f64, y: f64) -> f64;
 
-    /// Samples per axis needed to average f over the pixel centred at
-    /// (x, y): more where f changes fast within a pixel.
-    fn samples(&self, x: f64, y: f64) -> u32;
+    /// Samples along x and along y needed to average f over the pixel
+    /// centred at (x, y): more where f changes fast within the pixel, and in
+    /// the direction it changes fastest.
+    fn samples(&self, x: f64, y: f64) -> Samples;
 
     /// Whether f puts light in the centre pixel. A PSF singular at the
     /// centre leaves the light that moves by less than half a pixel in the
     /// unspread part.
     fn spreads_centre(&self) -> bool {
         true
+    }
+}
+
+/// A supersampling grid: `x` columns by `y` rows of samples in a pixel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Samples {
+    pub x: u32,
+    pub y: u32,
+}
+
+impl Samples {
+    /// The same count along both axes.
+    pub fn square(m: u32) -> Samples {
+        Samples { x: m, y: m }
     }
 }
 

@@ -7,7 +7,7 @@
 
 use serde::Deserialize;
 
-use super::{check_epsilon, check_range, samples_for_curvature, SpreadShape};
+use super::{check_epsilon, check_range, samples_for_curvature, Samples, SpreadShape};
 use crate::camera::Camera;
 use crate::error::Result;
 
@@ -64,14 +64,14 @@ impl SpreadShape for VosShape {
         libm::pow(theta, -self.exponent) * c * c * c
     }
 
-    fn samples(&self, x: f64, y: f64) -> u32 {
+    fn samples(&self, x: f64, y: f64) -> Samples {
         // |f''/f| of r⁻ⁿ is about n(n + 1)/r², largest at the pixel's nearest
         // point to the centre.
         let r_near = ((x * x + y * y).sqrt() - std::f64::consts::FRAC_1_SQRT_2).max(0.25);
-        samples_for_curvature(
+        Samples::square(samples_for_curvature(
             self.exponent * (self.exponent + 1.0) / (r_near * r_near),
             32,
-        )
+        ))
     }
 
     fn spreads_centre(&self) -> bool {
