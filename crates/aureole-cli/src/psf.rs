@@ -3,7 +3,6 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::anyhow;
 use aureole::io::{extension, write_kernel, KERNEL_EXTENSIONS};
 use aureole::{presets, Config, ConfigFile, Extent};
 use clap::ArgMatches;
@@ -53,7 +52,7 @@ pub struct Args {
 
     /// Radius in pixels of the angular profile (default: a quarter of the
     /// kernel's smaller half-size).
-    #[arg(long, value_name = "PX", requires = "profile")]
+    #[arg(long, value_name = "PX", requires = "profile", value_parser = parse_radius, allow_negative_numbers = true)]
     profile_radius: Option<f64>,
 }
 
@@ -76,6 +75,14 @@ pub fn source_order(matches: &ArgMatches) -> SourceOrder {
         presets: indices("preset"),
         configs: indices("config"),
     }
+}
+
+fn parse_radius(text: &str) -> Result<f64, String> {
+    text.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|r| r.is_finite() && *r > 0.0)
+        .ok_or_else(|| format!("{text:?} is not a radius in pixels above 0"))
 }
 
 fn parse_size(text: &str) -> Result<(usize, usize), String> {
@@ -112,11 +119,6 @@ pub fn run(args: &Args, order: &SourceOrder, quiet: bool) -> Result<(), Failure>
         let radius = args
             .profile_radius
             .unwrap_or_else(|| (cx.min(cy) as f64 / 4.0).max(1.0));
-        if !(radius.is_finite() && radius > 0.0) {
-            return Err(Failure::Usage(anyhow!(
-                "--profile-radius {radius} is not allowed: a radius in pixels above 0"
-            )));
-        }
         aureole::plot::write_profile_plot(plot, &kernel, radius)?;
     }
     if !quiet {

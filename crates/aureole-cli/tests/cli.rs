@@ -386,6 +386,25 @@ fn bad_arguments_get_one_clear_line_and_no_output() {
         &["no effect"],
         Some(&out),
     );
+    let plot = dir.path().join("plot.png");
+    assert_refused(
+        &[
+            "psf",
+            "--preset",
+            "paper-fig4-bloom",
+            "--size",
+            "9",
+            "-o",
+            o,
+            "--profile",
+            plot.to_str().unwrap(),
+            "--profile-radius",
+            "-3",
+        ],
+        2,
+        &["--profile-radius", "above 0"],
+        Some(&out),
+    );
     assert_refused(
         &["presets", "nope"],
         2,

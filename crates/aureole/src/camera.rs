@@ -62,12 +62,4 @@ impl Camera {
             why: "angles from the optical axis come from the distance on the sensor and the focal length",
         })
     }
-
-    pub(crate) fn require_sensor_width(&self, what: &str) -> Result<f64> {
-        self.sensor_width_mm.ok_or_else(|| Error::NeedsCamera {
-            what: what.to_string(),
-            field: "sensor_width_mm",
-            why: "distances on the sensor come from pixels through the pixel pitch, sensor width / image width",
-        })
-    }
 }

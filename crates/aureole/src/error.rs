@@ -125,6 +125,16 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// `what` is on the sensor (µm, mm) or needs the pixel pitch, and the
+    /// camera has no sensor width.
+    pub(crate) fn needs_sensor_width(what: String) -> Self {
+        Error::NeedsCamera {
+            what,
+            field: "sensor_width_mm",
+            why: "distances on the sensor become pixels through the pixel pitch, sensor width / image width",
+        }
+    }
+
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),

@@ -78,11 +78,7 @@ impl Length {
         };
         match pitch_mm {
             Some(pitch) => Ok(mm / pitch),
-            None => Err(Error::NeedsCamera {
-                what: format!("{what} \"{self}\""),
-                field: "sensor_width_mm",
-                why: "a length on the sensor becomes pixels through the pixel pitch, sensor width / image width",
-            }),
+            None => Err(Error::needs_sensor_width(format!("{what} \"{self}\""))),
         }
     }
 }

@@ -176,12 +176,18 @@ struct Layer {
 
 impl Psf {
     fn from_shape(epsilon: f64, shape: &dyn SpreadShape, extent: &Extent) -> Psf {
-        let layer = match rasterise(shape, extent) {
+        let spread = if epsilon > 0.0 {
+            rasterise(shape, extent)
+        } else {
+            None
+        };
+        let layer = match spread {
             Some(f) => Layer {
                 centre: 1.0 - epsilon,
                 spread: f.into_iter().map(|v| epsilon * v).collect(),
             },
-            // Nowhere to spread within the extent: all light stays.
+            // Nothing spread, or nowhere to spread it within the extent: all
+            // light stays.
             None => Layer {
                 centre: 1.0,
                 spread: vec![0.0; extent.width * extent.height],
@@ -319,4 +325,33 @@ fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, grid: Samples) -> f64 
         }
     }
     sum / f64::from(mx * my)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_image_needs_twice_its_size_less_one() {
+        let extent = Extent::for_image(1920, 1080).unwrap();
+        assert_eq!(
+            (extent.width, extent.height, extent.image_width),
+            (3839, 2159, 1920)
+        );
+        assert_eq!(extent.centre(), (1919, 1079));
+        let capped = extent.capped(1001, 4000);
+        assert_eq!(
+            (capped.width, capped.height, capped.image_width),
+            (1001, 2159, 1920)
+        );
+    }
+
+    #[test]
+    fn empty_and_huge_extents_are_refused() {
+        assert!(Extent::new(0, 5).is_err());
+        assert!(Extent::new(5, 0).is_err());
+        assert!(Extent::for_image(0, 5).is_err());
+        let e = Extent::new(1 << 15, 1 << 14).unwrap_err().to_string();
+        assert!(e.contains("32768x16384") && e.contains("2^28"), "{e}");
+    }
 }

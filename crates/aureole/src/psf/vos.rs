@@ -9,7 +9,7 @@ use serde::Deserialize;
 
 use super::{check_epsilon, check_range, samples_for_curvature, Samples, SpreadShape};
 use crate::camera::Camera;
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// Vos glare parameters, as in an `[[effect]]` table with `type = "vos"`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -42,8 +42,7 @@ impl Vos {
     pub(crate) fn shape(&self, camera: &Camera, pitch_mm: Option<f64>) -> Result<VosShape> {
         self.validate()?;
         let focal = camera.require_focal_length("vos glare")?;
-        camera.require_sensor_width("vos glare")?;
-        let pitch = pitch_mm.unwrap_or(f64::NAN);
+        let pitch = pitch_mm.ok_or_else(|| Error::needs_sensor_width("vos glare".into()))?;
         Ok(VosShape {
             radians_per_px: pitch / focal,
             exponent: self.exponent,
