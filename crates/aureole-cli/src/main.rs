@@ -1,6 +1,14 @@
 //! `aureole`: the command-line shell over the aureole library.
 
+mod apply;
+mod chain;
+mod demo;
+mod display_args;
+mod info;
+mod input;
+mod output;
 mod presets;
+mod progress;
 mod psf;
 
 use std::process::ExitCode;
@@ -21,6 +29,12 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Apply the camera to an HDR image: write what it would have recorded.
+    Apply(apply::Args),
+    /// Render a built-in night street through the camera: aureole with nothing else.
+    Demo(demo::Args),
+    /// Describe an image: size, channels, luminance range, bright pixels.
+    Info(info::Args),
     /// Write the camera's PSF as a convolution kernel (PFM, EXR or a PNG picture).
     Psf(psf::Args),
     /// List the built-in presets, or print one as TOML to start a config from.
@@ -71,14 +85,12 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    let sub = |name| matches.subcommand_matches(name).unwrap_or(&matches);
     let result = match &cli.command {
-        Command::Psf(args) => {
-            let order = matches
-                .subcommand_matches("psf")
-                .map(psf::source_order)
-                .unwrap_or_default();
-            psf::run(args, &order, cli.quiet)
-        }
+        Command::Apply(args) => apply::run(args, sub("apply"), cli.quiet),
+        Command::Demo(args) => demo::run(args, sub("demo"), cli.quiet),
+        Command::Info(args) => info::run(args, cli.quiet),
+        Command::Psf(args) => psf::run(args, sub("psf"), cli.quiet),
         Command::Presets(args) => presets::run(args),
     };
     match result {

@@ -4,9 +4,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use aureole::io::{extension, write_kernel, KERNEL_EXTENSIONS};
-use aureole::{presets, Config, ConfigFile, Extent};
+use aureole::Extent;
 use clap::ArgMatches;
 
+use crate::chain::ChainArgs;
 use crate::Failure;
 
 #[derive(clap::Args)]
@@ -17,18 +18,8 @@ convolution. The kernel is normalised over the pixels it writes (ΣK = 1), its c
 column floor(W/2) and row floor(H/2) counted from the top."
 )]
 pub struct Args {
-    /// A built-in preset (see `aureole presets`); repeatable.
-    #[arg(long, value_name = "NAME")]
-    preset: Vec<String>,
-
-    /// A TOML config file (seed, [camera], [[effect]] …); repeatable.
-    #[arg(long, value_name = "FILE")]
-    config: Vec<PathBuf>,
-
-    /// Seed of the random ray lengths (and widths, intensities) of a corona;
-    /// overrides the config's `seed`.
-    #[arg(long, value_name = "N")]
-    seed: Option<u64>,
+    #[command(flatten)]
+    chain: ChainArgs,
 
     /// Kernel extent in pixels: W (square) or WxH. An image of W×H pixels
     /// needs (2W-1)x(2H-1) for light to reach across the whole frame.
@@ -56,27 +47,6 @@ pub struct Args {
     profile_radius: Option<f64>,
 }
 
-/// Where each --preset and --config stands on the command line, so that they
-/// compose in the order the user gave them.
-#[derive(Default)]
-pub struct SourceOrder {
-    presets: Vec<usize>,
-    configs: Vec<usize>,
-}
-
-pub fn source_order(matches: &ArgMatches) -> SourceOrder {
-    let indices = |id| {
-        matches
-            .indices_of(id)
-            .map(|i| i.collect())
-            .unwrap_or_default()
-    };
-    SourceOrder {
-        presets: indices("preset"),
-        configs: indices("config"),
-    }
-}
-
 fn parse_radius(text: &str) -> Result<f64, String> {
     text.trim()
         .parse::<f64>()
@@ -85,7 +55,7 @@ fn parse_radius(text: &str) -> Result<f64, String> {
         .ok_or_else(|| format!("{text:?} is not a radius in pixels above 0"))
 }
 
-fn parse_size(text: &str) -> Result<(usize, usize), String> {
+pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
     let number = |s: &str| {
         s.trim()
             .parse::<usize>()
@@ -99,12 +69,15 @@ fn parse_size(text: &str) -> Result<(usize, usize), String> {
     }
 }
 
-pub fn run(args: &Args, order: &SourceOrder, quiet: bool) -> Result<(), Failure> {
+pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
     check_output(&args.output, &["pfm", "exr", "png"], KERNEL_EXTENSIONS)?;
     if let Some(plot) = &args.profile {
         check_output(plot, &["png"], ".png")?;
     }
-    let config = compose(args, order)?;
+    let config = args.chain.compose(matches)?;
+    if config.effects.is_empty() {
+        return Err(aureole::Error::NoEffect.into());
+    }
     let (width, height) = args.size;
     let mut extent = Extent::new(width, height)?;
     if let Some(n) = args.image_width {
@@ -154,28 +127,4 @@ fn check_output(path: &Path, allowed: &[&str], listed: &'static str) -> Result<(
         }
         .into())
     }
-}
-
-fn compose(args: &Args, order: &SourceOrder) -> Result<Config, Failure> {
-    let mut sources: Vec<(usize, ConfigFile)> = Vec::new();
-    for (name, &index) in args.preset.iter().zip(&order.presets) {
-        sources.push((index, presets::find(name)?.config()?));
-    }
-    for (path, &index) in args.config.iter().zip(&order.configs) {
-        // Any failure to read the config is the user's to fix: exit 2.
-        let file = ConfigFile::load(path).map_err(|e| Failure::Usage(e.into()))?;
-        sources.push((index, file));
-    }
-    sources.sort_by_key(|(index, _)| *index);
-    let mut config = Config::default();
-    for (_, file) in sources {
-        config.apply(file);
-    }
-    if let Some(seed) = args.seed {
-        config.seed = seed;
-    }
-    if config.effects.is_empty() {
-        return Err(aureole::Error::NoEffect.into());
-    }
-    Ok(config)
 }

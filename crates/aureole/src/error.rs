@@ -79,6 +79,15 @@ pub enum Error {
     )]
     NoEffect,
 
+    /// An image whose size differs from the one a plan was built for.
+    #[error("image is {}x{} but the plan was built for {}x{}", found.0, found.1, expected.0, expected.1)]
+    SizeMismatch {
+        /// The plan's size.
+        expected: (usize, usize),
+        /// The image's size.
+        found: (usize, usize),
+    },
+
     /// An output path whose extension names no format we write.
     #[error("{path}: unknown output extension {extension:?}; allowed: {allowed}")]
     OutputFormat {

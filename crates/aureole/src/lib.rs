@@ -20,10 +20,14 @@
 //! # Ok::<(), aureole::Error>(())
 //! ```
 
+pub mod apply;
 pub mod camera;
 pub mod config;
 pub mod convolve;
+pub mod demo;
+pub mod display;
 pub mod error;
+pub mod image;
 pub mod io;
 pub mod kernel;
 pub mod plot;
@@ -31,9 +35,11 @@ pub mod presets;
 pub mod psf;
 pub mod units;
 
+pub use apply::{Applied, ApplyOptions, Plan};
 pub use camera::Camera;
 pub use config::{Config, ConfigFile};
 pub use error::{Error, Result};
+pub use image::{Image, Layout};
 pub use kernel::{Extent, Kernel};
 pub use psf::{Bloom, Corona, Effect, Vos};
 pub use units::{Length, Unit};

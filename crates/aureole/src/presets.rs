@@ -19,6 +19,9 @@ macro_rules! presets {
     };
 }
 
+/// The camera `apply` and `demo` use when no preset or config is given.
+pub const DEFAULT_PRESET: &str = "paper-fig5-both";
+
 /// Every built-in preset, in the order they are listed.
 pub const PRESETS: &[Preset] = presets!(
     "paper-fig4-bloom",

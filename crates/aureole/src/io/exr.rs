@@ -1,20 +1,70 @@
-//! OpenEXR output through the `exr` crate: float32, one `Y` channel for an
-//! achromatic plane or `R`, `G`, `B`.
+//! OpenEXR output through the `exr` crate: float32 (or half) planes named
+//! `Y` or `R`, `G`, `B` (and `A`), ZIP compressed (lossless).
 
 use exr::prelude::*;
 
 use super::atomic::write_atomic;
 use crate::error::{Error, Result};
 
-/// Writes one plane as `Y` or three as `R`, `G`, `B`, float32, ZIP
-/// compressed (lossless).
+/// Named planes of one image, with what its header should carry.
+pub struct ExrPlanes<'a> {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// (channel name, row-major plane) pairs.
+    pub planes: Vec<(&'static str, &'a [f32])>,
+    /// Store half floats instead of float32.
+    pub half: bool,
+    /// The `whiteLuminance` attribute to keep, cd/m² of the value 1.
+    pub white_luminance: Option<f32>,
+}
+
+/// Writes the planes to `path` atomically.
+pub fn write_planes(path: &std::path::Path, image: &ExrPlanes<'_>) -> Result<()> {
+    let list = image
+        .planes
+        .iter()
+        .map(|(name, plane)| {
+            let samples = if image.half {
+                FlatSamples::F16(plane.iter().map(|&v| f16::from_f32(v)).collect())
+            } else {
+                FlatSamples::F32(plane.to_vec())
+            };
+            AnyChannel::new(*name, samples)
+        })
+        .collect();
+    let attributes = LayerAttributes {
+        white_luminance: image.white_luminance,
+        ..LayerAttributes::default()
+    };
+    let layer = Layer::new(
+        (image.width, image.height),
+        attributes,
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    let exr_image = Image::from_layer(layer);
+    write_atomic(path, |out| {
+        exr_image
+            .write()
+            .to_buffered(out)
+            .map_err(|e| Error::Encode {
+                path: path.to_path_buf(),
+                format: "EXR",
+                message: e.to_string(),
+            })
+    })
+}
+
+/// Writes one plane as `Y` or three as `R`, `G`, `B`, float32.
 pub fn write(
     path: &std::path::Path,
     width: usize,
     height: usize,
     channels: &[Vec<f32>],
 ) -> Result<()> {
-    let names: &[&str] = match channels.len() {
+    let names: &[&'static str] = match channels.len() {
         1 => &["Y"],
         3 => &["R", "G", "B"],
         n => {
@@ -25,23 +75,18 @@ pub fn write(
             })
         }
     };
-    let list = names
-        .iter()
-        .zip(channels)
-        .map(|(name, plane)| AnyChannel::new(*name, FlatSamples::F32(plane.clone())))
-        .collect();
-    let layer = Layer::new(
-        (width, height),
-        LayerAttributes::default(),
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(list),
-    );
-    let image = Image::from_layer(layer);
-    write_atomic(path, |out| {
-        image.write().to_buffered(out).map_err(|e| Error::Encode {
-            path: path.to_path_buf(),
-            format: "EXR",
-            message: e.to_string(),
-        })
-    })
+    write_planes(
+        path,
+        &ExrPlanes {
+            width,
+            height,
+            planes: names
+                .iter()
+                .zip(channels)
+                .map(|(n, p)| (*n, p.as_slice()))
+                .collect(),
+            half: false,
+            white_luminance: None,
+        },
+    )
 }

@@ -96,6 +96,43 @@ pub struct Kernel {
 }
 
 impl Kernel {
+    /// A kernel from planes (1 or 3, row-major, top row first, centre at
+    /// column `width/2` and row `height/2`), e.g. a measured PSF. Each plane
+    /// is normalised to ΣK = 1; planes must be finite and non-negative with a
+    /// positive sum.
+    pub fn from_planes(width: usize, height: usize, channels: Vec<Vec<f32>>) -> Result<Kernel> {
+        Extent::new(width, height)?;
+        let refuse = |message: &str| Error::Parameter {
+            effect: "kernel".to_string(),
+            name: "planes",
+            value: message.to_string(),
+            allowed:
+                "1 or 3 planes of width×height finite, non-negative weights with a positive sum",
+        };
+        if channels.len() != 1 && channels.len() != 3 {
+            return Err(refuse(&format!("{} planes", channels.len())));
+        }
+        let mut normalised = Vec::with_capacity(channels.len());
+        for plane in channels {
+            if plane.len() != width * height {
+                return Err(refuse(&format!("a plane of {} values", plane.len())));
+            }
+            if plane.iter().any(|v| !v.is_finite() || *v < 0.0) {
+                return Err(refuse("a negative or non-finite weight"));
+            }
+            let sum: f64 = plane.iter().map(|&v| f64::from(v)).sum();
+            if sum <= 0.0 {
+                return Err(refuse("a plane of zeros"));
+            }
+            normalised.push(plane.iter().map(|&v| (f64::from(v) / sum) as f32).collect());
+        }
+        Ok(Kernel {
+            width,
+            height,
+            channels: normalised,
+        })
+    }
+
     /// Width in pixels.
     pub fn width(&self) -> usize {
         self.width

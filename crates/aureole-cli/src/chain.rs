@@ -1,0 +1,76 @@
+//! The options that say which camera to simulate, shared by the commands:
+//! presets and config files composed in command-line order, and the seed.
+
+use std::path::PathBuf;
+
+use aureole::{presets, Config, ConfigFile};
+use clap::ArgMatches;
+
+use crate::Failure;
+
+#[derive(clap::Args)]
+pub struct ChainArgs {
+    /// A built-in preset (see `aureole presets`); repeatable.
+    #[arg(long, value_name = "NAME")]
+    pub preset: Vec<String>,
+
+    /// A TOML config file (seed, threshold, [camera], [[effect]] …); repeatable.
+    #[arg(long, value_name = "FILE")]
+    pub config: Vec<PathBuf>,
+
+    /// Seed of the random ray lengths (and widths, intensities) of a corona;
+    /// overrides the config's `seed`.
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
+}
+
+impl ChainArgs {
+    /// Whether the user named any preset or config.
+    pub fn is_empty(&self) -> bool {
+        self.preset.is_empty() && self.config.is_empty()
+    }
+
+    /// The configuration the sources make, in the order they stand in
+    /// `matches` (the subcommand's): later settings replace earlier ones,
+    /// effects are appended.
+    pub fn compose(&self, matches: &ArgMatches) -> Result<Config, Failure> {
+        let indices = |id| -> Vec<usize> {
+            matches
+                .indices_of(id)
+                .map(|i| i.collect())
+                .unwrap_or_default()
+        };
+        let mut sources: Vec<(usize, ConfigFile)> = Vec::new();
+        for (name, index) in self.preset.iter().zip(indices("preset")) {
+            sources.push((index, presets::find(name)?.config()?));
+        }
+        for (path, index) in self.config.iter().zip(indices("config")) {
+            // Any failure to read the config is the user's to fix: exit 2.
+            let file = ConfigFile::load(path).map_err(|e| Failure::Usage(e.into()))?;
+            sources.push((index, file));
+        }
+        sources.sort_by_key(|(index, _)| *index);
+        let mut config = Config::default();
+        for (_, file) in sources {
+            config.apply(file);
+        }
+        if let Some(seed) = self.seed {
+            config.seed = seed;
+        }
+        Ok(config)
+    }
+
+    /// As [`compose`](Self::compose), with the default camera when no source
+    /// was named.
+    pub fn compose_or_default(&self, matches: &ArgMatches) -> Result<(Config, bool), Failure> {
+        let mut config = self.compose(matches)?;
+        let defaulted = self.is_empty();
+        if defaulted {
+            config.apply(presets::find(presets::DEFAULT_PRESET)?.config()?);
+        }
+        if config.effects.is_empty() {
+            return Err(aureole::Error::NoEffect.into());
+        }
+        Ok((config, defaulted))
+    }
+}

@@ -1,0 +1,84 @@
+//! Display options: how a linear result becomes a picture.
+
+use aureole::display::{Depth, DisplayOptions, Exposure, ToneCurve};
+
+#[derive(clap::Args)]
+pub struct DisplayArgs {
+    /// Exposure of a picture: `auto` (metered on the log-average luminance)
+    /// or EV at ISO 100, e.g. 10 for f/8 at 1/15 s (white = 1.2·2^EV cd/m²).
+    #[arg(long, value_name = "EV|auto", default_value = "auto", value_parser = parse_exposure, allow_negative_numbers = true)]
+    pub exposure: ExposureArg,
+
+    /// The luminance in cd/m² shown as white (instead of --exposure).
+    #[arg(long, value_name = "CD_PER_M2", conflicts_with = "exposure", value_parser = parse_positive)]
+    pub white: Option<f64>,
+
+    /// Tone curve from exposed light to the display: clip, reinhard or filmic.
+    #[arg(long, value_name = "CURVE", default_value = "filmic")]
+    pub tonemap: Curve,
+
+    /// Bits per sample of a picture: 8 or 16 (PNG and TIFF; default 8 for
+    /// PNG and JPEG, 16 for TIFF).
+    #[arg(long, value_name = "8|16", value_parser = ["8", "16"])]
+    pub bits: Option<String>,
+}
+
+#[derive(Clone, Copy)]
+pub enum ExposureArg {
+    Auto,
+    Ev(f64),
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum Curve {
+    Clip,
+    Reinhard,
+    Filmic,
+}
+
+fn parse_exposure(text: &str) -> Result<ExposureArg, String> {
+    if text.eq_ignore_ascii_case("auto") {
+        return Ok(ExposureArg::Auto);
+    }
+    text.parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && v.abs() <= 40.0)
+        .map(ExposureArg::Ev)
+        .ok_or_else(|| format!("{text:?} is not `auto` or an EV from -40 to 40"))
+}
+
+pub fn parse_positive(text: &str) -> Result<f64, String> {
+    text.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .ok_or_else(|| format!("{text:?} is not a finite number above 0"))
+}
+
+impl DisplayArgs {
+    pub fn options(&self) -> DisplayOptions {
+        let exposure = match (self.white, self.exposure) {
+            (Some(white), _) => Exposure::White(white),
+            (None, ExposureArg::Auto) => Exposure::Auto,
+            (None, ExposureArg::Ev(ev)) => Exposure::Ev(ev),
+        };
+        let tone = match self.tonemap {
+            Curve::Clip => ToneCurve::Clip,
+            Curve::Reinhard => ToneCurve::Reinhard,
+            Curve::Filmic => ToneCurve::Filmic,
+        };
+        DisplayOptions { exposure, tone }
+    }
+
+    /// The sample depth for a picture at `path`.
+    pub fn depth(&self, path: &std::path::Path) -> Depth {
+        match self.bits.as_deref() {
+            Some("16") => Depth::Sixteen,
+            Some(_) => Depth::Eight,
+            None if matches!(aureole::io::extension(path).as_str(), "tif" | "tiff") => {
+                Depth::Sixteen
+            }
+            None => Depth::Eight,
+        }
+    }
+}

@@ -1,0 +1,69 @@
+//! `aureole info`: what an image holds, in luminance.
+
+use std::path::PathBuf;
+
+use crate::display_args::parse_positive;
+use crate::{input, Failure};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// The image to describe.
+    input: PathBuf,
+
+    /// Count the pixels above this luminance in cd/m² (default: a ladder
+    /// from 1 to 10⁵).
+    #[arg(long, value_name = "CD_PER_M2")]
+    threshold: Option<f64>,
+
+    /// cd/m² per file unit (default: whiteLuminance, else 1).
+    #[arg(long, value_name = "X", value_parser = parse_positive)]
+    input_scale: Option<f64>,
+}
+
+pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
+    // info describes bad pixels instead of refusing them.
+    let input = input::read(&args.input, args.input_scale, true, quiet)?;
+    let image = &input.loaded.image;
+    let n = image.width * image.height;
+    let mut luminance: Vec<f64> = (0..n)
+        .map(|i| f64::from(image.luminance_at(i)) * input.scale)
+        .collect();
+    let above = |t: f64| luminance.iter().filter(|&&y| y > t).count();
+    let thresholds: Vec<f64> = match args.threshold {
+        Some(t) => vec![t],
+        None => vec![1.0, 10.0, 100.0, 1e3, 1e4, 1e5],
+    };
+    let counts: Vec<String> = thresholds
+        .iter()
+        .map(|&t| format!("  above {t} cd/m²: {} px", above(t)))
+        .collect();
+    luminance.sort_by(f64::total_cmp);
+    let negatives = image.planes.iter().flatten().filter(|v| **v < 0.0).count();
+    let mut text = format!(
+        "{}: {} {}x{}, {:?}{}\n",
+        args.input.display(),
+        input.loaded.format,
+        image.width,
+        image.height,
+        image.layout,
+        if image.alpha.is_some() {
+            " + alpha"
+        } else {
+            ""
+        }
+    );
+    text += &format!(
+        "scale: {} cd/m² per unit ({})\n",
+        input.scale, input.scale_source
+    );
+    if let (Some(min), Some(max)) = (luminance.first(), luminance.last()) {
+        text += &format!(
+            "luminance (cd/m²): min {min:.6} median {:.6} max {max:.6}\n",
+            luminance[luminance.len() / 2]
+        );
+    }
+    text += &format!("negative samples: {negatives}\n");
+    text += &counts.join("\n");
+    println!("{text}");
+    Ok(())
+}

@@ -1,0 +1,172 @@
+//! Linear ("same"-size) convolution of images with a fixed kernel through
+//! real-to-complex FFTs in f32: the kernel's spectrum is computed once and
+//! reused for every channel and every image of the same size. Zero padding
+//! to 5-smooth sizes keeps light from wrapping around the frame.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use realfft::num_complex::Complex;
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::{Fft, FftPlanner};
+
+use super::fft::fast_size;
+use crate::kernel::Kernel;
+
+/// Convolves `width`×`height` planes with one kernel, channel by channel.
+pub struct Convolver {
+    width: usize,
+    height: usize,
+    px: usize,
+    py: usize,
+    /// One spectrum per kernel channel, stored column by column
+    /// (`px/2 + 1` columns of `py` values).
+    spectra: Vec<Vec<Complex<f32>>>,
+    row_fft: Arc<dyn RealToComplex<f32>>,
+    row_ifft: Arc<dyn ComplexToReal<f32>>,
+    column_fft: Arc<dyn Fft<f32>>,
+    column_ifft: Arc<dyn Fft<f32>>,
+}
+
+impl Convolver {
+    /// Plans the convolution of `width`×`height` images with `kernel`
+    /// (centre at column `w/2`, row `h/2`) and transforms the kernel.
+    pub fn new(kernel: &Kernel, width: usize, height: usize) -> Convolver {
+        let (kw, kh) = (kernel.width(), kernel.height());
+        let (cx, cy) = kernel.centre();
+        // Output x ∈ [0, W) must not alias with the full linear result,
+        // which spans [−cx, W + Kw − 2 − cx]; the kernel must not overlap
+        // itself either.
+        let px = fast_size((width + kw - 1 - cx).max(width + cx).max(kw));
+        let py = fast_size((height + kh - 1 - cy).max(height + cy).max(kh));
+        let mut real_planner = RealFftPlanner::<f32>::new();
+        let mut planner = FftPlanner::<f32>::new();
+        let mut plan = Convolver {
+            width,
+            height,
+            px,
+            py,
+            spectra: Vec::new(),
+            row_fft: real_planner.plan_fft_forward(px),
+            row_ifft: real_planner.plan_fft_inverse(px),
+            column_fft: planner.plan_fft_forward(py),
+            column_ifft: planner.plan_fft_inverse(py),
+        };
+        plan.spectra = kernel
+            .channels()
+            .iter()
+            .map(|k| {
+                plan.forward(|row, input| {
+                    // Kernel row j sits at offset j − cy, wrapped.
+                    let j = (row + cy) % py;
+                    if j >= kh {
+                        return false;
+                    }
+                    for (i, &v) in k[j * kw..(j + 1) * kw].iter().enumerate() {
+                        input[(i + px - cx) % px] = v;
+                    }
+                    true
+                })
+            })
+            .collect();
+        plan
+    }
+
+    /// The padded FFT size, columns × rows.
+    pub fn padded_size(&self) -> (usize, usize) {
+        (self.px, self.py)
+    }
+
+    /// How many kernel channels there are.
+    pub fn channels(&self) -> usize {
+        self.spectra.len()
+    }
+
+    /// `plane` (row-major, `width`×`height`) convolved with kernel channel
+    /// `channel`, over the same frame; light beyond the frame is lost.
+    pub fn convolve(&self, plane: &[f32], channel: usize) -> Vec<f32> {
+        let (w, h, px, py) = (self.width, self.height, self.px, self.py);
+        let mut columns = self.forward(|row, input| {
+            if row >= h {
+                return false;
+            }
+            input[..w].copy_from_slice(&plane[row * w..(row + 1) * w]);
+            true
+        });
+        let kernel = &self.spectra[channel];
+        let column_ifft = &self.column_ifft;
+        columns
+            .par_chunks_mut(py)
+            .zip(kernel.par_chunks(py))
+            .for_each(|(column, k)| {
+                for (a, b) in column.iter_mut().zip(k) {
+                    *a *= *b;
+                }
+                column_ifft.process(column);
+            });
+
+        let count = px / 2 + 1;
+        let scale = 1.0 / (px as f32 * py as f32);
+        let row_ifft = &self.row_ifft;
+        let mut out = vec![0f32; w * h];
+        out.par_chunks_mut(w).enumerate().for_each_init(
+            || {
+                (
+                    row_ifft.make_input_vec(),
+                    row_ifft.make_output_vec(),
+                    row_ifft.make_scratch_vec(),
+                )
+            },
+            |(input, output, scratch), (y, dst)| {
+                for (c, v) in input.iter_mut().enumerate() {
+                    *v = columns[c * py + y];
+                }
+                // A real signal's DC and Nyquist bins are real; the inverse
+                // refuses their round-off.
+                input[0].im = 0.0;
+                if px % 2 == 0 {
+                    input[count - 1].im = 0.0;
+                }
+                let _ = row_ifft.process_with_scratch(input, output, scratch);
+                for (d, v) in dst.iter_mut().zip(output.iter()) {
+                    *d = v * scale;
+                }
+            },
+        );
+        out
+    }
+
+    /// The 2-D spectrum, column by column, of the px×py plane whose rows
+    /// `fill` writes (returning false for an all-zero row).
+    fn forward<F>(&self, fill: F) -> Vec<Complex<f32>>
+    where
+        F: Fn(usize, &mut [f32]) -> bool + Sync,
+    {
+        let (px, py) = (self.px, self.py);
+        let count = px / 2 + 1;
+        let zero = Complex::new(0.0, 0.0);
+        let row_fft = &self.row_fft;
+        let mut rows = vec![zero; py * count];
+        rows.par_chunks_mut(count).enumerate().for_each_init(
+            || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
+            |(input, scratch), (row, out)| {
+                input.iter_mut().for_each(|v| *v = 0.0);
+                if fill(row, input) {
+                    let _ = row_fft.process_with_scratch(input, out, scratch);
+                }
+            },
+        );
+        let column_fft = &self.column_fft;
+        let mut columns = vec![zero; count * py];
+        columns
+            .par_chunks_mut(py)
+            .enumerate()
+            .for_each(|(c, column)| {
+                for (r, v) in column.iter_mut().enumerate() {
+                    *v = rows[r * count + c];
+                }
+                column_fft.process(column);
+            });
+        columns
+    }
+}
