@@ -57,6 +57,10 @@ pub struct Plan {
     width: usize,
     height: usize,
     kernel: Kernel,
+    /// K at the centre, per kernel channel: applied exactly, pixel by pixel.
+    centres: Vec<f32>,
+    /// Convolves with the rest of K, the light that moves. Leaving the
+    /// (1 − ε) peak out of the FFT keeps its f32 round-off ~1/ε times smaller.
     convolver: Convolver,
 }
 
@@ -75,11 +79,13 @@ impl Plan {
             extent = extent.capped(w, h);
         }
         let kernel = config.kernel(&extent)?;
-        let convolver = Convolver::new(&kernel, width, height);
+        let (centres, spread) = kernel.split_centre();
+        let convolver = Convolver::new(&spread, width, height);
         Ok(Plan {
             width,
             height,
             kernel,
+            centres,
             convolver,
         })
     }
@@ -157,7 +163,7 @@ impl Plan {
         }
     }
 
-    /// The bright part of colour plane `c` spread by the kernel. A coloured
+    /// The bright part of colour plane `c` through the kernel. A coloured
     /// kernel spreads a luminance image as Y = Σ w_c K_c ⊛ Y.
     fn spread(
         &self,
@@ -167,21 +173,24 @@ impl Plan {
         step: &mut dyn FnMut(()),
     ) -> Vec<f32> {
         let kernels = self.convolver.channels();
+        let through = |k: usize| {
+            let mut out = self.convolver.convolve(bright, k);
+            let centre = self.centres[k];
+            out.par_iter_mut()
+                .zip(bright)
+                .for_each(|(o, b)| *o += centre * b);
+            out
+        };
         match (layout, kernels) {
-            (_, 1) => {
-                let out = self.convolver.convolve(bright, 0);
-                step(());
-                out
-            }
-            (Layout::Rgb, _) => {
-                let out = self.convolver.convolve(bright, c.min(kernels - 1));
+            (_, 1) | (Layout::Rgb, _) => {
+                let out = through(c.min(kernels - 1));
                 step(());
                 out
             }
             (Layout::Luminance, _) => {
                 let mut sum = vec![0f32; bright.len()];
                 for (k, weight) in REC709_LUMINANCE.iter().enumerate().take(kernels) {
-                    let part = self.convolver.convolve(bright, k);
+                    let part = through(k);
                     sum.par_iter_mut()
                         .zip(&part)
                         .for_each(|(s, p)| *s += weight * p);

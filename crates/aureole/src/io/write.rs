@@ -9,6 +9,23 @@ use super::exr::{write_planes, ExrPlanes};
 use crate::error::{Error, Result};
 use crate::image::{Image, Layout};
 
+/// The largest finite half float.
+pub const HALF_MAX: f32 = 65504.0;
+
+/// A copy with every colour sample clamped to the half range, and how many
+/// were clamped.
+fn clamp_to_half(image: &Image) -> (Image, usize) {
+    let mut copy = image.clone();
+    let mut count = 0;
+    for v in copy.planes.iter_mut().flatten() {
+        if v.abs() > HALF_MAX {
+            *v = v.clamp(-HALF_MAX, HALF_MAX);
+            count += 1;
+        }
+    }
+    (copy, count)
+}
+
 /// How to store a linear image.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct LinearOptions {
@@ -22,6 +39,19 @@ pub fn write_linear(path: &Path, image: &Image, options: LinearOptions) -> Resul
     let mut notes = Vec::new();
     match super::extension(path).as_str() {
         "exr" => {
+            let clamped;
+            let image = if options.half {
+                let (copy, count) = clamp_to_half(image);
+                if count > 0 {
+                    notes.push(format!(
+                        "{count} samples beyond ±{HALF_MAX} (the largest half float) written as ±{HALF_MAX}; drop --half to keep them"
+                    ));
+                }
+                clamped = copy;
+                &clamped
+            } else {
+                image
+            };
             let mut planes: Vec<(&'static str, &[f32])> = match image.layout {
                 Layout::Luminance => vec![("Y", &image.planes[0])],
                 Layout::Rgb => vec![

@@ -168,6 +168,19 @@ impl Kernel {
         self.channels[channel][j as usize * self.width + i as usize]
     }
 
+    /// The kernel split into its centre weights (one per channel) and the
+    /// rest, the light that moves: K = centre·δ + spread.
+    pub(crate) fn split_centre(&self) -> (Vec<f32>, Kernel) {
+        let (cx, cy) = self.centre();
+        let at = cy * self.width + cx;
+        let centres = self.channels.iter().map(|plane| plane[at]).collect();
+        let mut spread = self.clone();
+        for plane in &mut spread.channels {
+            plane[at] = 0.0;
+        }
+        (centres, spread)
+    }
+
     /// ΣK of one channel, in f64.
     pub fn sum(&self, channel: usize) -> f64 {
         self.channels[channel].iter().map(|&v| f64::from(v)).sum()

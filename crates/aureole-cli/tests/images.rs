@@ -1,0 +1,274 @@
+//! `aureole apply`, `demo` and `info` as a user runs them.
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use aureole::io::read::read_image;
+use aureole::io::write::{write_linear, LinearOptions};
+use aureole::{ApplyOptions, Config, Image, Layout, Plan};
+use predicates::prelude::*;
+
+fn aureole() -> Command {
+    Command::cargo_bin("aureole").unwrap()
+}
+
+/// A small night scene: a dim background and two lamps.
+fn scene(dir: &Path, name: &str) -> (PathBuf, Image) {
+    let (w, h) = (48, 32);
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.02);
+    for (x, y, l) in [(10, 8, 5e4f32), (35, 20, 2e4)] {
+        for plane in &mut image.planes {
+            plane[y * w + x] = l;
+        }
+    }
+    image.white_luminance = None;
+    let path = dir.join(name);
+    write_linear(&path, &image, LinearOptions::default()).unwrap();
+    (path, image)
+}
+
+fn library_result(image: &Image, preset: &str, threshold: f64) -> Image {
+    let mut config = Config::default();
+    config.apply(aureole::presets::find(preset).unwrap().config().unwrap());
+    let plan = Plan::new(&config, image.width, image.height, None).unwrap();
+    let options = ApplyOptions {
+        threshold,
+        ..ApplyOptions::default()
+    };
+    plan.apply(image, &options, &mut |_| {}).unwrap().image
+}
+
+#[test]
+fn apply_writes_what_the_library_computes() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, image) = scene(dir.path(), "night.exr");
+    let out = dir.path().join("out.exr");
+    aureole()
+        .args(["apply", "--preset", "paper-fig5-both", "--threshold", "1"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success()
+        .stderr(
+            predicate::str::contains("48x32").and(predicate::str::contains("2 px above 1 cd/m²")),
+        );
+    let written = read_image(&out).unwrap().image;
+    assert_eq!(written, library_result(&image, "paper-fig5-both", 1.0));
+    // The input is untouched.
+    assert_eq!(read_image(&input).unwrap().image, image);
+}
+
+#[test]
+fn apply_without_a_camera_uses_the_default_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, image) = scene(dir.path(), "night.pfm");
+    let out = dir.path().join("out.pfm");
+    aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("default camera"));
+    assert_eq!(
+        read_image(&out).unwrap().image,
+        library_result(&image, aureole::presets::DEFAULT_PRESET, 0.0)
+    );
+}
+
+#[test]
+fn apply_writes_pictures_and_glare_only_layers() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, image) = scene(dir.path(), "night.exr");
+    for (name, magic) in [
+        ("p.png", b"\x89PNG".as_slice()),
+        ("p.jpg", &[0xff, 0xd8]),
+        ("p.tif", b"II*\0"),
+    ] {
+        let out = dir.path().join(name);
+        aureole()
+            .args(["apply", "--exposure", "2", "--tonemap", "reinhard"])
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .success()
+            .stderr(predicate::str::contains("EV100 2.0"));
+        assert!(std::fs::read(&out).unwrap().starts_with(magic), "{name}");
+    }
+    let png16 = dir.path().join("p16.png");
+    aureole()
+        .args(["apply", "--white", "100", "--bits", "16"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&png16)
+        .assert()
+        .success();
+    let decoded = image::open(&png16).unwrap();
+    assert!(matches!(decoded, image::DynamicImage::ImageRgb16(_)));
+
+    let glare = dir.path().join("glare.exr");
+    aureole()
+        .args(["apply", "--glare-only", "-q"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&glare)
+        .assert()
+        .success()
+        .stderr("");
+    let glare = read_image(&glare).unwrap().image;
+    let full = library_result(&image, aureole::presets::DEFAULT_PRESET, 0.0);
+    for c in 0..3 {
+        for i in 0..image.width * image.height {
+            let composite = image.planes[c][i] + glare.planes[c][i];
+            assert!(
+                (composite - full.planes[c][i]).abs() <= 1e-3 * full.planes[c][i].abs().max(1.0)
+            );
+        }
+    }
+}
+
+#[test]
+fn apply_keeps_luminance_only_files_luminance_only_and_whiteluminance() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut image = Image::filled(20, 10, Layout::Luminance, 0.01);
+    image.planes[0][55] = 10.0; // 6210 cd/m² at 621 cd/m² per unit
+    image.white_luminance = Some(621.0);
+    let input = dir.path().join("y.exr");
+    write_linear(&input, &image, LinearOptions::default()).unwrap();
+    let out = dir.path().join("out.exr");
+    aureole()
+        .args(["apply", "--threshold", "1000"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("621").and(predicate::str::contains("1 px above 1000")));
+    let written = read_image(&out).unwrap().image;
+    assert_eq!(written.layout, Layout::Luminance);
+    assert_eq!(written.white_luminance, Some(621.0));
+}
+
+#[test]
+fn apply_refuses_nan_unless_sanitized() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut image = Image::filled(8, 6, Layout::Rgb, 1.0);
+    image.planes[0][2 * 8 + 5] = f32::NAN;
+    image.planes[1][4 * 8 + 1] = f32::INFINITY;
+    let input = dir.path().join("bad.exr");
+    write_linear(&input, &image, LinearOptions::default()).unwrap();
+    let out = dir.path().join("out.exr");
+    let assert = aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .failure()
+        .code(1);
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr).into_owned();
+    assert!(
+        stderr.contains("bad.exr")
+            && stderr.contains("2 NaN or infinite")
+            && stderr.contains("column 5 row 2"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+    aureole()
+        .args(["apply", "--sanitize"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains(
+            "2 NaN or infinite samples replaced by 0",
+        ));
+    assert!(read_image(&out).unwrap().image.non_finite().is_none());
+}
+
+#[test]
+fn apply_refuses_to_overwrite_its_input_and_unknown_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, image) = scene(dir.path(), "night.exr");
+    let same = dir.path().join(".").join("night.exr");
+    let assert = aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("-o")
+        .arg(&same)
+        .assert()
+        .failure()
+        .code(2);
+    assert!(String::from_utf8_lossy(&assert.get_output().stderr).contains("overwrite the input"));
+    assert_eq!(read_image(&input).unwrap().image, image);
+
+    let gif = dir.path().join("out.gif");
+    aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("-o")
+        .arg(&gif)
+        .assert()
+        .failure()
+        .code(2)
+        .stderr(predicate::str::contains("\"gif\"").and(predicate::str::contains(".exr")));
+    assert!(!gif.exists());
+
+    let missing = dir.path().join("missing.exr");
+    aureole()
+        .arg("apply")
+        .arg(&missing)
+        .arg("-o")
+        .arg(dir.path().join("o.exr"))
+        .assert()
+        .failure()
+        .code(1)
+        .stderr(predicate::str::contains("missing.exr"));
+}
+
+#[test]
+fn demo_writes_a_picture_and_its_linear_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let (png, exr) = (dir.path().join("demo.png"), dir.path().join("scene.exr"));
+    aureole()
+        .args(["demo", "--size", "320x180", "-o"])
+        .arg(&png)
+        .arg("--hdr")
+        .arg(&exr)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("night street 320x180"));
+    let picture = image::open(&png).unwrap();
+    assert_eq!((picture.width(), picture.height()), (320, 180));
+    let scene = read_image(&exr).unwrap().image;
+    let max = scene.planes.iter().flatten().fold(0f32, |m, &v| m.max(v));
+    let min = scene
+        .planes
+        .iter()
+        .flatten()
+        .fold(f32::INFINITY, |m, &v| m.min(v));
+    // Street lamps of 10⁴–10⁵ cd/m² over a sky of ~10⁻² cd/m².
+    assert!(max > 1e4 && max < 2e5 && min < 0.05, "{min} … {max}");
+}
+
+#[test]
+fn info_describes_luminance_and_bright_pixels() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, _) = scene(dir.path(), "night.exr");
+    aureole().arg("info").arg(&input).assert().success().stdout(
+        predicate::str::contains("48x32")
+            .and(predicate::str::contains("max 50000"))
+            .and(predicate::str::contains("above 10000 cd/m²: 2 px"))
+            .and(predicate::str::contains("above 100000 cd/m²: 0 px")),
+    );
+    aureole()
+        .args(["info", "--threshold", "30000"])
+        .arg(&input)
+        .assert()
+        .success()
+        .stdout(predicate::str::contains("above 30000 cd/m²: 1 px"));
+}

@@ -1,0 +1,300 @@
+//! The pipeline against its definition: linear convolution with zero outside
+//! the frame, the threshold split O = I·[Y ≤ T] + K ⊛ (I·[Y > T]), energy.
+
+use aureole::apply::spread_fraction;
+use aureole::convolve::plan::Convolver;
+use aureole::{ApplyOptions, Bloom, Config, Effect, Image, Kernel, Layout, Length, Plan};
+
+fn pseudo_random(n: usize, seed: u64) -> Vec<f32> {
+    let mut state = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    (0..n)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 40) as f32) / (1u64 << 24) as f32
+        })
+        .collect()
+}
+
+/// out(x, y) = Σ I(p) K(x − p): the definition, zero outside the frame.
+fn direct(image: &[f32], w: usize, h: usize, kernel: &Kernel) -> Vec<f64> {
+    let mut out = vec![0.0; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let mut sum = 0.0;
+            for py in 0..h {
+                for px in 0..w {
+                    // Kernel offsets are y-up; image rows grow downwards.
+                    let (dx, dy) = (x as i64 - px as i64, py as i64 - y as i64);
+                    sum += f64::from(image[py * w + px]) * f64::from(kernel.at(0, dx, dy));
+                }
+            }
+            out[y * w + x] = sum;
+        }
+    }
+    out
+}
+
+#[test]
+fn fft_convolution_equals_direct_convolution() {
+    for (w, h, kw, kh) in [
+        (17, 12, 5, 7),
+        (16, 9, 6, 4),
+        (9, 14, 33, 27),
+        (20, 20, 39, 39),
+        (7, 5, 1, 1),
+        (12, 8, 2, 3),
+    ] {
+        let kernel = Kernel::from_planes(kw, kh, vec![pseudo_random(kw * kh, 7)]).unwrap();
+        let image = pseudo_random(w * h, 3);
+        let fast = Convolver::new(&kernel, w, h).convolve(&image, 0);
+        let slow = direct(&image, w, h, &kernel);
+        let scale = slow.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (f, s) in fast.iter().zip(&slow) {
+            assert!(
+                (f64::from(*f) - s).abs() <= 1e-5 * scale,
+                "{w}x{h} * {kw}x{kh}: {f} vs {s}"
+            );
+        }
+    }
+}
+
+fn bloom_config(epsilon: f64, beta: f64, radius: f64) -> Config {
+    Config {
+        effects: vec![Effect::Bloom(Bloom {
+            epsilon,
+            beta,
+            radius: Length::px(radius),
+        })],
+        ..Config::default()
+    }
+}
+
+fn paper_config() -> Config {
+    let mut config = Config::default();
+    config.apply(
+        aureole::presets::find("paper-fig5-both")
+            .unwrap()
+            .config()
+            .unwrap(),
+    );
+    config
+}
+
+#[test]
+fn a_single_bright_pixel_reproduces_the_kernel() {
+    let (w, h) = (48, 33);
+    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+    let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
+    let (sx, sy) = (20, 13);
+    image.planes[0][sy * w + sx] = 1000.0;
+    let out = plan
+        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .unwrap()
+        .image;
+    let kernel = plan.kernel();
+    for y in 0..h {
+        for x in 0..w {
+            let expected =
+                1000.0 * f64::from(kernel.at(0, x as i64 - sx as i64, sy as i64 - y as i64));
+            let got = f64::from(out.planes[0][y * w + x]);
+            // f32 FFTs leave round-off near 10⁻¹⁰ of the source's light.
+            let tolerance = 1e-5 * expected + 1e-8 * 1000.0;
+            assert!(
+                (got - expected).abs() <= tolerance,
+                "({x}, {y}): {got} vs {expected}"
+            );
+        }
+    }
+}
+
+#[test]
+fn energy_is_conserved_when_the_glare_stays_in_the_frame() {
+    // β = 4, R = 2 px, capped at 21×21: every source 10 px from the edges keeps
+    // all its light in the frame.
+    let (w, h) = (64, 50);
+    let plan = Plan::new(&bloom_config(0.4, 4.0, 2.0), w, h, Some((21, 21))).unwrap();
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.0);
+    let values = pseudo_random(w * h, 11);
+    for plane in &mut image.planes {
+        for y in 10..h - 10 {
+            for x in 10..w - 10 {
+                plane[y * w + x] = 1.0 + 1e4 * values[y * w + x].powi(8);
+            }
+        }
+    }
+    let applied = plan
+        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .unwrap();
+    assert!((applied.energy_out / applied.energy_in - 1.0).abs() < 1e-5);
+    for (out, input) in applied.image.planes.iter().zip(&image.planes) {
+        let (so, si): (f64, f64) = (
+            out.iter().map(|&v| f64::from(v)).sum(),
+            input.iter().map(|&v| f64::from(v)).sum(),
+        );
+        assert!((so / si - 1.0).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn light_that_leaves_the_frame_is_lost_and_only_that() {
+    let (w, h) = (40, 30);
+    let plan = Plan::new(&bloom_config(0.5, 2.0, 6.0), w, h, None).unwrap();
+    let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
+    image.planes[0][0] = 100.0; // a corner: much of its glare leaves the frame
+    let applied = plan
+        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .unwrap();
+    let kernel = plan.kernel();
+    let inside: f64 = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| f64::from(kernel.at(0, x as i64, -(y as i64))))
+        .sum();
+    assert!((applied.energy_out / 100.0 - inside).abs() < 1e-5);
+    assert!(inside < 0.9);
+}
+
+#[test]
+fn pixels_at_or_below_the_threshold_pass_bit_identical() {
+    let (w, h) = (31, 23);
+    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.0);
+    let values = pseudo_random(w * h * 3, 5);
+    for (c, plane) in image.planes.iter_mut().enumerate() {
+        for (i, v) in plane.iter_mut().enumerate() {
+            *v = 50.0 * values[c * w * h + i] - 5.0; // small negatives too
+        }
+    }
+    let options = ApplyOptions {
+        threshold: 60.0,
+        ..ApplyOptions::default()
+    };
+    let applied = plan.apply(&image, &options, &mut |_| {}).unwrap();
+    assert_eq!(applied.spread_pixels, 0);
+    assert_eq!(applied.image, image);
+}
+
+#[test]
+fn dim_pixels_keep_their_light_and_only_receive_glare() {
+    let (w, h) = (40, 40);
+    let plan = Plan::new(&bloom_config(0.2, 3.0, 2.0), w, h, Some((9, 9))).unwrap();
+    let mut image = Image::filled(w, h, Layout::Luminance, 1.0);
+    image.planes[0][20 * w + 20] = 1e4;
+    let options = ApplyOptions {
+        threshold: 10.0,
+        ..ApplyOptions::default()
+    };
+    let out = plan.apply(&image, &options, &mut |_| {}).unwrap().image;
+    // Beyond the 9×9 kernel's reach the dim pixels keep their light: all
+    // they get is f32 round-off, under 10⁻⁸ of the source.
+    for y in 0..h {
+        for x in 0..w {
+            if (x as i64 - 20).abs() > 4 || (y as i64 - 20).abs() > 4 {
+                let v = out.planes[0][y * w + x];
+                assert!((v - 1.0).abs() < 1e4 * 1e-8, "({x}, {y}): {v}");
+            }
+        }
+    }
+    assert!(out.planes[0][20 * w + 21] > 1.0);
+}
+
+#[test]
+fn no_wrap_around_a_source_at_the_left_edge_never_lights_the_right_edge() {
+    let (w, h) = (128, 40);
+    let plan = Plan::new(&bloom_config(0.5, 2.0, 3.0), w, h, Some((41, 41))).unwrap();
+    let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
+    for y in 0..h {
+        image.planes[0][y * w] = 1e5;
+    }
+    let out = plan
+        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .unwrap()
+        .image;
+    for y in 0..h {
+        for x in 21..w {
+            // Beyond the kernel's reach: only round-off, far below the 10⁻³
+            // of the source a wrapped kernel edge would bring.
+            assert!(
+                out.planes[0][y * w + x].abs() < 1e5 * 1e-6,
+                "({x}, {y}): {}",
+                out.planes[0][y * w + x]
+            );
+        }
+        assert!(out.planes[0][y * w + 20] > 1e5 * 1e-5);
+    }
+}
+
+#[test]
+fn glare_only_is_what_the_camera_adds() {
+    let (w, h) = (30, 20);
+    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.5);
+    image.planes[1][10 * w + 12] = 5e4;
+    let full = plan
+        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .unwrap()
+        .image;
+    let glare_options = ApplyOptions {
+        glare_only: true,
+        ..ApplyOptions::default()
+    };
+    let glare = plan
+        .apply(&image, &glare_options, &mut |_| {})
+        .unwrap()
+        .image;
+    for c in 0..3 {
+        for i in 0..w * h {
+            let composite = image.planes[c][i] + glare.planes[c][i];
+            assert!(
+                (composite - full.planes[c][i]).abs() <= 1e-3 * full.planes[c][i].abs().max(1.0)
+            );
+        }
+    }
+}
+
+#[test]
+fn the_soft_knee_rises_smoothly_from_the_threshold() {
+    assert_eq!(spread_fraction(10.0, 10.0, 0.5), 0.0);
+    assert_eq!(spread_fraction(15.0, 10.0, 0.5), 1.0);
+    assert_eq!(spread_fraction(10.001, 10.0, 0.0), 1.0);
+    let mut last = 0.0;
+    for i in 1..100 {
+        let f = spread_fraction(10.0 + 5.0 * i as f64 / 100.0, 10.0, 0.5);
+        assert!(f > last && f < 1.0);
+        last = f;
+    }
+}
+
+#[test]
+fn a_plan_refuses_an_image_of_another_size() {
+    let plan = Plan::new(&paper_config(), 10, 10, None).unwrap();
+    let image = Image::filled(11, 10, Layout::Luminance, 1.0);
+    let e = plan
+        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("11x10") && e.contains("10x10"), "{e}");
+}
+
+#[test]
+fn input_scale_sets_what_the_threshold_means() {
+    let (w, h) = (16, 16);
+    let plan = Plan::new(&bloom_config(0.3, 2.0, 2.0), w, h, None).unwrap();
+    let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
+    image.planes[0][8 * w + 8] = 2.0; // 2 units = 1242 cd/m² at 621 cd/m² per unit
+    let spread = |scale: f64| {
+        let options = ApplyOptions {
+            threshold: 1000.0,
+            scale,
+            ..ApplyOptions::default()
+        };
+        plan.apply(&image, &options, &mut |_| {})
+            .unwrap()
+            .spread_pixels
+    };
+    assert_eq!(spread(621.0), 1);
+    assert_eq!(spread(1.0), 0);
+}
