@@ -8,7 +8,39 @@
 //! Photographic Effects for Night and Day Scenes", read through MODEL.md.
 //!
 //! A PSF is P(r, φ) = (1 − ε) δ(r) + ε f(r, φ); each effect gives ε and f,
-//! and a [`Kernel`] is the PSF averaged over pixel areas with ΣK = 1.
+//! and a [`Kernel`] is the PSF averaged over pixel areas with ΣK = 1. A
+//! [`Plan`] holds a kernel and its spectrum for one image size and applies
+//! the camera to any number of images: the light of pixels brighter than the
+//! threshold is spread, the rest stays (MODEL.md §7).
+//!
+//! Load, plan, apply, save:
+//!
+//! ```
+//! use aureole::io::{read::read_image, write::{write_linear, LinearOptions}};
+//! use aureole::{presets, ApplyOptions, Config, Plan};
+//!
+//! # let dir = tempfile::tempdir().unwrap();
+//! # let night = dir.path().join("night.exr");
+//! # write_linear(&night, &aureole::demo::night_street(320, 180), LinearOptions::default())?;
+//! // An HDR image whose pixels are cd/m² (or whose whiteLuminance says how many).
+//! let image = read_image(&night)?.image;
+//! let scale = image.white_luminance.map_or(1.0, f64::from);
+//!
+//! // The camera: presets and config files compose like on the command line.
+//! let mut config = Config::default();
+//! config.apply(presets::find("paper-fig5-both")?.config()?);
+//!
+//! // Built once per image size; light from any pixel can reach the whole frame.
+//! let plan = Plan::new(&config, image.width, image.height, None)?;
+//! let options = ApplyOptions { threshold: 100.0, scale, ..ApplyOptions::default() };
+//! let result = plan.apply(&image, &options, &mut |done| eprintln!("{:.0} %", done * 100.0))?;
+//! assert!(result.energy_out <= result.energy_in * (1.0 + 1e-6));
+//!
+//! write_linear(&dir.path().join("camera.exr"), &result.image, LinearOptions::default())?;
+//! # Ok::<(), aureole::Error>(())
+//! ```
+//!
+//! Kernels alone:
 //!
 //! ```
 //! use aureole::{presets, Config, Extent};
