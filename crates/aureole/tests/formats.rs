@@ -323,6 +323,33 @@ fn a_failed_write_leaves_no_file() {
 
 #[cfg(unix)]
 #[test]
+fn outputs_are_ordinary_files_that_others_may_read() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.pfm");
+    write_linear(
+        &path,
+        &test_image(Layout::Luminance, false),
+        LinearOptions::default(),
+    )
+    .unwrap();
+    let mode = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+    // 0666 less the umask, as for any file a program creates (Linux shows
+    // the umask in /proc; elsewhere only the owner's bits are checked).
+    let umask = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|status| {
+            let line = status.lines().find(|l| l.starts_with("Umask:"))?;
+            u32::from_str_radix(line["Umask:".len()..].trim(), 8).ok()
+        });
+    match umask {
+        Some(umask) => assert_eq!(mode, 0o666 & !umask, "{mode:o}"),
+        None => assert_eq!(mode & 0o600, 0o600, "{mode:o}"),
+    }
+}
+
+#[cfg(unix)]
+#[test]
 fn an_unwritable_folder_leaves_no_file() {
     use std::os::unix::fs::PermissionsExt;
     let dir = tempfile::tempdir().unwrap();

@@ -18,9 +18,16 @@ where
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut temp = tempfile::Builder::new()
-        .prefix(".aureole-")
-        .suffix(".part")
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".aureole-").suffix(".part");
+    // Temporary files are private by default; the result is an ordinary
+    // file, so it gets the ordinary mode (0666 less the umask).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut temp = builder
         .tempfile_in(folder)
         .map_err(|e| Error::io(path, e))?;
     {
