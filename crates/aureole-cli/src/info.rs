@@ -24,9 +24,10 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     // info describes bad pixels instead of refusing them.
     let input = input::read(&args.input, args.input_scale, true, quiet)?;
     let image = &input.loaded.image;
-    let n = image.width * image.height;
-    let mut luminance: Vec<f64> = (0..n)
-        .map(|i| f64::from(image.luminance_at(i)) * input.scale)
+    let mut luminance: Vec<f64> = image
+        .luminance()
+        .iter()
+        .map(|&y| f64::from(y) * input.scale)
         .collect();
     let above = |t: f64| luminance.iter().filter(|&&y| y > t).count();
     let thresholds: Vec<f64> = match args.threshold {
@@ -56,6 +57,15 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         "scale: {} cd/m² per unit ({})\n",
         input.scale, input.scale_source
     );
+    if image.layout == aureole::Layout::Rgb {
+        let [wr, wg, wb] = image.luminance_weights();
+        let source = if image.primaries.is_some() {
+            "the file's chromaticities"
+        } else {
+            "Rec.709"
+        };
+        text += &format!("luminance: Y = {wr:.5} R + {wg:.5} G + {wb:.5} B ({source})\n");
+    }
     if let (Some(min), Some(max)) = (luminance.first(), luminance.last()) {
         text += &format!(
             "luminance (cd/m²): min {min:.6} median {:.6} max {max:.6}\n",
@@ -64,6 +74,8 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     }
     text += &format!("negative samples: {negatives}\n");
     text += &counts.join("\n");
-    println!("{text}");
+    text.push('\n');
+    // A closed pipe (`aureole info … | head`) is not an error worth a message.
+    let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
     Ok(())
 }

@@ -109,12 +109,12 @@ impl Plan {
                 found: (image.width, image.height),
             });
         }
-        let n = image.width * image.height;
         let threshold = options.threshold / options.scale;
         let knee = options.knee;
-        let fractions: Vec<f32> = (0..n)
-            .into_par_iter()
-            .map(|i| spread_fraction(f64::from(image.luminance_at(i)), threshold, knee))
+        let fractions: Vec<f32> = image
+            .luminance()
+            .par_iter()
+            .map(|&y| spread_fraction(f64::from(y), threshold, knee))
             .collect();
         let spread_pixels = fractions.iter().filter(|&&f| f > 0.0).count();
         let energy_in = image.total_luminance();

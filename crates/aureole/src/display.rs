@@ -83,8 +83,10 @@ pub fn log_average_luminance(image: &Image, scale: f64) -> f64 {
     if n == 0 {
         return LOG_AVERAGE_FLOOR;
     }
-    let sum: f64 = (0..n)
-        .map(|i| (f64::from(image.luminance_at(i)).max(0.0) * scale + LOG_AVERAGE_FLOOR).ln())
+    let sum: f64 = image
+        .luminance()
+        .iter()
+        .map(|&y| (f64::from(y).max(0.0) * scale + LOG_AVERAGE_FLOOR).ln())
         .sum();
     (sum / n as f64).exp()
 }

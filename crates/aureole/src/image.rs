@@ -4,6 +4,48 @@
 /// Rec.709 luminance weights: Y = 0.2126 R + 0.7152 G + 0.0722 B.
 pub const REC709_LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
 
+/// The CIE xy chromaticities of an image's red, green and blue primaries and
+/// its white point (the EXR `chromaticities` attribute).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Primaries {
+    /// Red primary, (x, y).
+    pub red: [f32; 2],
+    /// Green primary, (x, y).
+    pub green: [f32; 2],
+    /// Blue primary, (x, y).
+    pub blue: [f32; 2],
+    /// White point, (x, y).
+    pub white: [f32; 2],
+}
+
+impl Primaries {
+    /// The Y row of the RGB → XYZ matrix, normalised so that RGB (1, 1, 1)
+    /// is white of Y = 1; `None` for degenerate primaries.
+    pub fn luminance_weights(&self) -> Option<[f32; 3]> {
+        // Columns: XYZ of each primary at Y = 1; solve M·s = XYZ(white).
+        let xyz = |[x, y]: [f32; 2]| {
+            let (x, y) = (f64::from(x), f64::from(y));
+            [x / y, 1.0, (1.0 - x - y) / y]
+        };
+        let (r, g, b, w) = (
+            xyz(self.red),
+            xyz(self.green),
+            xyz(self.blue),
+            xyz(self.white),
+        );
+        let det = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
+            a[0] * (b[1] * c[2] - b[2] * c[1]) - b[0] * (a[1] * c[2] - a[2] * c[1])
+                + c[0] * (a[1] * b[2] - a[2] * b[1])
+        };
+        let d = det(r, g, b);
+        let weights = [det(w, g, b) / d, det(r, w, b) / d, det(r, g, w) / d];
+        weights
+            .iter()
+            .all(|v| v.is_finite() && *v > 0.0)
+            .then(|| weights.map(|v| v as f32))
+    }
+}
+
 /// Which colour channels an image holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Layout {
@@ -28,6 +70,8 @@ pub struct Image {
     pub alpha: Option<Vec<f32>>,
     /// The EXR `whiteLuminance` attribute: cd/m² of the value 1.
     pub white_luminance: Option<f32>,
+    /// The EXR `chromaticities` attribute; Rec.709 when absent.
+    pub primaries: Option<Primaries>,
 }
 
 /// Pixels that are NaN or infinite: how many and where the first one is.
@@ -53,26 +97,35 @@ impl Image {
             planes: vec![vec![value; width * height]; planes],
             alpha: None,
             white_luminance: None,
+            primaries: None,
         }
     }
 
-    /// The luminance of pixel `i` in file units.
-    pub fn luminance_at(&self, i: usize) -> f32 {
+    /// Y = w·RGB for this image's primaries (Rec.709 unless the file
+    /// says otherwise).
+    pub fn luminance_weights(&self) -> [f32; 3] {
+        self.primaries
+            .and_then(|p| p.luminance_weights())
+            .unwrap_or(REC709_LUMINANCE)
+    }
+
+    /// The luminance of every pixel, in file units.
+    pub fn luminance(&self) -> Vec<f32> {
         match self.layout {
-            Layout::Luminance => self.planes[0][i],
+            Layout::Luminance => self.planes[0].clone(),
             Layout::Rgb => {
-                REC709_LUMINANCE[0] * self.planes[0][i]
-                    + REC709_LUMINANCE[1] * self.planes[1][i]
-                    + REC709_LUMINANCE[2] * self.planes[2][i]
+                let [wr, wg, wb] = self.luminance_weights();
+                let (r, g, b) = (&self.planes[0], &self.planes[1], &self.planes[2]);
+                (0..self.width * self.height)
+                    .map(|i| wr * r[i] + wg * g[i] + wb * b[i])
+                    .collect()
             }
         }
     }
 
     /// Σ luminance over the image, in file units, summed in f64.
     pub fn total_luminance(&self) -> f64 {
-        (0..self.width * self.height)
-            .map(|i| f64::from(self.luminance_at(i)))
-            .sum()
+        self.luminance().iter().map(|&v| f64::from(v)).sum()
     }
 
     /// The NaN and infinite samples of the colour planes, if any.
@@ -103,5 +156,45 @@ impl Image {
             }
         }
         count
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rec709_primaries_give_the_rec709_weights() {
+        let rec709 = Primaries {
+            red: [0.64, 0.33],
+            green: [0.30, 0.60],
+            blue: [0.15, 0.06],
+            white: [0.3127, 0.3290],
+        };
+        let w = rec709.luminance_weights().unwrap();
+        for (a, b) in w.iter().zip(REC709_LUMINANCE) {
+            assert!((a - b).abs() < 2e-4, "{w:?}");
+        }
+    }
+
+    #[test]
+    fn other_primaries_give_their_own_luminance() {
+        // Tree.exr's primaries: Y = 0.24994 R + 0.66502 G + 0.08504 B.
+        let tree = Primaries {
+            red: [0.6295, 0.3410],
+            green: [0.2867, 0.6108],
+            blue: [0.1489, 0.0712],
+            white: [0.3155, 0.3316],
+        };
+        let w = tree.luminance_weights().unwrap();
+        for (a, b) in w.iter().zip([0.24994, 0.66502, 0.08504]) {
+            assert!((a - b).abs() < 1e-4, "{w:?}");
+        }
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+        let degenerate = Primaries {
+            green: [0.64, 0.33],
+            ..tree
+        };
+        assert!(degenerate.luminance_weights().is_none());
     }
 }

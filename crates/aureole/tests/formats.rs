@@ -278,6 +278,7 @@ fn unknown_and_empty_files_are_refused_by_content() {
             ],
             half: false,
             white_luminance: None,
+            primaries: None,
         },
     )
     .unwrap();

@@ -18,6 +18,8 @@ pub struct ExrPlanes<'a> {
     pub half: bool,
     /// The `whiteLuminance` attribute to keep, cd/m² of the value 1.
     pub white_luminance: Option<f32>,
+    /// The `chromaticities` attribute to keep.
+    pub primaries: Option<crate::image::Primaries>,
 }
 
 /// Writes the planes to `path` atomically.
@@ -44,7 +46,16 @@ pub fn write_planes(path: &std::path::Path, image: &ExrPlanes<'_>) -> Result<()>
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(list),
     );
-    let exr_image = Image::from_layer(layer);
+    let mut exr_image = Image::from_layer(layer);
+    exr_image.attributes.chromaticities =
+        image
+            .primaries
+            .map(|p| exr::meta::attribute::Chromaticities {
+                red: Vec2(p.red[0], p.red[1]),
+                green: Vec2(p.green[0], p.green[1]),
+                blue: Vec2(p.blue[0], p.blue[1]),
+                white: Vec2(p.white[0], p.white[1]),
+            });
     write_atomic(path, |out| {
         exr_image
             .write()
@@ -87,6 +98,7 @@ pub fn write(
                 .collect(),
             half: false,
             white_luminance: None,
+            primaries: None,
         },
     )
 }

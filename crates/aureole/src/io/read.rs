@@ -7,7 +7,7 @@ use std::path::Path;
 use exr::prelude::{self as x, ReadChannels, ReadLayers};
 
 use crate::error::{Error, Result};
-use crate::image::{Image, Layout};
+use crate::image::{Image, Layout, Primaries};
 
 /// A decoded file and what the user should know about how it was read.
 #[derive(Debug, Clone)]
@@ -77,6 +77,7 @@ pub fn read_image(path: &Path) -> Result<Loaded> {
                     planes: pfm.channels,
                     alpha: None,
                     white_luminance: None,
+                    primaries: None,
                 },
                 format: "PFM",
                 display_referred: false,
@@ -179,6 +180,15 @@ fn read_exr(path: &Path) -> Result<Loaded> {
         .attributes
         .white_luminance
         .filter(|w| w.is_finite() && *w > 0.0);
+    let primaries = image.attributes.chromaticities.map(|c| Primaries {
+        red: [c.red.0, c.red.1],
+        green: [c.green.0, c.green.1],
+        blue: [c.blue.0, c.blue.1],
+        white: [c.white.0, c.white.1],
+    });
+    if primaries.is_some_and(|p| p.luminance_weights().is_none()) {
+        notes.push("the chromaticities attribute is degenerate: luminance uses Rec.709".into());
+    }
     Ok(Loaded {
         image: Image {
             width,
@@ -187,6 +197,7 @@ fn read_exr(path: &Path) -> Result<Loaded> {
             planes,
             alpha: plane("A"),
             white_luminance,
+            primaries,
         },
         format: "OpenEXR",
         display_referred: false,
@@ -250,6 +261,7 @@ fn read_with_image_crate(path: &Path) -> Result<Loaded> {
             planes,
             alpha,
             white_luminance: None,
+            primaries: None,
         },
         format,
         display_referred: !float,

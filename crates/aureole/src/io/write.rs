@@ -71,6 +71,7 @@ pub fn write_linear(path: &Path, image: &Image, options: LinearOptions) -> Resul
                     planes,
                     half: options.half,
                     white_luminance: image.white_luminance,
+                    primaries: image.primaries,
                 },
             )?;
         }
