@@ -7,6 +7,8 @@
 
 pub mod bloom;
 pub mod corona;
+pub mod pupil;
+pub mod spectrum;
 pub mod vos;
 
 pub use bloom::Bloom;
