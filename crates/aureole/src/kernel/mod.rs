@@ -5,6 +5,7 @@
 //! unspread (1 − ε) at the centre: K = (1 − ε)·[centre] + ε·F/ΣF, so ΣK = 1.
 //! The effects of a chain compose by convolution.
 
+mod diffraction;
 pub mod profile;
 
 use rayon::prelude::*;
@@ -12,7 +13,8 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::convolve::fft::convolve_same;
 use crate::error::{Error, Result};
-use crate::psf::{Effect, Samples, SpreadShape};
+use crate::psf::aperture::Optics;
+use crate::psf::{spectrum, Effect, Samples, Source, SpreadShape};
 
 /// The most pixels a kernel may have (2²⁸: 2 GiB per f64 plane while it is
 /// built).
@@ -187,6 +189,38 @@ impl Kernel {
     }
 }
 
+/// The light a diffraction kernel integrates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Light {
+    /// 380–780 nm into linear Rec.709 R, G, B (three planes).
+    Spectral,
+    /// One wavelength in nm (one plane).
+    Monochrome(f64),
+}
+
+impl Light {
+    fn samples(self) -> diffraction::Spectrum {
+        match self {
+            Light::Spectral => spectrum::samples()
+                .into_iter()
+                .map(|(l, w)| (l, w.to_vec()))
+                .collect(),
+            Light::Monochrome(nm) => vec![(nm, vec![1.0])],
+        }
+    }
+}
+
+/// The diffraction kernel of any pupil (`optics`) at `pitch_mm` per pixel:
+/// each channel the pixel-averaged |Â(x/(λf))|², summed over `light`,
+/// normalised to ΣK = 1.
+pub fn diffraction_kernel(optics: &Optics, light: Light, extent: &Extent, pitch_mm: f64) -> Kernel {
+    Psf::from_planes(
+        diffraction::rasterise(optics, &light.samples(), extent, pitch_mm),
+        extent,
+    )
+    .into_kernel()
+}
+
 /// Builds the kernel of the optical chain `effects`, in order, at `extent`.
 /// `seed` drives the corona rays.
 pub fn build(camera: &Camera, effects: &[Effect], seed: u64, extent: &Extent) -> Result<Kernel> {
@@ -198,11 +232,28 @@ pub fn build(camera: &Camera, effects: &[Effect], seed: u64, extent: &Extent) ->
     let mut coronas = 0;
     let mut chain: Option<Psf> = None;
     for effect in effects {
-        let shape = effect.shape(camera, pitch, seed, coronas)?;
+        let source = effect.source(camera, pitch, seed, coronas)?;
         if matches!(effect, Effect::Corona(_)) {
             coronas += 1;
         }
-        let psf = Psf::from_shape(effect.epsilon(), shape.as_ref(), extent);
+        let psf = match source {
+            Source::Shape(epsilon, shape) => Psf::from_shape(epsilon, shape.as_ref(), extent),
+            Source::Diffraction(aperture, pitch) => {
+                let reach = pitch
+                    * ((extent.width * extent.width + extent.height * extent.height) as f64).sqrt()
+                    / 2.0;
+                let optics = aperture.optics(camera, reach)?;
+                let light = if aperture.spectral {
+                    Light::Spectral
+                } else {
+                    Light::Monochrome(aperture.wavelength_nm)
+                };
+                Psf::from_planes(
+                    diffraction::rasterise(&optics, &light.samples(), extent, pitch),
+                    extent,
+                )
+            }
+        };
         chain = Some(match chain {
             None => psf,
             Some(before) => before.then(&psf),
@@ -246,6 +297,20 @@ impl Psf {
         Psf {
             extent: *extent,
             channels: vec![layer],
+        }
+    }
+
+    /// A PSF that is all pattern (no unspread part): planes summing to 1.
+    fn from_planes(planes: Vec<Vec<f64>>, extent: &Extent) -> Psf {
+        Psf {
+            extent: *extent,
+            channels: planes
+                .into_iter()
+                .map(|spread| Layer {
+                    centre: 0.0,
+                    spread,
+                })
+                .collect(),
         }
     }
 

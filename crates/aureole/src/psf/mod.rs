@@ -5,12 +5,14 @@
 //! shape of f; [`crate::kernel`] averages f over pixel areas and normalises it
 //! in discrete space, so constant factors of f never matter.
 
+pub mod aperture;
 pub mod bloom;
 pub mod corona;
 pub mod pupil;
 pub mod spectrum;
 pub mod vos;
 
+pub use aperture::{Aperture, Filter};
 pub use bloom::Bloom;
 pub use corona::{Corona, RayFactors};
 pub use vos::Vos;
@@ -31,10 +33,13 @@ pub enum Effect {
     Corona(Corona),
     /// Human-eye glare after Vos (paper §3).
     Vos(Vos),
+    /// Diffraction on the stop and on filters, computed from the pupil
+    /// (paper §2, MODEL.md §6).
+    Aperture(Aperture),
 }
 
 /// The effect types a config file may name.
-pub const EFFECT_TYPES: &[&str] = &["bloom", "corona", "vos"];
+pub const EFFECT_TYPES: &[&str] = &["bloom", "corona", "vos", "aperture"];
 
 impl Effect {
     /// The effect's type as written in a config file.
@@ -43,15 +48,7 @@ impl Effect {
             Effect::Bloom(_) => "bloom",
             Effect::Corona(_) => "corona",
             Effect::Vos(_) => "vos",
-        }
-    }
-
-    /// ε: the fraction of the light this effect spreads.
-    pub fn epsilon(&self) -> f64 {
-        match self {
-            Effect::Bloom(b) => b.epsilon,
-            Effect::Corona(c) => c.epsilon,
-            Effect::Vos(v) => v.epsilon,
+            Effect::Aperture(_) => "aperture",
         }
     }
 
@@ -61,26 +58,43 @@ impl Effect {
             Effect::Bloom(b) => b.validate(),
             Effect::Corona(c) => c.validate(),
             Effect::Vos(v) => v.validate(),
+            Effect::Aperture(a) => a.validate(),
         }
     }
 
-    /// The spread function f in pixel units, ready to be rasterised.
-    /// `pitch_mm` is the pixel pitch of the image the kernel is for;
-    /// `corona_index` counts the coronas before this one, so that each corona
-    /// of a chain draws its own rays from the one seed.
-    pub(crate) fn shape(
+    /// What the kernel builder rasterises for this effect. `pitch_mm` is the
+    /// pixel pitch of the image the kernel is for; `corona_index` counts the
+    /// coronas before this one, so that each corona of a chain draws its own
+    /// rays from the one seed.
+    pub(crate) fn source(
         &self,
         camera: &Camera,
         pitch_mm: Option<f64>,
         seed: u64,
         corona_index: usize,
-    ) -> Result<Box<dyn SpreadShape>> {
+    ) -> Result<Source> {
         Ok(match self {
-            Effect::Bloom(b) => Box::new(b.shape(pitch_mm)?),
-            Effect::Corona(c) => Box::new(c.shape(pitch_mm, seed, corona_index)?),
-            Effect::Vos(v) => Box::new(v.shape(camera, pitch_mm)?),
+            Effect::Bloom(b) => Source::Shape(b.epsilon, Box::new(b.shape(pitch_mm)?)),
+            Effect::Corona(c) => {
+                Source::Shape(c.epsilon, Box::new(c.shape(pitch_mm, seed, corona_index)?))
+            }
+            Effect::Vos(v) => Source::Shape(v.epsilon, Box::new(v.shape(camera, pitch_mm)?)),
+            Effect::Aperture(a) => {
+                a.validate()?;
+                let pitch = pitch_mm
+                    .ok_or_else(|| Error::needs_sensor_width("aperture diffraction".into()))?;
+                Source::Diffraction(a.clone(), pitch)
+            }
         })
     }
+}
+
+/// An effect ready to rasterise.
+pub(crate) enum Source {
+    /// ε and the shape of f: K = (1 − ε)·δ + ε·F/ΣF.
+    Shape(f64, Box<dyn SpreadShape>),
+    /// A diffraction pattern at this pixel pitch (mm): all of K.
+    Diffraction(Aperture, f64),
 }
 
 /// The spread function f of an effect, in pixel coordinates, as the kernel
