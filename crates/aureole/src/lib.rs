@@ -73,7 +73,7 @@ pub use config::{Config, ConfigFile};
 pub use error::{Error, Result};
 pub use image::{Image, Layout};
 pub use kernel::{Extent, Kernel};
-pub use psf::{Bloom, Corona, Effect, Vos};
+pub use psf::{Aperture, Bloom, Corona, Effect, Filter, Vos};
 pub use units::{Length, Unit};
 
 /// The README's Rust examples, run as doctests so that they stay true.

@@ -32,6 +32,12 @@ pub const PRESETS: &[Preset] = presets!(
     "paper-fig6c",
     "paper-fig6d",
     "human-eye-vos",
+    "camera-f8-7blade",
+    "camera-f11-6blade",
+    "camera-f16-9blade",
+    "star-filter-4pt",
+    "star-filter-6pt",
+    "star-filter-8pt",
 );
 
 impl Preset {

@@ -53,9 +53,12 @@ pub(crate) fn rasterise(
             for (k, (lambda_nm, weights)) in spectrum.iter().enumerate() {
                 let lambda = lambda_nm * 1e-6;
                 let scale = 1.0 / (lambda * f);
-                // A different sub-pixel offset per wavelength (golden-ratio
-                // steps) spreads the samples over the pixel.
-                let (ox, oy) = (frac(0.618_034 * k as f64), frac(0.754_878 * k as f64));
+                // Sample cells' centres, moved by a different fraction per
+                // wavelength (golden-ratio steps), spread over the pixel.
+                let (ox, oy) = (
+                    frac(0.5 + 0.618_034 * k as f64),
+                    frac(0.5 + 0.754_878 * k as f64),
+                );
                 let mut sum = 0.0;
                 for a in 0..grid {
                     let sy = y + pitch_mm * ((a as f64 + oy) / grid as f64 - 0.5);

@@ -1,0 +1,330 @@
+//! Diffraction kernels against the closed-form results of optics
+//! (paper §2, MODEL.md §6).
+
+use std::f64::consts::TAU;
+
+use aureole::kernel::profile::{bilinear, radial_profile};
+use aureole::kernel::{diffraction_kernel, Light};
+use aureole::psf::aperture::Optics;
+use aureole::psf::pupil::Pupil;
+use aureole::psf::spectrum::mean_wavelengths;
+use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel};
+
+const F: f64 = 50.0; // focal length, mm
+const GREEN: f64 = 550.0; // nm
+
+fn optics(pupil: Pupil, diameter_mm: f64) -> Optics {
+    Optics {
+        pupil,
+        diameter_mm,
+        focal_mm: F,
+        orders: vec![([0.0, 0.0], 1.0)],
+    }
+}
+
+fn rectangle(cx: f64, cy: f64, w: f64, h: f64) -> Vec<[f64; 2]> {
+    vec![
+        [cx - w / 2.0, cy - h / 2.0],
+        [cx + w / 2.0, cy - h / 2.0],
+        [cx + w / 2.0, cy + h / 2.0],
+        [cx - w / 2.0, cy + h / 2.0],
+    ]
+}
+
+fn row(kernel: &Kernel, channel: usize) -> Vec<f64> {
+    let (cx, _) = kernel.centre();
+    (0..kernel.width() - cx)
+        .map(|x| f64::from(kernel.at(channel, x as i64, 0)))
+        .collect()
+}
+
+fn local_minima(values: &[f64]) -> Vec<usize> {
+    (1..values.len() - 1)
+        .filter(|&i| values[i] < values[i - 1] && values[i] <= values[i + 1])
+        .collect()
+}
+
+fn local_maxima(values: &[f64]) -> Vec<usize> {
+    (1..values.len() - 1)
+        .filter(|&i| values[i] > values[i - 1] && values[i] >= values[i + 1])
+        .collect()
+}
+
+#[test]
+fn circular_stop_has_its_first_dark_ring_at_1_22_lambda_n() {
+    let n = 8.0;
+    let mut pupil = Pupil::new();
+    pupil.add_disc([0.0, 0.0], F / n / 2.0, true);
+    let pitch = 0.25e-3; // 0.25 µm: the ring at 1.22·0.55·8 = 5.37 µm is 21.5 px out
+    let kernel = diffraction_kernel(
+        &optics(pupil, F / n),
+        Light::Monochrome(GREEN),
+        &Extent::new(81, 81).unwrap(),
+        pitch,
+    );
+    let profile = radial_profile(&kernel, 0);
+    let i = local_minima(&profile)[0];
+    // Sub-pixel minimum by a parabola through the three rings around it.
+    let (a, b, c) = (profile[i - 1], profile[i], profile[i + 1]);
+    let minimum = i as f64 + 0.5 * (a - c) / (a - 2.0 * b + c);
+    let expected = 1.22 * GREEN * 1e-6 * n / pitch;
+    assert!(
+        (minimum - expected).abs() < 0.5,
+        "first dark ring at {minimum} px, theory {expected}"
+    );
+}
+
+#[test]
+fn single_slit_has_sinc_squared_zeros_at_m_lambda_f_over_e() {
+    let e = 0.1; // mm
+    let mut pupil = Pupil::new();
+    pupil.add_polygon(&rectangle(0.0, 0.0, e, 4.0), true);
+    let pitch = GREEN * 1e-6 * F / e / 10.0; // zeros every 10 px
+    let kernel = diffraction_kernel(
+        &optics(pupil, 4.0),
+        Light::Monochrome(GREEN),
+        &Extent::new(101, 9).unwrap(),
+        pitch,
+    );
+    let values = row(&kernel, 0);
+    assert_eq!(local_minima(&values), vec![10, 20, 30, 40]);
+    // Averaged over a pixel (a tenth of the period), a zero of sinc² keeps
+    // ~(π/10)²/12 of the neighbouring lobe's level: far below it.
+    for m in 1..=4 {
+        assert!(values[10 * m] < 0.03 * values[10 * m + 5], "m = {m}");
+    }
+}
+
+#[test]
+fn n_slits_have_principal_maxima_at_m_lambda_f_over_d_and_n_minus_2_between() {
+    let (slits, d, e) = (5, 0.1, 0.02);
+    let mut pupil = Pupil::new();
+    for k in 0..slits {
+        let x = (k as f64 - (slits - 1) as f64 / 2.0) * d;
+        pupil.add_polygon(&rectangle(x, 0.0, e, 2.0), true);
+    }
+    let pitch = GREEN * 1e-6 * F / d / 100.0; // principal maxima every 100 px
+    let kernel = diffraction_kernel(
+        &optics(pupil, 2.0),
+        Light::Monochrome(GREEN),
+        &Extent::new(451, 5).unwrap(),
+        pitch,
+    );
+    let values = row(&kernel, 0);
+    let maxima = local_maxima(&values);
+    let principal: Vec<usize> = maxima
+        .iter()
+        .copied()
+        .filter(|&i| values[i] > 0.3 * values[0])
+        .collect();
+    assert_eq!(principal, vec![100, 200], "{maxima:?}");
+    let between = maxima.iter().filter(|&&i| i > 2 && i < 98).count();
+    assert_eq!(between, slits - 2, "{maxima:?}");
+    assert_eq!(local_minima(&values[..100]).len(), slits - 1);
+}
+
+#[test]
+fn many_random_equal_holes_give_the_single_hole_pattern() {
+    let radius = 0.05;
+    let mut one = Pupil::new();
+    one.add_disc([0.0, 0.0], radius, true);
+    let mut many = Pupil::new();
+    let mut state = 12345u64;
+    let mut uniform = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..30 {
+        many.add_disc([2.0 * uniform() - 1.0, 2.0 * uniform() - 1.0], radius, true);
+    }
+    // The Airy zero of one hole: 1.22 λ f / 2a = 0.335 mm, 16.8 px.
+    let (pitch, extent) = (0.02, Extent::new(81, 81).unwrap());
+    let single = radial_profile(
+        &diffraction_kernel(&optics(one, 2.0 * radius), Light::Spectral, &extent, pitch),
+        1,
+    );
+    let sum = radial_profile(
+        &diffraction_kernel(&optics(many, 2.0), Light::Spectral, &extent, pitch),
+        1,
+    );
+    // At ν = 0 the holes add coherently (N² instead of N) within a speckle of
+    // the centre: compare the shapes outside it, over the same rings.
+    let rings = 4..14;
+    let (ts, tm): (f64, f64) = (
+        single[rings.clone()].iter().sum(),
+        sum[rings.clone()].iter().sum(),
+    );
+    for r in rings {
+        let (a, b) = (sum[r] / tm, single[r] / ts);
+        assert!((a / b - 1.0).abs() < 0.15, "r {r}: {a} vs {b}");
+    }
+}
+
+/// Prominent peaks of the kernel's angular profile averaged over radii
+/// `r0`…`r1` px on an even polar grid.
+fn ray_count(kernel: &Kernel, r0: f64, r1: f64) -> usize {
+    let bins = 720;
+    let profile: Vec<f64> = (0..bins)
+        .map(|b| {
+            let (sin, cos) = (TAU * b as f64 / bins as f64).sin_cos();
+            let steps = ((r1 - r0) * 4.0) as usize;
+            (0..=steps)
+                .map(|s| {
+                    let r = r0 + (r1 - r0) * s as f64 / steps as f64;
+                    bilinear(kernel, 0, r * cos, r * sin) * r
+                })
+                .sum::<f64>()
+        })
+        .collect();
+    let max = profile.iter().cloned().fold(0.0, f64::max);
+    let value = |i: usize| profile[i % bins];
+    (0..bins)
+        .filter(|&i| {
+            let here = value(i);
+            if here < 0.1 * max || !(here > value(i + bins - 1) && here >= value(i + 1)) {
+                return false;
+            }
+            let lowest = |forward: bool| {
+                let mut low = here;
+                for j in 1..bins {
+                    let v = value(i + if forward { j } else { bins - j });
+                    // Ties stop the walk one way only: twin maxima count once.
+                    if v > here || (forward && v == here) {
+                        break;
+                    }
+                    low = low.min(v);
+                }
+                low
+            };
+            here - lowest(true).max(lowest(false)) > 0.3 * here
+        })
+        .count()
+}
+
+fn aperture_kernel(blades: u32, rotation_deg: f64) -> Kernel {
+    let config = Config {
+        camera: Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(F),
+            f_number: Some(8.0),
+        },
+        effects: vec![Effect::Aperture(Aperture {
+            blades,
+            rotation_deg,
+            roundness: 0.0,
+            spectral: false,
+            wavelength_nm: GREEN,
+            obstruction: 0.0,
+            vanes: 0,
+            vane_width: 0.02,
+            filters: Vec::new(),
+        })],
+        ..Config::default()
+    };
+    // 36 mm over 8182 px: a 4.4 µm pitch, λN at 550 nm and f/8.
+    config
+        .kernel(&Extent::new(121, 121).unwrap().with_image_width(8182))
+        .unwrap()
+}
+
+#[test]
+fn an_n_blade_stop_gives_n_rays_for_even_n_and_2n_for_odd_n() {
+    for blades in 3..=9u32 {
+        let expected = if blades % 2 == 0 { blades } else { 2 * blades };
+        for rotation in [0.0, 11.0] {
+            let kernel = aperture_kernel(blades, rotation);
+            assert!((kernel.sum(0) - 1.0).abs() < 1e-5);
+            assert_eq!(
+                ray_count(&kernel, 20.0, 58.0),
+                expected as usize,
+                "{blades} blades, rotated {rotation}°"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_slit_network_follows_the_same_rule_babinet() {
+    // Narrow slits along the sides of a regular polygon: the filter of the
+    // paper's Fig. 2, and by Babinet the complement of a polygonal stop.
+    for sides in 3..=6usize {
+        let radius = 2.0;
+        let mut pupil = Pupil::new();
+        for k in 0..sides {
+            let (a0, a1) = (
+                TAU * k as f64 / sides as f64,
+                TAU * (k + 1) as f64 / sides as f64,
+            );
+            let (p, q) = (
+                [radius * a0.cos(), radius * a0.sin()],
+                [radius * a1.cos(), radius * a1.sin()],
+            );
+            let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+            let length = (dx * dx + dy * dy).sqrt();
+            let (nx, ny) = (-dy / length * 0.01, dx / length * 0.01);
+            pupil.add_polygon(
+                &[
+                    [p[0] - nx, p[1] - ny],
+                    [q[0] - nx, q[1] - ny],
+                    [q[0] + nx, q[1] + ny],
+                    [p[0] + nx, p[1] + ny],
+                ],
+                true,
+            );
+        }
+        let kernel = diffraction_kernel(
+            &optics(pupil, 2.0 * radius),
+            Light::Monochrome(GREEN),
+            &Extent::new(121, 121).unwrap(),
+            2e-3,
+        );
+        let expected = if sides % 2 == 0 { sides } else { 2 * sides };
+        assert_eq!(ray_count(&kernel, 15.0, 58.0), expected, "{sides} slits");
+    }
+}
+
+#[test]
+fn red_spreads_wider_than_blue_by_the_ratio_of_their_wavelengths() {
+    let n = 8.0;
+    let mut pupil = Pupil::new();
+    pupil.add_disc([0.0, 0.0], F / n / 2.0, true);
+    let kernel = diffraction_kernel(
+        &optics(pupil, F / n),
+        Light::Spectral,
+        &Extent::new(161, 161).unwrap(),
+        0.25e-3,
+    );
+    // The radius holding half the energy, per channel.
+    let half_energy_radius = |c: usize| {
+        let (cx, cy) = kernel.centre();
+        let mut rings = vec![0.0; 200];
+        for (i, &v) in kernel.channels()[c].iter().enumerate() {
+            let (dx, dy) = (
+                (i % kernel.width()) as f64 - cx as f64,
+                (i / kernel.width()) as f64 - cy as f64,
+            );
+            rings[(dx * dx + dy * dy).sqrt().round() as usize] += f64::from(v);
+        }
+        let mut total = 0.0;
+        for (r, e) in rings.iter().enumerate() {
+            if total + e >= 0.5 {
+                return r as f64 - 0.5 + (0.5 - total) / e;
+            }
+            total += e;
+        }
+        f64::NAN
+    };
+    for c in 0..3 {
+        assert!((kernel.sum(c) - 1.0).abs() < 1e-5);
+    }
+    let [red, _, blue] = mean_wavelengths();
+    let ratio = half_energy_radius(0) / half_energy_radius(2);
+    assert!(
+        (ratio / (red / blue) - 1.0).abs() < 0.1,
+        "measured {ratio}, wavelengths {}",
+        red / blue
+    );
+    assert!(ratio > 1.0);
+}
