@@ -328,3 +328,49 @@ fn red_spreads_wider_than_blue_by_the_ratio_of_their_wavelengths() {
     );
     assert!(ratio > 1.0);
 }
+
+#[test]
+fn rays_reach_far_and_fade_as_the_inverse_square_of_the_distance() {
+    // Along a straight edge's ray |F|² ∝ L²/q²: the light per pixel of
+    // radius falls as r⁻². A 4K frame on full frame, f/8, 7 blades.
+    let config = Config {
+        camera: Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(F),
+            f_number: Some(8.0),
+        },
+        effects: vec![Effect::Aperture(Aperture {
+            blades: 7,
+            rotation_deg: 0.0,
+            roundness: 0.0,
+            spectral: true,
+            wavelength_nm: GREEN,
+            obstruction: 0.0,
+            vanes: 0,
+            vane_width: 0.02,
+            filters: Vec::new(),
+        })],
+        ..Config::default()
+    };
+    let kernel = config
+        .kernel(&Extent::new(1601, 1601).unwrap().with_image_width(3840))
+        .unwrap();
+    let mut rings = vec![0.0; 801];
+    let (cx, cy) = kernel.centre();
+    for (i, &v) in kernel.channels()[1].iter().enumerate() {
+        let (dx, dy) = ((i % 1601) as f64 - cx as f64, (i / 1601) as f64 - cy as f64);
+        let r = (dx * dx + dy * dy).sqrt().round() as usize;
+        if r <= 800 {
+            rings[r] += f64::from(v);
+        }
+    }
+    let band = |r: usize| rings[r - 20..r + 20].iter().sum::<f64>() / 40.0;
+    let points: Vec<(f64, f64)> = [100, 200, 400, 750]
+        .iter()
+        .map(|&r| ((r as f64).ln(), band(r).ln()))
+        .collect();
+    let slope = (points[3].1 - points[0].1) / (points[3].0 - points[0].0);
+    assert!((slope + 2.0).abs() < 0.15, "slope {slope}");
+    // Still light 750 px out: the ray crosses the frame.
+    assert!(band(750) > 1e-9);
+}

@@ -11,6 +11,10 @@ use std::f64::consts::{PI, TAU};
 /// A complex amplitude (re, im).
 pub type Amplitude = [f64; 2];
 
+/// A polygon edge for the far field: length (mm), outward normal, unit
+/// direction along the edge.
+pub(crate) type EdgeTerm = (f64, [f64; 2], [f64; 2]);
+
 #[derive(Debug, Clone)]
 struct Edge {
     length: f64,
@@ -172,6 +176,26 @@ impl Pupil {
             sum[1] += element.sign * a[1];
         }
         sum
+    }
+
+    /// What the far field is made of: every polygon edge as (length L mm,
+    /// outward normal, unit direction along it), and every disc's radius.
+    /// Far from the centre the edges' and discs' patterns add incoherently.
+    pub(crate) fn far_field_terms(&self) -> (Vec<EdgeTerm>, Vec<f64>) {
+        let mut edges = Vec::new();
+        let mut discs = Vec::new();
+        for element in &self.elements {
+            match &element.shape {
+                Shape::Polygon { edges: list, .. } => {
+                    for e in list {
+                        let along = [e.delta[0] / e.length, e.delta[1] / e.length];
+                        edges.push((e.length, e.normal, along));
+                    }
+                }
+                Shape::Disc { radius, .. } => discs.push(*radius),
+            }
+        }
+        (edges, discs)
     }
 
     /// |Â(ν)|².
