@@ -458,3 +458,82 @@ fn help_explains_options_with_their_units() {
         assert!(help.contains(phrase), "{phrase} missing from:\n{help}");
     }
 }
+
+#[test]
+fn aperture_presets_write_coloured_kernels() {
+    let dir = tempfile::tempdir().unwrap();
+    let (pfm_path, exr_path, png) = (
+        dir.path().join("k.pfm"),
+        dir.path().join("k.exr"),
+        dir.path().join("k.png"),
+    );
+    for out in [&pfm_path, &exr_path, &png] {
+        aureole()
+            .args([
+                "psf",
+                "--preset",
+                "camera-f8-7blade",
+                "--size",
+                "61",
+                "--image-width",
+                "3840",
+                "-o",
+            ])
+            .arg(out)
+            .assert()
+            .success()
+            .stderr(predicate::str::contains("3 channels"));
+    }
+    assert!(std::fs::read(&pfm_path)
+        .unwrap()
+        .starts_with(b"PF\n61 61\n"));
+    let kernel = pfm::read(&pfm_path).unwrap();
+    for plane in &kernel.channels {
+        let sum: f64 = plane.iter().map(|&v| f64::from(v)).sum();
+        assert!((sum - 1.0).abs() < 1e-5);
+    }
+    let image = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
+    let names: Vec<String> = image.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
+    assert_eq!(names, ["B", "G", "R"]);
+    let picture = image::open(&png).unwrap();
+    assert!(matches!(picture, image::DynamicImage::ImageRgb8(_)));
+}
+
+#[test]
+fn aperture_configs_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("k.pfm");
+    let write = |name: &str, text: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let two_blades = write("two.toml", "[camera]\nsensor_width_mm = 36.0\nfocal_length_mm = 50.0\nf_number = 8.0\n[[effect]]\ntype = \"aperture\"\nblades = 2\n");
+    let no_f = write("nof.toml", "[camera]\nsensor_width_mm = 36.0\nfocal_length_mm = 50.0\n[[effect]]\ntype = \"aperture\"\nblades = 6\n");
+    let bad_filter = write("filter.toml", "[camera]\nsensor_width_mm = 36.0\nfocal_length_mm = 50.0\nf_number = 8.0\n[[effect]]\ntype = \"aperture\"\nblades = 6\n[[effect.filter]]\nspacing_um = 10.0\nwidth_um = 20.0\n");
+    for (config, expected) in [
+        (&two_blades, &["blades = 2", "3 to 64"][..]),
+        (&no_f, &["f_number"][..]),
+        (&bad_filter, &["width_um = 20", "below the spacing"][..]),
+    ] {
+        assert_refused(
+            &[
+                "psf",
+                "--config",
+                config.to_str().unwrap(),
+                "--size",
+                "9",
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            2,
+            expected,
+            Some(&out),
+        );
+    }
+}

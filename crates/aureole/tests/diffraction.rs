@@ -374,3 +374,87 @@ fn rays_reach_far_and_fade_as_the_inverse_square_of_the_distance() {
     // Still light 750 px out: the ray crosses the frame.
     assert!(band(750) > 1e-9);
 }
+
+fn star_config(families: &[f64], spacing_um: f64, width_um: f64, spectral: bool) -> Config {
+    Config {
+        camera: Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(F),
+            f_number: Some(8.0),
+        },
+        effects: vec![Effect::Aperture(Aperture {
+            blades: 0,
+            rotation_deg: 0.0,
+            roundness: 0.0,
+            spectral,
+            wavelength_nm: GREEN,
+            obstruction: 0.0,
+            vanes: 0,
+            vane_width: 0.02,
+            filters: families
+                .iter()
+                .map(|&angle_deg| aureole::Filter {
+                    angle_deg,
+                    spacing_um,
+                    width_um,
+                })
+                .collect(),
+        })],
+        ..Config::default()
+    }
+}
+
+#[test]
+fn filter_lines_diffract_into_orders_at_m_lambda_f_over_d() {
+    // Vertical lines (90°) every d = 200 µm, e = 40 µm: orders along x at
+    // m·λf/d = m·0.1375 mm, 20 px apart at 6.875 µm per pixel, each with
+    // |c_m|² = (e/d)² sinc²(πme/d).
+    let (d, e) = (200.0, 40.0);
+    let kernel = star_config(&[90.0], d, e, false)
+        .kernel(
+            &Extent::new(141, 41)
+                .unwrap()
+                .with_image_width((36.0 / 0.006875) as usize),
+        )
+        .unwrap();
+    let values = row(&kernel, 0);
+    let peaks: Vec<usize> = local_maxima(&values)
+        .into_iter()
+        .filter(|&i| values[i] > 1e-4 * values[0])
+        .collect();
+    assert_eq!(peaks, vec![20, 40, 60], "{peaks:?}");
+    let weight = |m: f64| {
+        let z = std::f64::consts::PI * m * e / d;
+        (z.sin() / z).powi(2)
+    };
+    // Orders are narrow next to a pixel: compare the light within ±3 px.
+    let around = |m: usize| values[20 * m - 3..=20 * m + 3].iter().sum::<f64>();
+    for m in [2usize, 3] {
+        let measured = around(m) / around(1);
+        let theory = weight(m as f64) / weight(1.0);
+        assert!(
+            (measured / theory - 1.0).abs() < 0.1,
+            "order {m}: {measured} vs {theory}"
+        );
+    }
+}
+
+#[test]
+fn star_filters_give_two_rays_per_family_of_lines() {
+    for (families, rays) in [
+        (&[0.0, 90.0][..], 4),
+        (&[0.0, 60.0, 120.0][..], 6),
+        (&[0.0, 45.0, 90.0, 135.0][..], 8),
+    ] {
+        let kernel = star_config(families, 200.0, 10.0, true)
+            .kernel(&Extent::new(161, 161).unwrap().with_image_width(3840))
+            .unwrap();
+        assert_eq!(
+            ray_count(&kernel, 20.0, 78.0),
+            rays,
+            "{} families",
+            families.len()
+        );
+        assert!((kernel.sum(2) - 1.0).abs() < 1e-5);
+    }
+}

@@ -12,7 +12,8 @@
 use rayon::prelude::*;
 
 use super::Extent;
-use crate::convolve::fft::convolve_same;
+use crate::convolve::plan::Convolver;
+use crate::kernel::Kernel;
 use crate::psf::aperture::Optics;
 
 /// What light to integrate: (wavelength nm, weight per channel).
@@ -113,14 +114,33 @@ fn rasterise_with(
         }
     }
     if optics.orders.len() > 1 {
+        // The zero order keeps the whole pattern. Every other order holds
+        // |c_m|² ≲ (e/d)² of the light and the stop's pattern beyond
+        // ORDER_REACH px a fraction of a per cent of that: those orders
+        // convolve a crop of the pattern, through the image convolution.
+        let zero: f64 = optics
+            .orders
+            .iter()
+            .filter(|(nu, _)| nu[0] == 0.0 && nu[1] == 0.0)
+            .map(|(_, w)| w)
+            .sum();
         planes = planes
             .iter()
             .enumerate()
             .map(|(c, plane)| {
                 let comb = order_comb(optics, spectrum, c, extent, pitch_mm, weights_total[c]);
-                convolve_same(plane, &comb, width, height)
-                    .into_iter()
-                    .map(|v| v.max(0.0))
+                let crop = centre_crop(plane, extent, ORDER_REACH);
+                let moved = match Kernel::from_planes(crop.0, crop.1, vec![crop.2]) {
+                    Ok(kernel) => {
+                        let comb: Vec<f32> = comb.iter().map(|&v| v as f32).collect();
+                        Convolver::new(&kernel, width, height).convolve(&comb, 0)
+                    }
+                    Err(_) => vec![0.0; width * height],
+                };
+                plane
+                    .iter()
+                    .zip(&moved)
+                    .map(|(p, m)| (zero * p + f64::from(*m)).max(0.0))
                     .collect()
             })
             .collect();
@@ -261,7 +281,31 @@ impl FarField {
     }
 }
 
-/// The filter's orders for channel `c`: each order m at x = ν_m λ f, with
+/// Half-size in px of the pattern that the filter's non-zero orders carry.
+const ORDER_REACH: usize = 64;
+
+/// The (2·reach + 1)² window around the plane's centre (smaller if the
+/// plane is), as f32.
+fn centre_crop(plane: &[f64], extent: &Extent, reach: usize) -> (usize, usize, Vec<f32>) {
+    let (cx, cy) = (extent.width / 2, extent.height / 2);
+    let (x0, y0) = (cx.saturating_sub(reach), cy.saturating_sub(reach));
+    let (x1, y1) = (
+        (cx + reach).min(extent.width - 1),
+        (cy + reach).min(extent.height - 1),
+    );
+    // Keep the centre in the middle: equal reach on both sides.
+    let (rx, ry) = ((cx - x0).min(x1 - cx), (cy - y0).min(y1 - cy));
+    let (w, h) = (2 * rx + 1, 2 * ry + 1);
+    let mut out = Vec::with_capacity(w * h);
+    for y in cy - ry..=cy + ry {
+        for x in cx - rx..=cx + rx {
+            out.push(plane[y * extent.width + x] as f32);
+        }
+    }
+    (w, h, out)
+}
+
+/// The filter's non-zero orders for channel `c`: each order m at x = ν_m λ f, with
 /// its share |c_m|² of the light, spread bilinearly over the pixels, for
 /// every wavelength of the channel (so orders disperse into spectra).
 fn order_comb(
@@ -277,7 +321,11 @@ fn order_comb(
     let mut comb = vec![0.0; width * height];
     for (lambda_nm, weights) in spectrum {
         let to_px = lambda_nm * 1e-6 * optics.focal_mm / pitch_mm;
-        for (nu, share) in &optics.orders {
+        for (nu, share) in optics
+            .orders
+            .iter()
+            .filter(|(nu, _)| nu[0] != 0.0 || nu[1] != 0.0)
+        {
             let (px, py) = (cx + nu[0] * to_px, cy - nu[1] * to_px);
             let (x0, y0) = (px.floor(), py.floor());
             let (fx, fy) = (px - x0, py - y0);

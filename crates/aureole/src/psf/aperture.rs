@@ -287,7 +287,7 @@ impl Aperture {
                     -(e / d) * z.sin() / z
                 }
             };
-            let mut next = Vec::with_capacity(orders.len() * (2 * count as usize + 1));
+            let mut next = Vec::new();
             for &(nu, weight, used) in &orders {
                 for m in -count..=count {
                     if m != 0 && used >= 2 {
