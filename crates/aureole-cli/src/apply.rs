@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aureole::{ApplyOptions, Plan};
+use aureole::io::read::read_image;
+use aureole::{ApplyOptions, Config, Kernel, Plan};
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
@@ -28,6 +29,12 @@ pub struct Args {
 
     #[command(flatten)]
     chain: ChainArgs,
+
+    /// Use this kernel (a .pfm or .exr written by `aureole psf`, centre at
+    /// its middle) instead of building one from presets and configs: build
+    /// it once, apply it to every frame.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["preset", "config", "seed", "max_kernel"])]
+    kernel: Option<PathBuf>,
 
     /// Luminance threshold in cd/m²: pixels at or below it keep their light
     /// in place (overrides the config's `threshold`; 0 spreads every pixel).
@@ -76,7 +83,10 @@ fn parse_non_negative(text: &str) -> Result<f64, String> {
 
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
     output::check(&args.output, Some(&args.input))?;
-    let (config, defaulted) = args.chain.compose_or_default(matches)?;
+    let (config, defaulted) = match &args.kernel {
+        Some(_) => (Config::default(), false),
+        None => args.chain.compose_or_default(matches)?,
+    };
     let start = Instant::now();
     let input = input::read(&args.input, args.input_scale, args.sanitize, quiet)?;
     let image = &input.loaded.image;
@@ -96,7 +106,15 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     }
     let progress = Progress::new(quiet);
     progress.stage("building kernel");
-    let plan = Plan::new(&config, image.width, image.height, args.max_kernel)?;
+    let plan = match &args.kernel {
+        Some(path) => {
+            let file = read_image(path)?.image;
+            let kernel = Kernel::from_planes(file.width, file.height, file.planes)
+                .map_err(|e| Failure::Usage(anyhow::anyhow!("{}: {e}", path.display())))?;
+            Plan::from_kernel(kernel, image.width, image.height)
+        }
+        None => Plan::new(&config, image.width, image.height, args.max_kernel)?,
+    };
     progress.stage("convolving");
     let options = ApplyOptions {
         threshold: args.threshold.unwrap_or(config.threshold),

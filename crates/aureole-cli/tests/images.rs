@@ -272,3 +272,51 @@ fn info_describes_luminance_and_bright_pixels() {
         .success()
         .stdout(predicate::str::contains("above 30000 cd/m²: 1 px"));
 }
+
+#[test]
+fn apply_reuses_a_kernel_written_by_psf() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, image) = scene(dir.path(), "night.exr");
+    // The kernel a 48×32 frame needs, built once.
+    let kernel = dir.path().join("k.exr");
+    aureole()
+        .args([
+            "psf",
+            "--preset",
+            "paper-fig5-both",
+            "--size",
+            "95x63",
+            "-o",
+        ])
+        .arg(&kernel)
+        .assert()
+        .success();
+    let out = dir.path().join("out.exr");
+    aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("--kernel")
+        .arg(&kernel)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success();
+    let written = read_image(&out).unwrap().image;
+    let expected = library_result(&image, "paper-fig5-both", 0.0);
+    for (a, b) in written
+        .planes
+        .iter()
+        .flatten()
+        .zip(expected.planes.iter().flatten())
+    {
+        assert!((a - b).abs() <= 1e-5 * b.abs().max(1.0), "{a} vs {b}");
+    }
+    aureole()
+        .arg("apply")
+        .arg(&input)
+        .args(["--kernel", "k.exr", "--preset", "paper-fig4-bloom", "-o"])
+        .arg(&out)
+        .assert()
+        .failure()
+        .code(2);
+}

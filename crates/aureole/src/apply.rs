@@ -78,16 +78,21 @@ impl Plan {
         if let Some((w, h)) = max_extent {
             extent = extent.capped(w, h);
         }
-        let kernel = config.kernel(&extent)?;
+        Ok(Plan::from_kernel(config.kernel(&extent)?, width, height))
+    }
+
+    /// A plan for `width`×`height` images with a kernel built before (e.g.
+    /// by `aureole psf`, read back from a file): kernels are cacheable.
+    pub fn from_kernel(kernel: Kernel, width: usize, height: usize) -> Plan {
         let (centres, spread) = kernel.split_centre();
         let convolver = Convolver::new(&spread, width, height);
-        Ok(Plan {
+        Plan {
             width,
             height,
             kernel,
             centres,
             convolver,
-        })
+        }
     }
 
     /// The kernel in use.
