@@ -13,6 +13,28 @@ use rustfft::{Fft, FftPlanner};
 use super::fft::fast_size;
 use crate::kernel::Kernel;
 
+/// Columns transformed together: a strip of them fills a few cache lines
+/// per row.
+const STRIP: usize = 16;
+
+/// The FFT size for a linear convolution of `width`×`height` images with a
+/// `kernel_width`×`kernel_height` kernel centred at its middle: output x in
+/// [0, W) must not alias with the full linear result, which spans
+/// [−cx, W + Kw − 2 − cx], and the kernel must not overlap itself; then the
+/// next 5-smooth size.
+pub fn padded_size(
+    kernel_width: usize,
+    kernel_height: usize,
+    width: usize,
+    height: usize,
+) -> (usize, usize) {
+    let side = |k: usize, n: usize| {
+        let c = k / 2;
+        fast_size((n + k - 1 - c).max(n + c).max(k))
+    };
+    (side(kernel_width, width), side(kernel_height, height))
+}
+
 /// Convolves `width`×`height` planes with one kernel, channel by channel.
 pub struct Convolver {
     width: usize,
@@ -34,11 +56,7 @@ impl Convolver {
     pub fn new(kernel: &Kernel, width: usize, height: usize) -> Convolver {
         let (kw, kh) = (kernel.width(), kernel.height());
         let (cx, cy) = kernel.centre();
-        // Output x ∈ [0, W) must not alias with the full linear result,
-        // which spans [−cx, W + Kw − 2 − cx]; the kernel must not overlap
-        // itself either.
-        let px = fast_size((width + kw - 1 - cx).max(width + cx).max(kw));
-        let py = fast_size((height + kh - 1 - cy).max(height + cy).max(kh));
+        let (px, py) = padded_size(kw, kh, width, height);
         let mut real_planner = RealFftPlanner::<f32>::new();
         let mut planner = FftPlanner::<f32>::new();
         let mut plan = Convolver {
@@ -84,28 +102,82 @@ impl Convolver {
 
     /// `plane` (row-major, `width`×`height`) convolved with kernel channel
     /// `channel`, over the same frame; light beyond the frame is lost.
+    ///
+    /// Only the H image rows are transformed and kept: their spectra go into
+    /// a buffer of strips of [`STRIP`] columns, row by row, so that each
+    /// strip's column transforms (padded to py, multiplied by the kernel's
+    /// spectrum, transformed back and cut to the H output rows) work in
+    /// cache, with no transpose of the whole plane.
     pub fn convolve(&self, plane: &[f32], channel: usize) -> Vec<f32> {
         let (w, h, px, py) = (self.width, self.height, self.px, self.py);
-        let mut columns = self.forward(|row, input| {
-            if row >= h {
-                return false;
-            }
-            input[..w].copy_from_slice(&plane[row * w..(row + 1) * w]);
-            true
-        });
-        let kernel = &self.spectra[channel];
-        let column_ifft = &self.column_ifft;
-        columns
-            .par_chunks_mut(py)
-            .zip(kernel.par_chunks(py))
-            .for_each(|(column, k)| {
-                for (a, b) in column.iter_mut().zip(k) {
-                    *a *= *b;
-                }
-                column_ifft.process(column);
-            });
-
         let count = px / 2 + 1;
+        let strips = count.div_ceil(STRIP);
+        let zero = Complex::new(0.0, 0.0);
+
+        // Row transforms, written strip-major: strip s, row r, column j.
+        let mut buffer = vec![zero; strips * h * STRIP];
+        let row_fft = &self.row_fft;
+        let rows: Vec<Vec<Complex<f32>>> = plane
+            .par_chunks(w)
+            .map_init(
+                || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
+                |(input, scratch), src| {
+                    input[..w].copy_from_slice(src);
+                    input[w..].iter_mut().for_each(|v| *v = 0.0);
+                    let mut out = vec![zero; count];
+                    let _ = row_fft.process_with_scratch(input, &mut out, scratch);
+                    out
+                },
+            )
+            .collect();
+        buffer
+            .par_chunks_mut(h * STRIP)
+            .enumerate()
+            .for_each(|(s, strip)| {
+                let first = s * STRIP;
+                let width = STRIP.min(count - first);
+                for (r, row) in rows.iter().enumerate() {
+                    strip[r * STRIP..r * STRIP + width].copy_from_slice(&row[first..first + width]);
+                }
+            });
+        drop(rows);
+
+        // Column transforms, strip by strip, multiplied by the kernel.
+        let kernel = &self.spectra[channel];
+        let (column_fft, column_ifft) = (&self.column_fft, &self.column_ifft);
+        buffer.par_chunks_mut(h * STRIP).enumerate().for_each_init(
+            || {
+                (
+                    vec![zero; py],
+                    vec![
+                        zero;
+                        column_fft
+                            .get_inplace_scratch_len()
+                            .max(column_ifft.get_inplace_scratch_len())
+                    ],
+                )
+            },
+            |(column, scratch), (s, strip)| {
+                let first = s * STRIP;
+                for j in 0..STRIP.min(count - first) {
+                    for (r, v) in column[..h].iter_mut().enumerate() {
+                        *v = strip[r * STRIP + j];
+                    }
+                    column[h..].iter_mut().for_each(|v| *v = zero);
+                    column_fft.process_with_scratch(column, scratch);
+                    let k = &kernel[(first + j) * py..(first + j + 1) * py];
+                    for (a, b) in column.iter_mut().zip(k) {
+                        *a *= *b;
+                    }
+                    column_ifft.process_with_scratch(column, scratch);
+                    for (r, v) in column[..h].iter().enumerate() {
+                        strip[r * STRIP + j] = *v;
+                    }
+                }
+            },
+        );
+
+        // Inverse row transforms of the H output rows.
         let scale = 1.0 / (px as f32 * py as f32);
         let row_ifft = &self.row_ifft;
         let mut out = vec![0f32; w * h];
@@ -118,8 +190,9 @@ impl Convolver {
                 )
             },
             |(input, output, scratch), (y, dst)| {
-                for (c, v) in input.iter_mut().enumerate() {
-                    *v = columns[c * py + y];
+                for (s, chunk) in input.chunks_mut(STRIP).enumerate() {
+                    let at = s * h * STRIP + y * STRIP;
+                    chunk.copy_from_slice(&buffer[at..at + chunk.len()]);
                 }
                 // A real signal's DC and Nyquist bins are real; the inverse
                 // refuses their round-off.

@@ -1,0 +1,97 @@
+//! Criterion benches of the pipeline on the issue-5 workload: the steady
+//! state (applying a plan whose kernel spectrum is built), the floor (only
+//! the 1-D FFTs a 2-D convolution at that padded size must do), and the
+//! kernel build.
+
+mod workload;
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use aureole::convolve::plan::padded_size;
+use aureole::{ApplyOptions, Extent, Plan};
+use criterion::{criterion_group, criterion_main, Criterion};
+use rayon::prelude::*;
+use realfft::num_complex::Complex;
+use realfft::RealFftPlanner;
+use rustfft::FftPlanner;
+
+const SIZES: [(&str, usize, usize); 2] = [("1080p", 1920, 1080), ("4k", 3840, 2160)];
+
+fn apply(c: &mut Criterion) {
+    let mut group = c.benchmark_group("apply");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(20));
+    for (name, w, h) in SIZES {
+        let image = workload::image(w, h);
+        let plan = Plan::new(&workload::config(), w, h, None).expect("workload plan");
+        group.bench_function(name, |b| {
+            b.iter(|| black_box(plan.apply(&image, &ApplyOptions::default(), &mut |_| {})))
+        });
+    }
+    group.finish();
+}
+
+/// The 1-D transforms of a 3-channel linear convolution at the plan's
+/// padded size: per channel, forward real FFTs of the H image rows,
+/// forward and inverse complex FFTs of the px/2 + 1 columns, inverse real
+/// FFTs of the H output rows; no transposes, no copies.
+fn floor(c: &mut Criterion) {
+    let mut group = c.benchmark_group("floor");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(10));
+    for (name, w, h) in SIZES {
+        // The padded size a full-frame kernel needs.
+        let extent = Extent::for_image(w, h).expect("extent");
+        let (px, py) = padded_size(extent.width, extent.height, w, h);
+        let columns = px / 2 + 1;
+        let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(px);
+        let row_ifft = RealFftPlanner::<f32>::new().plan_fft_inverse(px);
+        let mut planner = FftPlanner::<f32>::new();
+        let (col_fft, col_ifft) = (planner.plan_fft_forward(py), planner.plan_fft_inverse(py));
+        let mut real = vec![0f32; h * px];
+        let mut spectra = vec![Complex::new(0f32, 0.0); h * columns];
+        let mut cols = vec![Complex::new(0f32, 0.0); columns * py];
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                for _ in 0..3 {
+                    real.par_chunks_mut(px)
+                        .zip(spectra.par_chunks_mut(columns))
+                        .for_each(|(r, s)| {
+                            let _ = row_fft.process(r, s);
+                        });
+                    cols.par_chunks_mut(py).for_each(|col| col_fft.process(col));
+                    cols.par_chunks_mut(py)
+                        .for_each(|col| col_ifft.process(col));
+                    spectra
+                        .par_chunks_mut(columns)
+                        .zip(real.par_chunks_mut(px))
+                        .for_each(|(s, r)| {
+                            s[0].im = 0.0;
+                            s[columns - 1].im = 0.0;
+                            let _ = row_ifft.process(s, r);
+                        });
+                }
+                black_box(&real);
+            })
+        });
+    }
+    group.finish();
+}
+
+fn kernel_build(c: &mut Criterion) {
+    let mut group = c.benchmark_group("kernel");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(30));
+    let (name, w, h) = SIZES[0];
+    group.bench_function(name, |b| {
+        b.iter(|| black_box(Plan::new(&workload::config(), w, h, None).expect("plan")))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, apply, floor, kernel_build);
+criterion_main!(benches);
