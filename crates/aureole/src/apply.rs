@@ -124,25 +124,39 @@ impl Plan {
         let spread_pixels = fractions.iter().filter(|&&f| f > 0.0).count();
         let energy_in = image.total_luminance();
 
-        let mut output = image.clone();
-        if spread_pixels > 0 {
+        let mut output = image.clone_without_planes();
+        if spread_pixels == 0 {
+            output.planes = image.planes.clone();
+        } else {
             let steps = self.convolutions(image.layout) as f64;
             let mut done = 0.0;
-            for (c, plane) in output.planes.iter_mut().enumerate() {
+            // With every pixel spread (threshold 0, the complete camera) the
+            // plane is its own bright part and nothing stays: no copies.
+            let everything =
+                spread_pixels == fractions.len() && fractions.iter().all(|&f| f == 1.0);
+            for (c, plane) in image.planes.iter().enumerate() {
+                let mut step = |_| {
+                    done += 1.0;
+                    progress(done / steps);
+                };
+                if everything {
+                    output
+                        .planes
+                        .push(self.spread(plane, c, image.layout, &mut step));
+                    continue;
+                }
                 let bright: Vec<f32> = plane
                     .par_iter()
                     .zip(&fractions)
                     .map(|(v, f)| v * f)
                     .collect();
-                let spread = self.spread(&bright, c, image.layout, &mut |_| {
-                    done += 1.0;
-                    progress(done / steps);
-                });
-                plane
+                let mut spread = self.spread(&bright, c, image.layout, &mut step);
+                spread
                     .par_iter_mut()
+                    .zip(plane)
                     .zip(&bright)
-                    .zip(&spread)
-                    .for_each(|((v, b), s)| *v = (*v - b) + s);
+                    .for_each(|((s, v), b)| *s += v - b);
+                output.planes.push(spread);
             }
         }
         progress(1.0);

@@ -1,6 +1,8 @@
 //! HDR images in memory: linear planes in the file's own units, with the
 //! scale that turns them into luminance (cd/m²).
 
+use rayon::prelude::*;
+
 /// Rec.709 luminance weights: Y = 0.2126 R + 0.7152 G + 0.0722 B.
 pub const REC709_LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
 
@@ -101,6 +103,20 @@ impl Image {
         }
     }
 
+    /// The same image with no colour planes: size, layout, alpha and
+    /// attributes, for a result to fill in.
+    pub fn clone_without_planes(&self) -> Image {
+        Image {
+            width: self.width,
+            height: self.height,
+            layout: self.layout,
+            planes: Vec::new(),
+            alpha: self.alpha.clone(),
+            white_luminance: self.white_luminance,
+            primaries: self.primaries,
+        }
+    }
+
     /// Y = w·RGB for this image's primaries (Rec.709 unless the file
     /// says otherwise).
     pub fn luminance_weights(&self) -> [f32; 3] {
@@ -117,15 +133,41 @@ impl Image {
                 let [wr, wg, wb] = self.luminance_weights();
                 let (r, g, b) = (&self.planes[0], &self.planes[1], &self.planes[2]);
                 (0..self.width * self.height)
+                    .into_par_iter()
                     .map(|i| wr * r[i] + wg * g[i] + wb * b[i])
                     .collect()
             }
         }
     }
 
-    /// Σ luminance over the image, in file units, summed in f64.
+    /// Σ luminance over the image, in file units, summed in f64 row by row
+    /// (rows in parallel, added in order: the same bits every run).
     pub fn total_luminance(&self) -> f64 {
-        self.luminance().iter().map(|&v| f64::from(v)).sum()
+        let weights: Vec<f64> = match self.layout {
+            Layout::Luminance => vec![1.0],
+            Layout::Rgb => self
+                .luminance_weights()
+                .iter()
+                .map(|&w| f64::from(w))
+                .collect(),
+        };
+        let width = self.width.max(1);
+        let rows: Vec<f64> = (0..self.height)
+            .into_par_iter()
+            .map(|y| {
+                self.planes
+                    .iter()
+                    .zip(&weights)
+                    .map(|(plane, w)| {
+                        w * plane[y * width..(y + 1) * width]
+                            .iter()
+                            .map(|&v| f64::from(v))
+                            .sum::<f64>()
+                    })
+                    .sum::<f64>()
+            })
+            .collect();
+        rows.iter().sum()
     }
 
     /// The NaN and infinite samples of the colour planes, if any.

@@ -3,7 +3,7 @@
 //! reused for every channel and every image of the same size. Zero padding
 //! to 5-smooth sizes keeps light from wrapping around the frame.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
 use realfft::num_complex::Complex;
@@ -12,6 +12,9 @@ use rustfft::{Fft, FftPlanner};
 
 use super::fft::fast_size;
 use crate::kernel::Kernel;
+
+/// Row spectra and column strips of one convolution.
+type Buffers = (Vec<Complex<f32>>, Vec<Complex<f32>>);
 
 /// Columns transformed together: a strip of them fills a few cache lines
 /// per row.
@@ -46,6 +49,8 @@ pub struct Convolver {
     spectra: Vec<Vec<Complex<f32>>>,
     row_fft: Arc<dyn RealToComplex<f32>>,
     row_ifft: Arc<dyn ComplexToReal<f32>>,
+    /// Row spectra and column strips, kept between calls.
+    scratch: Mutex<Buffers>,
     column_fft: Arc<dyn Fft<f32>>,
     column_ifft: Arc<dyn Fft<f32>>,
 }
@@ -67,6 +72,7 @@ impl Convolver {
             spectra: Vec::new(),
             row_fft: real_planner.plan_fft_forward(px),
             row_ifft: real_planner.plan_fft_inverse(px),
+            scratch: Mutex::new((Vec::new(), Vec::new())),
             column_fft: planner.plan_fft_forward(py),
             column_ifft: planner.plan_fft_inverse(py),
         };
@@ -115,32 +121,38 @@ impl Convolver {
         let zero = Complex::new(0.0, 0.0);
 
         // Row transforms, written strip-major: strip s, row r, column j.
-        let mut buffer = vec![zero; strips * h * STRIP];
+        // Reuse the plan's buffers when no other call holds them: fresh
+        // ones cost page faults and zeroing on every frame.
+        let mut held = self.scratch.try_lock();
+        let mut own = (Vec::new(), Vec::new());
+        let (rows, buffer) = match held.as_deref_mut() {
+            Ok(buffers) => (&mut buffers.0, &mut buffers.1),
+            Err(_) => (&mut own.0, &mut own.1),
+        };
+        rows.resize(h * count, zero);
+        buffer.resize(strips * h * STRIP, zero);
         let row_fft = &self.row_fft;
-        let rows: Vec<Vec<Complex<f32>>> = plane
-            .par_chunks(w)
-            .map_init(
+        rows.par_chunks_mut(count)
+            .zip(plane.par_chunks(w))
+            .for_each_init(
                 || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
-                |(input, scratch), src| {
+                |(input, scratch), (out, src)| {
                     input[..w].copy_from_slice(src);
                     input[w..].iter_mut().for_each(|v| *v = 0.0);
-                    let mut out = vec![zero; count];
-                    let _ = row_fft.process_with_scratch(input, &mut out, scratch);
-                    out
+                    let _ = row_fft.process_with_scratch(input, out, scratch);
                 },
-            )
-            .collect();
+            );
+        let rows = &*rows;
         buffer
             .par_chunks_mut(h * STRIP)
             .enumerate()
             .for_each(|(s, strip)| {
                 let first = s * STRIP;
                 let width = STRIP.min(count - first);
-                for (r, row) in rows.iter().enumerate() {
+                for (r, row) in rows.chunks(count).enumerate() {
                     strip[r * STRIP..r * STRIP + width].copy_from_slice(&row[first..first + width]);
                 }
             });
-        drop(rows);
 
         // Column transforms, strip by strip, multiplied by the kernel.
         let kernel = &self.spectra[channel];
