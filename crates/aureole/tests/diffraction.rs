@@ -22,6 +22,33 @@ fn optics(pupil: Pupil, diameter_mm: f64) -> Optics {
     }
 }
 
+/// A stop of `blades` blades on the tests' 50 mm f/8 full-frame camera.
+fn lens(blades: u32, spectral: bool) -> Aperture {
+    Aperture {
+        blades,
+        rotation_deg: 0.0,
+        roundness: 0.0,
+        spectral,
+        wavelength_nm: GREEN,
+        obstruction: 0.0,
+        vanes: 0,
+        vane_width: 0.02,
+        filters: Vec::new(),
+    }
+}
+
+fn camera_config(aperture: Aperture) -> Config {
+    Config {
+        camera: Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(F),
+            f_number: Some(8.0),
+        },
+        effects: vec![Effect::Aperture(aperture)],
+        ..Config::default()
+    }
+}
+
 fn rectangle(cx: f64, cy: f64, w: f64, h: f64) -> Vec<[f64; 2]> {
     vec![
         [cx - w / 2.0, cy - h / 2.0],
@@ -204,25 +231,10 @@ fn ray_count(kernel: &Kernel, r0: f64, r1: f64) -> usize {
 }
 
 fn aperture_kernel(blades: u32, rotation_deg: f64) -> Kernel {
-    let config = Config {
-        camera: Camera {
-            sensor_width_mm: Some(36.0),
-            focal_length_mm: Some(F),
-            f_number: Some(8.0),
-        },
-        effects: vec![Effect::Aperture(Aperture {
-            blades,
-            rotation_deg,
-            roundness: 0.0,
-            spectral: false,
-            wavelength_nm: GREEN,
-            obstruction: 0.0,
-            vanes: 0,
-            vane_width: 0.02,
-            filters: Vec::new(),
-        })],
-        ..Config::default()
-    };
+    let config = camera_config(Aperture {
+        rotation_deg,
+        ..lens(blades, false)
+    });
     // 36 mm over 8182 px: a 4.4 µm pitch, λN at 550 nm and f/8.
     config
         .kernel(&Extent::new(121, 121).unwrap().with_image_width(8182))
@@ -333,26 +345,7 @@ fn red_spreads_wider_than_blue_by_the_ratio_of_their_wavelengths() {
 fn rays_reach_far_and_fade_as_the_inverse_square_of_the_distance() {
     // Along a straight edge's ray |F|² ∝ L²/q²: the light per pixel of
     // radius falls as r⁻². A 4K frame on full frame, f/8, 7 blades.
-    let config = Config {
-        camera: Camera {
-            sensor_width_mm: Some(36.0),
-            focal_length_mm: Some(F),
-            f_number: Some(8.0),
-        },
-        effects: vec![Effect::Aperture(Aperture {
-            blades: 7,
-            rotation_deg: 0.0,
-            roundness: 0.0,
-            spectral: true,
-            wavelength_nm: GREEN,
-            obstruction: 0.0,
-            vanes: 0,
-            vane_width: 0.02,
-            filters: Vec::new(),
-        })],
-        ..Config::default()
-    };
-    let kernel = config
+    let kernel = camera_config(lens(7, true))
         .kernel(&Extent::new(1601, 1601).unwrap().with_image_width(3840))
         .unwrap();
     let mut rings = vec![0.0; 801];
@@ -376,32 +369,17 @@ fn rays_reach_far_and_fade_as_the_inverse_square_of_the_distance() {
 }
 
 fn star_config(families: &[f64], spacing_um: f64, width_um: f64, spectral: bool) -> Config {
-    Config {
-        camera: Camera {
-            sensor_width_mm: Some(36.0),
-            focal_length_mm: Some(F),
-            f_number: Some(8.0),
-        },
-        effects: vec![Effect::Aperture(Aperture {
-            blades: 0,
-            rotation_deg: 0.0,
-            roundness: 0.0,
-            spectral,
-            wavelength_nm: GREEN,
-            obstruction: 0.0,
-            vanes: 0,
-            vane_width: 0.02,
-            filters: families
-                .iter()
-                .map(|&angle_deg| aureole::Filter {
-                    angle_deg,
-                    spacing_um,
-                    width_um,
-                })
-                .collect(),
-        })],
-        ..Config::default()
-    }
+    camera_config(Aperture {
+        filters: families
+            .iter()
+            .map(|&angle_deg| aureole::Filter {
+                angle_deg,
+                spacing_um,
+                width_um,
+            })
+            .collect(),
+        ..lens(0, spectral)
+    })
 }
 
 #[test]

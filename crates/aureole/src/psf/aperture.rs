@@ -7,8 +7,8 @@ use std::f64::consts::{PI, TAU};
 
 use serde::Deserialize;
 
-use super::check_range;
 use super::pupil::Pupil;
+use super::{check_count, check_range};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 
@@ -98,14 +98,13 @@ impl Aperture {
     /// Checks every parameter.
     pub fn validate(&self) -> Result<()> {
         const NAME: &str = "aperture";
-        if self.blades != 0 && !(3..=MAX_BLADES).contains(&self.blades) {
-            return Err(Error::Parameter {
-                effect: NAME.into(),
-                name: "blades",
-                value: self.blades.to_string(),
-                allowed: "0 (a circular stop) or 3 to 64 blades",
-            });
-        }
+        check_count(
+            NAME,
+            "blades",
+            self.blades,
+            self.blades == 0 || (3..=MAX_BLADES).contains(&self.blades),
+            "0 (a circular stop) or 3 to 64 blades",
+        )?;
         check_range(
             NAME,
             "rotation_deg",
@@ -141,22 +140,20 @@ impl Aperture {
             self.vane_width > 0.0 && self.vane_width <= 0.2,
             "a fraction of the diameter above 0 and at most 0.2",
         )?;
-        if self.vanes > 16 {
-            return Err(Error::Parameter {
-                effect: NAME.into(),
-                name: "vanes",
-                value: self.vanes.to_string(),
-                allowed: "0 to 16 spider vanes",
-            });
-        }
-        if self.filters.len() > MAX_FILTERS {
-            return Err(Error::Parameter {
-                effect: NAME.into(),
-                name: "filter",
-                value: format!("{} families", self.filters.len()),
-                allowed: "at most 6 families of lines",
-            });
-        }
+        check_count(
+            NAME,
+            "vanes",
+            self.vanes,
+            self.vanes <= 16,
+            "0 to 16 spider vanes",
+        )?;
+        check_count(
+            NAME,
+            "filter",
+            format!("{} families", self.filters.len()),
+            self.filters.len() <= MAX_FILTERS,
+            "at most 6 families of lines",
+        )?;
         for f in &self.filters {
             check_range(
                 "aperture filter",

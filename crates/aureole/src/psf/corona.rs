@@ -12,8 +12,8 @@ use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::Deserialize;
 
-use super::{check_epsilon, check_range, Samples, SpreadShape};
-use crate::error::{Error, Result};
+use super::{check_count, check_epsilon, check_range, Samples, SpreadShape};
+use crate::error::Result;
 use crate::units::Length;
 
 /// The most rays a corona may have.
@@ -90,14 +90,13 @@ impl Corona {
     pub fn validate(&self) -> Result<()> {
         const NAME: &str = "corona";
         check_epsilon(NAME, self.epsilon)?;
-        if self.rays < 1 || self.rays > MAX_RAYS {
-            return Err(Error::Parameter {
-                effect: NAME.to_string(),
-                name: "rays",
-                value: self.rays.to_string(),
-                allowed: "a whole number of rays from 1 to 1024",
-            });
-        }
+        check_count(
+            NAME,
+            "rays",
+            self.rays,
+            (1..=MAX_RAYS).contains(&self.rays),
+            "a whole number of rays from 1 to 1024",
+        )?;
         check_range(
             NAME,
             "fadeout",

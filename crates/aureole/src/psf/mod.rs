@@ -151,6 +151,26 @@ pub(crate) fn check_range(
     }
 }
 
+/// Refuses a whole-number parameter unless `ok` holds.
+pub(crate) fn check_count(
+    effect: &str,
+    name: &'static str,
+    value: impl ToString,
+    ok: bool,
+    allowed: &'static str,
+) -> Result<()> {
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::Parameter {
+            effect: effect.to_string(),
+            name,
+            value: value.to_string(),
+            allowed,
+        })
+    }
+}
+
 pub(crate) fn check_epsilon(effect: &str, epsilon: f64) -> Result<()> {
     check_range(
         effect,
