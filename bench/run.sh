@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The issue-5 benchmark: aureole's library path and its peers on the same
+# workload, in one run, on this machine. Writes bench/RESULTS.md.
+#   bash bench/run.sh            # 1080p and 4K
+#   SIZES=1080p bash bench/run.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+sizes=${SIZES:-"1080p 4k"}
+venv=bench/.venv
+if [ ! -x "$venv/bin/python" ]; then
+  python3 -m venv "$venv"
+  "$venv/bin/pip" install --quiet numpy scipy opencv-python-headless
+fi
+cargo build --release --example bench_workload
+{
+  echo "# Benchmark results"
+  echo
+  echo "Produced by \`bash bench/run.sh\` on $(nproc) cores ($(uname -m)), $(date -u +%Y-%m-%d)."
+  echo "Workload of issue 5 (3 channels, full-frame kernel, threshold 0); times are the"
+  echo "steady state (kernel and its spectrum built beforehand where the tool allows),"
+  echo "median of 6 runs after a warm-up. Agreement: relative L2 difference to aureole."
+  echo
+} > bench/RESULTS.md
+for size in $sizes; do
+  out=bench/out/$size
+  ./target/release/examples/bench_workload "$size" "$out"
+  rows=$(mktemp)
+  for peer in "numpy/scipy rfft2, cached kernel spectrum" "scipy.signal.fftconvolve" "scipy.signal.fftconvolve (2 workers)" "scipy.signal.oaconvolve" "cv2.filter2D"; do
+    "$venv/bin/python" bench/peers.py "$out" "$peer" >> "$rows" || echo "{\"peer\": \"$peer\", \"failed\": true}" >> "$rows"
+  done
+  "$venv/bin/python" - "$out/aureole.json" "$rows" "$size" >> bench/RESULTS.md <<'PY'
+import json, sys
+ours = json.load(open(sys.argv[1]))
+rows = [json.loads(line) for line in open(sys.argv[2]) if line.strip()]
+print(f"## {sys.argv[3]}\n")
+print(f"aureole kernel build (bloom + corona, full frame): {ours['kernel_build']:.2f} s\n")
+print("| implementation | median | min | max | ratio to aureole | peak memory | agreement |")
+print("|---|---|---|---|---|---|---|")
+print(f"| aureole | {ours['median']*1e3:.0f} ms | {ours['min']*1e3:.0f} ms | {ours['max']*1e3:.0f} ms | 1.0 | {ours['peak_mb']:.0f} MB | reference |")
+for r in rows:
+    if r.get("failed"):
+        print(f"| {r['peer']} | failed | | | | | |")
+        continue
+    ok = "ok" if r["difference"] < 1e-4 else "DIFFERS"
+    print(f"| {r['peer']} | {r['median']*1e3:.0f} ms | {r['min']*1e3:.0f} ms | {r['max']*1e3:.0f} ms | {r['median']/ours['median']:.1f} | {r['peak_mb']:.0f} MB | {r['difference']:.1e} {ok} |")
+print()
+PY
+  rm -f "$rows"
+done
+cat bench/RESULTS.md
