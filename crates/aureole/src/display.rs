@@ -164,40 +164,40 @@ pub fn write_picture(path: &Path, picture: &Picture, depth: Depth) -> Result<()>
             })
         }
     };
-    let (w, h) = (picture.width as u32, picture.height as u32);
-    let quantise = |max: f32| move |v: &f32| (v.clamp(0.0, 1.0) * max).round();
     write_atomic(path, |out| match (depth, format) {
         (Depth::Sixteen, ImageFormat::Jpeg) => Err(encode_error(
             name,
             "JPEG holds 8 bits per sample; use .png or .tif for 16".to_string(),
         )),
-        (Depth::Sixteen, _) => {
-            let data: Vec<u16> = picture
-                .rgb
-                .iter()
-                .map(quantise(65535.0))
-                .map(|v| v as u16)
-                .collect();
-            let buffer = ImageBuffer::<Rgb<u16>, _>::from_raw(w, h, data)
-                .ok_or_else(|| encode_error(name, "picture buffer has the wrong size".into()))?;
-            buffer
-                .write_to(out, format)
-                .map_err(|e| encode_error(name, e.to_string()))
-        }
-        (Depth::Eight, _) => {
-            let data: Vec<u8> = picture
-                .rgb
-                .iter()
-                .map(quantise(255.0))
-                .map(|v| v as u8)
-                .collect();
-            let buffer = ImageBuffer::<Rgb<u8>, _>::from_raw(w, h, data)
-                .ok_or_else(|| encode_error(name, "picture buffer has the wrong size".into()))?;
-            buffer
-                .write_to(out, format)
-                .map_err(|e| encode_error(name, e.to_string()))
-        }
+        (Depth::Sixteen, _) => encode(picture, |v| (v * 65535.0).round() as u16, format, out)
+            .map_err(|e| encode_error(name, e)),
+        (Depth::Eight, _) => encode(picture, |v| (v * 255.0).round() as u8, format, out)
+            .map_err(|e| encode_error(name, e)),
     })
+}
+
+/// Quantises the picture's 0…1 values with `sample` and encodes them.
+fn encode<T, W>(
+    picture: &Picture,
+    sample: impl Fn(f32) -> T,
+    format: ImageFormat,
+    out: &mut W,
+) -> std::result::Result<(), String>
+where
+    T: image::Primitive,
+    Rgb<T>: image::Pixel<Subpixel = T> + image::PixelWithColorType,
+    [T]: image::EncodableLayout,
+    W: std::io::Write + std::io::Seek,
+{
+    let data: Vec<T> = picture
+        .rgb
+        .iter()
+        .map(|v| sample(v.clamp(0.0, 1.0)))
+        .collect();
+    ImageBuffer::<Rgb<T>, _>::from_raw(picture.width as u32, picture.height as u32, data)
+        .ok_or_else(|| "picture buffer has the wrong size".to_string())?
+        .write_to(out, format)
+        .map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

@@ -79,8 +79,8 @@ impl Effect {
                 Source::Shape(c.epsilon, Box::new(c.shape(pitch_mm, seed, corona_index)?))
             }
             Effect::Vos(v) => Source::Shape(v.epsilon, Box::new(v.shape(camera, pitch_mm)?)),
+            // Aperture::optics validates it, right when it is rasterised.
             Effect::Aperture(a) => {
-                a.validate()?;
                 let pitch = pitch_mm
                     .ok_or_else(|| Error::needs_sensor_width("aperture diffraction".into()))?;
                 Source::Diffraction(a.clone(), pitch)
@@ -139,16 +139,7 @@ pub(crate) fn check_range(
     ok: bool,
     allowed: &'static str,
 ) -> Result<()> {
-    if value.is_finite() && ok {
-        Ok(())
-    } else {
-        Err(Error::Parameter {
-            effect: effect.to_string(),
-            name,
-            value: value.to_string(),
-            allowed,
-        })
-    }
+    check_count(effect, name, value, value.is_finite() && ok, allowed)
 }
 
 /// Refuses a whole-number parameter unless `ok` holds.
