@@ -6,7 +6,7 @@
 use rayon::prelude::*;
 
 use crate::config::Config;
-use crate::convolve::plan::Convolver;
+use crate::convolve::plan::{Convolver, Input};
 use crate::error::{Error, Result};
 use crate::image::{Image, Layout, REC709_LUMINANCE};
 use crate::kernel::{Extent, Kernel};
@@ -108,6 +108,19 @@ impl Plan {
         options: &ApplyOptions,
         progress: &mut dyn FnMut(f64),
     ) -> Result<Applied> {
+        self.apply_recycling(image, options, Vec::new(), progress)
+    }
+
+    /// [`Plan::apply`], writing into `recycled`, the planes of a result
+    /// that is no longer needed (e.g. the previous frame's): in a frame
+    /// sequence this saves mapping fresh memory for every frame.
+    pub fn apply_recycling(
+        &self,
+        image: &Image,
+        options: &ApplyOptions,
+        mut recycled: Vec<Vec<f32>>,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<Applied> {
         if (image.width, image.height) != (self.width, self.height) {
             return Err(Error::SizeMismatch {
                 expected: (self.width, self.height),
@@ -116,47 +129,58 @@ impl Plan {
         }
         let threshold = options.threshold / options.scale;
         let knee = options.knee;
-        let fractions: Vec<f32> = image
-            .luminance()
-            .par_iter()
-            .map(|&y| spread_fraction(f64::from(y), threshold, knee))
-            .collect();
-        let spread_pixels = fractions.iter().filter(|&&f| f > 0.0).count();
+        let luminance = Luminance::of(image);
+        let pixels = image.width * image.height;
+        // Counted row by row without a plane of fractions: with every pixel
+        // fully spread (threshold 0, the complete camera) none is needed.
+        let width = image.width;
+        let (spread_pixels, full_pixels) = (0..image.height)
+            .into_par_iter()
+            .map(|y| {
+                (y * width..(y + 1) * width).fold((0, 0), |(spread, full), i| {
+                    let f = spread_fraction(f64::from(luminance.at(i)), threshold, knee);
+                    (spread + usize::from(f > 0.0), full + usize::from(f == 1.0))
+                })
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         let energy_in = image.total_luminance();
 
         let mut output = image.clone_without_planes();
         if spread_pixels == 0 {
-            output.planes = image.planes.clone();
+            recycled.truncate(image.planes.len());
+            recycled.resize_with(image.planes.len(), Vec::new);
+            for (out, plane) in recycled.iter_mut().zip(&image.planes) {
+                out.clear();
+                out.extend_from_slice(plane);
+            }
+            output.planes = recycled;
+        } else if full_pixels == pixels {
+            // Every plane is its own bright part and nothing stays.
+            let planes: Vec<&[f32]> = image.planes.iter().map(Vec::as_slice).collect();
+            output.planes = self.spread(&planes, image.layout, recycled, progress);
         } else {
-            let steps = self.convolutions(image.layout) as f64;
-            let mut done = 0.0;
-            // With every pixel spread (threshold 0, the complete camera) the
-            // plane is its own bright part and nothing stays: no copies.
-            let everything =
-                spread_pixels == fractions.len() && fractions.iter().all(|&f| f == 1.0);
-            for (c, plane) in image.planes.iter().enumerate() {
-                let mut step = |_| {
-                    done += 1.0;
-                    progress(done / steps);
-                };
-                if everything {
-                    output
-                        .planes
-                        .push(self.spread(plane, c, image.layout, &mut step));
-                    continue;
-                }
-                let bright: Vec<f32> = plane
-                    .par_iter()
-                    .zip(&fractions)
-                    .map(|(v, f)| v * f)
-                    .collect();
-                let mut spread = self.spread(&bright, c, image.layout, &mut step);
-                spread
-                    .par_iter_mut()
+            let fractions: Vec<f32> = (0..pixels)
+                .into_par_iter()
+                .map(|i| spread_fraction(f64::from(luminance.at(i)), threshold, knee))
+                .collect();
+            let bright: Vec<Vec<f32>> = image
+                .planes
+                .iter()
+                .map(|plane| {
+                    plane
+                        .par_iter()
+                        .zip(&fractions)
+                        .map(|(v, f)| v * f)
+                        .collect()
+                })
+                .collect();
+            let planes: Vec<&[f32]> = bright.iter().map(Vec::as_slice).collect();
+            output.planes = self.spread(&planes, image.layout, recycled, progress);
+            for ((out, plane), bright) in output.planes.iter_mut().zip(&image.planes).zip(&bright) {
+                out.par_iter_mut()
                     .zip(plane)
-                    .zip(&bright)
+                    .zip(bright)
                     .for_each(|((s, v), b)| *s += v - b);
-                output.planes.push(spread);
             }
         }
         progress(1.0);
@@ -174,48 +198,42 @@ impl Plan {
         })
     }
 
-    /// How many convolutions an image of `layout` takes.
-    fn convolutions(&self, layout: Layout) -> usize {
-        match (layout, self.convolver.channels()) {
-            (Layout::Rgb, _) => 3,
-            (Layout::Luminance, k) => k,
-        }
-    }
-
-    /// The bright part of colour plane `c` through the kernel. A coloured
-    /// kernel spreads a luminance image as Y = Σ w_c K_c ⊛ Y.
+    /// The bright planes through the kernel, its centre weight applied
+    /// exactly. A coloured kernel spreads a luminance image as
+    /// Y = Σ w_c K_c ⊛ Y.
     fn spread(
         &self,
-        bright: &[f32],
-        c: usize,
+        bright: &[&[f32]],
         layout: Layout,
-        step: &mut dyn FnMut(()),
-    ) -> Vec<f32> {
+        recycled: Vec<Vec<f32>>,
+        progress: &mut dyn FnMut(f64),
+    ) -> Vec<Vec<f32>> {
         let kernels = self.convolver.channels();
-        let through = |k: usize| {
-            let mut out = self.convolver.convolve(bright, k);
-            let centre = self.centres[k];
-            out.par_iter_mut()
-                .zip(bright)
-                .for_each(|(o, b)| *o += centre * b);
-            out
+        let input = |plane, channel: usize| Input {
+            plane,
+            channel,
+            centre: self.centres[channel],
         };
         match (layout, kernels) {
             (_, 1) | (Layout::Rgb, _) => {
-                let out = through(c.min(kernels - 1));
-                step(());
-                out
+                let inputs: Vec<Input> = bright
+                    .iter()
+                    .enumerate()
+                    .map(|(c, plane)| input(*plane, c.min(kernels - 1)))
+                    .collect();
+                self.convolver.convolve_all(&inputs, recycled, progress)
             }
             (Layout::Luminance, _) => {
-                let mut sum = vec![0f32; bright.len()];
-                for (k, weight) in REC709_LUMINANCE.iter().enumerate().take(kernels) {
-                    let part = through(k);
+                let inputs: Vec<Input> = (0..kernels).map(|k| input(bright[0], k)).collect();
+                let mut parts = self.convolver.convolve_all(&inputs, recycled, progress);
+                let mut sum = parts.remove(0);
+                sum.par_iter_mut().for_each(|s| *s *= REC709_LUMINANCE[0]);
+                for (part, weight) in parts.iter().zip(&REC709_LUMINANCE[1..]) {
                     sum.par_iter_mut()
-                        .zip(&part)
+                        .zip(part)
                         .for_each(|(s, p)| *s += weight * p);
-                    step(());
                 }
-                sum
+                vec![sum]
             }
         }
     }
@@ -234,4 +252,28 @@ pub fn spread_fraction(y: f64, threshold: f64, knee: f64) -> f32 {
     }
     let t = (y - threshold) / width;
     (t * t * (3.0 - 2.0 * t)) as f32
+}
+
+/// Per-pixel luminance of an image, computed where it is needed rather
+/// than kept as a plane.
+enum Luminance<'a> {
+    Rgb([f32; 3], [&'a [f32]; 3]),
+    Plane(&'a [f32]),
+}
+
+impl<'a> Luminance<'a> {
+    fn of(image: &'a Image) -> Luminance<'a> {
+        match (image.layout, image.planes.as_slice()) {
+            (Layout::Rgb, [r, g, b]) => Luminance::Rgb(image.luminance_weights(), [r, g, b]),
+            _ => Luminance::Plane(&image.planes[0]),
+        }
+    }
+
+    /// The same value as [`Image::luminance`] gives for pixel `i`.
+    fn at(&self, i: usize) -> f32 {
+        match self {
+            Luminance::Rgb([wr, wg, wb], [r, g, b]) => wr * r[i] + wg * g[i] + wb * b[i],
+            Luminance::Plane(y) => y[i],
+        }
+    }
 }

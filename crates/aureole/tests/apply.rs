@@ -2,7 +2,7 @@
 //! the frame, the threshold split O = I·[Y ≤ T] + K ⊛ (I·[Y > T]), energy.
 
 use aureole::apply::spread_fraction;
-use aureole::convolve::plan::Convolver;
+use aureole::convolve::plan::{Convolver, Input};
 use aureole::{ApplyOptions, Bloom, Config, Effect, Image, Kernel, Layout, Length, Plan};
 
 fn pseudo_random(n: usize, seed: u64) -> Vec<f32> {
@@ -59,6 +59,80 @@ fn fft_convolution_equals_direct_convolution() {
                 "{w}x{h} * {kw}x{kh}: {f} vs {s}"
             );
         }
+    }
+}
+
+#[test]
+fn full_frame_kernels_convolve_exactly_with_pruned_columns() {
+    // (2W − 1)×(2H − 1) kernels: every pixel reaches every other, and the
+    // columns run as two half-length transforms each way.
+    for (w, h) in [(16, 9), (15, 10), (24, 20), (7, 12)] {
+        let (kw, kh) = (2 * w - 1, 2 * h - 1);
+        let kernel = Kernel::from_planes(kw, kh, vec![pseudo_random(kw * kh, 11)]).unwrap();
+        let image = pseudo_random(w * h, 5);
+        let convolver = Convolver::new(&kernel, w, h);
+        let (_, py) = convolver.padded_size();
+        assert!(py >= kh, "{w}x{h}: period {py}");
+        let fast = convolver.convolve(&image, 0);
+        let slow = direct(&image, w, h, &kernel);
+        let scale = slow.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (f, s) in fast.iter().zip(&slow) {
+            assert!(
+                (f64::from(*f) - s).abs() <= 1e-5 * scale,
+                "{w}x{h}: {f} vs {s}"
+            );
+        }
+    }
+}
+
+#[test]
+fn planes_convolved_together_match_planes_convolved_alone() {
+    let (w, h) = (21, 13);
+    let planes: Vec<Vec<f32>> = (0..3).map(|c| pseudo_random(w * h, 20 + c)).collect();
+    let kernels: Vec<Vec<f32>> = (0..3).map(|c| pseudo_random(41 * 25, 30 + c)).collect();
+    let kernel = Kernel::from_planes(41, 25, kernels).unwrap();
+    let convolver = Convolver::new(&kernel, w, h);
+    let inputs: Vec<Input> = planes
+        .iter()
+        .enumerate()
+        .map(|(c, plane)| Input {
+            plane,
+            channel: 2 - c,
+            centre: 0.25 * c as f32,
+        })
+        .collect();
+    // Recycled planes of the wrong size and number are resized.
+    let recycled = vec![vec![7.0; 5]; 4];
+    let together = convolver.convolve_all(&inputs, recycled, &mut |_| {});
+    assert_eq!(together.len(), 3);
+    for (input, out) in inputs.iter().zip(&together) {
+        let alone = convolver.convolve(input.plane, input.channel);
+        for ((t, a), v) in out.iter().zip(&alone).zip(input.plane) {
+            assert_eq!(*t, a + input.centre * v);
+        }
+    }
+}
+
+#[test]
+fn a_recycled_result_gives_the_same_bytes_as_a_fresh_one() {
+    let (w, h) = (40, 24);
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.05);
+    for (i, plane) in image.planes.iter_mut().enumerate() {
+        plane[300 + 7 * i] = 5e4;
+        plane[611] = 2e3;
+    }
+    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+    for threshold in [0.0, 1.0, 1e9] {
+        let options = ApplyOptions {
+            threshold,
+            ..ApplyOptions::default()
+        };
+        let fresh = plan.apply(&image, &options, &mut |_| {}).unwrap();
+        let previous = vec![vec![f32::NAN; w * h]; 3];
+        let recycled = plan
+            .apply_recycling(&image, &options, previous, &mut |_| {})
+            .unwrap();
+        assert_eq!(fresh.image.planes, recycled.image.planes, "T = {threshold}");
     }
 }
 

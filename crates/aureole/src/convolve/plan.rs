@@ -2,6 +2,13 @@
 //! real-to-complex FFTs in f32: the kernel's spectrum is computed once and
 //! reused for every channel and every image of the same size. Zero padding
 //! to 5-smooth sizes keeps light from wrapping around the frame.
+//!
+//! Only what the "same" output needs is transformed: the H image rows (the
+//! padding rows are zeros), and each column transform is pruned when the
+//! padded height P = 2N holds the H rows in its first half: the even and odd
+//! frequencies of a column are then two transforms of length N (of x and of
+//! x·e^{−iπn/N}), and the H output rows come back from two inverse transforms
+//! of length N, which skips a radix-2 stage each way.
 
 use std::sync::{Arc, Mutex};
 
@@ -13,12 +20,21 @@ use rustfft::{Fft, FftPlanner};
 use super::fft::fast_size;
 use crate::kernel::Kernel;
 
-/// Row spectra and column strips of one convolution.
+/// Row spectra (in tiles) and column results (strip-major), kept between
+/// calls: fresh buffers cost page faults and zeroing on every frame.
 type Buffers = (Vec<Complex<f32>>, Vec<Complex<f32>>);
 
-/// Columns transformed together: a strip of them fills a few cache lines
-/// per row.
+/// Columns transformed together: a strip of them spans two cache lines per
+/// row, and its column transforms fit in the L2 cache.
 const STRIP: usize = 16;
+
+/// Rows transformed together: row spectra are stored in tiles of
+/// BLOCK rows × [`STRIP`] columns, block by block, so that a strip's column
+/// pass and a block's inverse row transforms each read whole tiles.
+const BLOCK: usize = 8;
+
+/// Values in a tile.
+const TILE: usize = BLOCK * STRIP;
 
 /// The FFT size for a linear convolution of `width`×`height` images with a
 /// `kernel_width`×`kernel_height` kernel centred at its middle: output x in
@@ -31,11 +47,69 @@ pub fn padded_size(
     width: usize,
     height: usize,
 ) -> (usize, usize) {
-    let side = |k: usize, n: usize| {
-        let c = k / 2;
-        fast_size((n + k - 1 - c).max(n + c).max(k))
-    };
-    (side(kernel_width, width), side(kernel_height, height))
+    (
+        fast_size(needed(kernel_width, width)),
+        column_transform(needed(kernel_height, height), height).length(),
+    )
+}
+
+/// The shortest period along one axis that avoids wrap-around.
+fn needed(kernel: usize, image: usize) -> usize {
+    let c = kernel / 2;
+    (image + kernel - 1 - c).max(image + c).max(kernel)
+}
+
+/// How the columns are transformed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum ColumnTransform {
+    /// One transform of the whole padded column.
+    Full(usize),
+    /// Two transforms of half the padded length 2N each way (the image
+    /// rows fit in the first half).
+    Halves(usize),
+}
+
+impl ColumnTransform {
+    fn length(self) -> usize {
+        match self {
+            ColumnTransform::Full(p) => p,
+            ColumnTransform::Halves(n) => 2 * n,
+        }
+    }
+}
+
+/// The cheaper of a full and a pruned column transform for `height` image
+/// rows and a period of at least `needed`, by the n·log₂n count.
+fn column_transform(needed: usize, height: usize) -> ColumnTransform {
+    let cost = |n: usize| n as f64 * (n as f64).log2();
+    let full = fast_size(needed);
+    let half = fast_size(needed.div_ceil(2).max(height));
+    if 4.0 * cost(half) < 2.0 * cost(full) {
+        ColumnTransform::Halves(half)
+    } else {
+        ColumnTransform::Full(full)
+    }
+}
+
+/// What a strip task reads: strip `index` of `strips`, the row spectra in
+/// tiles, the kernel's spectrum.
+struct Strip<'a> {
+    index: usize,
+    strips: usize,
+    rows: &'a [Complex<f32>],
+    spectrum: &'a [Complex<f32>],
+}
+
+/// One plane to convolve.
+#[derive(Debug, Clone, Copy)]
+pub struct Input<'a> {
+    /// Row-major, the convolver's width × height.
+    pub plane: &'a [f32],
+    /// The kernel channel to convolve with.
+    pub channel: usize,
+    /// Added to the result times the plane itself: a kernel weight at the
+    /// centre kept out of the FFT, where it would dominate the round-off.
+    pub centre: f32,
 }
 
 /// Convolves `width`×`height` planes with one kernel, channel by channel.
@@ -43,16 +117,18 @@ pub struct Convolver {
     width: usize,
     height: usize,
     px: usize,
-    py: usize,
-    /// One spectrum per kernel channel, stored column by column
-    /// (`px/2 + 1` columns of `py` values).
+    columns: ColumnTransform,
+    /// One spectrum per kernel channel, stored column by column (`px/2 + 1`
+    /// columns of P values; for pruned columns the even frequencies, then
+    /// the odd ones).
     spectra: Vec<Vec<Complex<f32>>>,
+    /// e^{−iπn/N} for n < N, for pruned columns.
+    twiddles: Vec<Complex<f32>>,
     row_fft: Arc<dyn RealToComplex<f32>>,
     row_ifft: Arc<dyn ComplexToReal<f32>>,
-    /// Row spectra and column strips, kept between calls.
-    scratch: Mutex<Buffers>,
     column_fft: Arc<dyn Fft<f32>>,
     column_ifft: Arc<dyn Fft<f32>>,
+    scratch: Mutex<Vec<Buffers>>,
 }
 
 impl Convolver {
@@ -61,26 +137,31 @@ impl Convolver {
     pub fn new(kernel: &Kernel, width: usize, height: usize) -> Convolver {
         let (kw, kh) = (kernel.width(), kernel.height());
         let (cx, cy) = kernel.centre();
-        let (px, py) = padded_size(kw, kh, width, height);
+        let px = fast_size(needed(kw, width));
+        let columns = column_transform(needed(kh, height), height);
+        let py = columns.length();
         let mut real_planner = RealFftPlanner::<f32>::new();
         let mut planner = FftPlanner::<f32>::new();
-        let mut plan = Convolver {
-            width,
-            height,
-            px,
-            py,
-            spectra: Vec::new(),
-            row_fft: real_planner.plan_fft_forward(px),
-            row_ifft: real_planner.plan_fft_inverse(px),
-            scratch: Mutex::new((Vec::new(), Vec::new())),
-            column_fft: planner.plan_fft_forward(py),
-            column_ifft: planner.plan_fft_inverse(py),
+        let transform = match columns {
+            ColumnTransform::Full(p) => p,
+            ColumnTransform::Halves(n) => n,
         };
-        plan.spectra = kernel
+        let twiddles = match columns {
+            ColumnTransform::Full(_) => Vec::new(),
+            ColumnTransform::Halves(n) => (0..n)
+                .map(|k| {
+                    let (sin, cos) = (-std::f64::consts::PI * k as f64 / n as f64).sin_cos();
+                    Complex::new(cos as f32, sin as f32)
+                })
+                .collect(),
+        };
+        let row_fft = real_planner.plan_fft_forward(px);
+        let full_column = planner.plan_fft_forward(py);
+        let spectra = kernel
             .channels()
             .iter()
             .map(|k| {
-                plan.forward(|row, input| {
+                let mut spectrum = spectrum(&*row_fft, &*full_column, px, py, |row, input| {
                     // Kernel row j sits at offset j − cy, wrapped.
                     let j = (row + cy) % py;
                     if j >= kh {
@@ -90,15 +171,40 @@ impl Convolver {
                         input[(i + px - cx) % px] = v;
                     }
                     true
-                })
+                });
+                if let ColumnTransform::Halves(n) = columns {
+                    spectrum.par_chunks_mut(py).for_each_init(
+                        || vec![Complex::new(0.0, 0.0); py],
+                        |copy, column| {
+                            copy.copy_from_slice(column);
+                            for m in 0..n {
+                                column[m] = copy[2 * m];
+                                column[n + m] = copy[2 * m + 1];
+                            }
+                        },
+                    );
+                }
+                spectrum
             })
             .collect();
-        plan
+        Convolver {
+            width,
+            height,
+            px,
+            columns,
+            spectra,
+            twiddles,
+            row_fft,
+            row_ifft: real_planner.plan_fft_inverse(px),
+            column_fft: planner.plan_fft_forward(transform),
+            column_ifft: planner.plan_fft_inverse(transform),
+            scratch: Mutex::new(Vec::new()),
+        }
     }
 
     /// The padded FFT size, columns × rows.
     pub fn padded_size(&self) -> (usize, usize) {
-        (self.px, self.py)
+        (self.px, self.columns.length())
     }
 
     /// How many kernel channels there are.
@@ -108,150 +214,340 @@ impl Convolver {
 
     /// `plane` (row-major, `width`×`height`) convolved with kernel channel
     /// `channel`, over the same frame; light beyond the frame is lost.
-    ///
-    /// Only the H image rows are transformed and kept: their spectra go into
-    /// a buffer of strips of [`STRIP`] columns, row by row, so that each
-    /// strip's column transforms (padded to py, multiplied by the kernel's
-    /// spectrum, transformed back and cut to the H output rows) work in
-    /// cache, with no transpose of the whole plane.
     pub fn convolve(&self, plane: &[f32], channel: usize) -> Vec<f32> {
-        let (w, h, px, py) = (self.width, self.height, self.px, self.py);
-        let count = px / 2 + 1;
+        self.convolve_all(
+            &[Input {
+                plane,
+                channel,
+                centre: 0.0,
+            }],
+            Vec::new(),
+            &mut |_| {},
+        )
+        .pop()
+        .unwrap_or_default()
+    }
+
+    /// Every input convolved with its kernel channel, plus its centre
+    /// weight times itself, written into the planes of `recycled` where
+    /// there are some (memory already mapped: fresh planes cost a page fault
+    /// every 4 KiB). The planes go through each pass together, so that the
+    /// kernel's spectrum is read from memory once for all of them;
+    /// `progress` hears the fraction done after each pass.
+    ///
+    /// Rows are transformed into a row-major buffer; each strip of
+    /// [`STRIP`] columns is gathered from it, transformed (padded, multiplied
+    /// by the kernel's spectrum, transformed back and cut to the H output
+    /// rows) in cache, and written strip-major; the inverse row transforms
+    /// gather their rows from the strips. No pass transposes a whole plane.
+    pub fn convolve_all(
+        &self,
+        inputs: &[Input],
+        mut recycled: Vec<Vec<f32>>,
+        progress: &mut dyn FnMut(f64),
+    ) -> Vec<Vec<f32>> {
+        let (w, h) = (self.width, self.height);
+        let count = self.px / 2 + 1;
         let strips = count.div_ceil(STRIP);
         let zero = Complex::new(0.0, 0.0);
 
-        // Row transforms, written strip-major: strip s, row r, column j.
-        // Reuse the plan's buffers when no other call holds them: fresh
-        // ones cost page faults and zeroing on every frame.
+        // Reuse the plan's buffers when no other call holds them.
         let mut held = self.scratch.try_lock();
-        let mut own = (Vec::new(), Vec::new());
-        let (rows, buffer) = match held.as_deref_mut() {
-            Ok(buffers) => (&mut buffers.0, &mut buffers.1),
-            Err(_) => (&mut own.0, &mut own.1),
+        let mut own = Vec::new();
+        let buffers = match held.as_deref_mut() {
+            Ok(buffers) => buffers,
+            Err(_) => &mut own,
         };
-        rows.resize(h * count, zero);
-        buffer.resize(strips * h * STRIP, zero);
+        buffers.resize_with(inputs.len(), Default::default);
+        for (rows, results) in buffers.iter_mut() {
+            rows.resize(h.div_ceil(BLOCK) * strips * TILE, zero);
+            results.resize(strips * h * STRIP, zero);
+        }
+
+        // Forward row transforms, a block of rows per task, into tiles:
+        // block b, strip s, row, column.
         let row_fft = &self.row_fft;
-        rows.par_chunks_mut(count)
-            .zip(plane.par_chunks(w))
-            .for_each_init(
-                || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
-                |(input, scratch), (out, src)| {
-                    input[..w].copy_from_slice(src);
-                    input[w..].iter_mut().for_each(|v| *v = 0.0);
-                    let _ = row_fft.process_with_scratch(input, out, scratch);
-                },
-            );
-        let rows = &*rows;
-        buffer
-            .par_chunks_mut(h * STRIP)
-            .enumerate()
-            .for_each(|(s, strip)| {
-                let first = s * STRIP;
-                let width = STRIP.min(count - first);
-                for (r, row) in rows.chunks(count).enumerate() {
-                    strip[r * STRIP..r * STRIP + width].copy_from_slice(&row[first..first + width]);
-                }
-            });
+        for (input, (rows, _)) in inputs.iter().zip(buffers.iter_mut()) {
+            rows.par_chunks_mut(strips * TILE)
+                .zip(input.plane.par_chunks(BLOCK * w))
+                .for_each_init(
+                    || {
+                        (
+                            row_fft.make_input_vec(),
+                            row_fft.make_output_vec(),
+                            row_fft.make_scratch_vec(),
+                        )
+                    },
+                    |(padded, spectrum, scratch), (tiles, src)| {
+                        for (r, row) in src.chunks(w).enumerate() {
+                            padded[..w].copy_from_slice(row);
+                            padded[w..].iter_mut().for_each(|v| *v = 0.0);
+                            let _ = row_fft.process_with_scratch(padded, spectrum, scratch);
+                            for (s, values) in spectrum.chunks(STRIP).enumerate() {
+                                let at = s * TILE + r * STRIP;
+                                tiles[at..at + values.len()].copy_from_slice(values);
+                            }
+                        }
+                    },
+                );
+        }
+        progress(0.3);
 
-        // Column transforms, strip by strip, multiplied by the kernel.
-        let kernel = &self.spectra[channel];
-        let (column_fft, column_ifft) = (&self.column_fft, &self.column_ifft);
-        buffer.par_chunks_mut(h * STRIP).enumerate().for_each_init(
-            || {
-                (
-                    vec![zero; py],
-                    vec![
-                        zero;
-                        column_fft
-                            .get_inplace_scratch_len()
-                            .max(column_ifft.get_inplace_scratch_len())
-                    ],
-                )
-            },
-            |(column, scratch), (s, strip)| {
-                let first = s * STRIP;
-                for j in 0..STRIP.min(count - first) {
-                    for (r, v) in column[..h].iter_mut().enumerate() {
-                        *v = strip[r * STRIP + j];
-                    }
-                    column[h..].iter_mut().for_each(|v| *v = zero);
-                    column_fft.process_with_scratch(column, scratch);
-                    let k = &kernel[(first + j) * py..(first + j + 1) * py];
-                    for (a, b) in column.iter_mut().zip(k) {
-                        *a *= *b;
-                    }
-                    column_ifft.process_with_scratch(column, scratch);
-                    for (r, v) in column[..h].iter().enumerate() {
-                        strip[r * STRIP + j] = *v;
-                    }
-                }
-            },
-        );
+        self.column_pass(inputs, buffers, strips);
+        progress(0.7);
 
-        // Inverse row transforms of the H output rows.
-        let scale = 1.0 / (px as f32 * py as f32);
+        // Inverse row transforms, a block of rows per task, gathered from
+        // the strips (a tile's worth from each), plus the centre's light.
+        let scale = 1.0 / (self.px as f32 * self.columns.length() as f32);
         let row_ifft = &self.row_ifft;
-        let mut out = vec![0f32; w * h];
-        out.par_chunks_mut(w).enumerate().for_each_init(
-            || {
-                (
-                    row_ifft.make_input_vec(),
-                    row_ifft.make_output_vec(),
-                    row_ifft.make_scratch_vec(),
-                )
-            },
-            |(input, output, scratch), (y, dst)| {
-                for (s, chunk) in input.chunks_mut(STRIP).enumerate() {
-                    let at = s * h * STRIP + y * STRIP;
-                    chunk.copy_from_slice(&buffer[at..at + chunk.len()]);
-                }
-                // A real signal's DC and Nyquist bins are real; the inverse
-                // refuses their round-off.
-                input[0].im = 0.0;
-                if px % 2 == 0 {
-                    input[count - 1].im = 0.0;
-                }
-                let _ = row_ifft.process_with_scratch(input, output, scratch);
-                for (d, v) in dst.iter_mut().zip(output.iter()) {
-                    *d = v * scale;
-                }
-            },
-        );
-        out
+        let zero = Complex::new(0.0, 0.0);
+        recycled.resize_with(inputs.len(), Vec::new);
+        recycled.truncate(inputs.len());
+        let outputs = inputs
+            .iter()
+            .zip(buffers.iter())
+            .zip(recycled)
+            .map(|((input, (_, results)), mut out)| {
+                out.resize(w * h, 0.0);
+                out.par_chunks_mut(BLOCK * w)
+                    .zip(input.plane.par_chunks(BLOCK * w))
+                    .enumerate()
+                    .for_each_init(
+                        || {
+                            (
+                                vec![zero; BLOCK * count],
+                                row_ifft.make_output_vec(),
+                                row_ifft.make_scratch_vec(),
+                            )
+                        },
+                        |(spectra, output, scratch), (block, (dst, src))| {
+                            let rows = dst.len() / w;
+                            for s in 0..strips {
+                                let at = s * h * STRIP + block * TILE;
+                                let tile = &results[at..at + rows * STRIP];
+                                let first = s * STRIP;
+                                let width = STRIP.min(count - first);
+                                for (r, values) in tile.chunks(STRIP).enumerate() {
+                                    spectra[r * count + first..r * count + first + width]
+                                        .copy_from_slice(&values[..width]);
+                                }
+                            }
+                            for ((spectrum, dst), src) in spectra
+                                .chunks_mut(count)
+                                .zip(dst.chunks_mut(w))
+                                .zip(src.chunks(w))
+                            {
+                                // A real signal's DC and Nyquist bins are
+                                // real; the inverse refuses their round-off.
+                                spectrum[0].im = 0.0;
+                                if self.px % 2 == 0 {
+                                    spectrum[count - 1].im = 0.0;
+                                }
+                                let _ = row_ifft.process_with_scratch(spectrum, output, scratch);
+                                for ((d, v), s) in dst.iter_mut().zip(output.iter()).zip(src) {
+                                    *d = v * scale + input.centre * s;
+                                }
+                            }
+                        },
+                    );
+                out
+            })
+            .collect();
+        progress(1.0);
+        outputs
     }
 
-    /// The 2-D spectrum, column by column, of the px×py plane whose rows
-    /// `fill` writes (returning false for an all-zero row).
-    fn forward<F>(&self, fill: F) -> Vec<Complex<f32>>
-    where
-        F: Fn(usize, &mut [f32]) -> bool + Sync,
-    {
-        let (px, py) = (self.px, self.py);
-        let count = px / 2 + 1;
+    /// The column transforms of every input, strip by strip: each strip task
+    /// gathers its columns from the row spectra, and writes the H output
+    /// rows of the product's inverse into its own part of `results`.
+    fn column_pass(&self, inputs: &[Input], buffers: &mut [Buffers], strips: usize) {
+        let h = self.height;
+        let py = self.columns.length();
         let zero = Complex::new(0.0, 0.0);
-        let row_fft = &self.row_fft;
-        let mut rows = vec![zero; py * count];
-        rows.par_chunks_mut(count).enumerate().for_each_init(
-            || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
-            |(input, scratch), (row, out)| {
-                input.iter_mut().for_each(|v| *v = 0.0);
-                if fill(row, input) {
-                    let _ = row_fft.process_with_scratch(input, out, scratch);
+        let (rows, mut results): (Vec<&[Complex<f32>]>, Vec<_>) = buffers
+            .iter_mut()
+            .map(|(rows, results)| (rows.as_slice(), results.chunks_mut(h * STRIP)))
+            .unzip();
+        // Strip s of every input, as one task.
+        let tasks: Vec<Vec<&mut [Complex<f32>]>> = (0..strips)
+            .map(|_| results.iter_mut().filter_map(Iterator::next).collect())
+            .collect();
+        let scratch_len = self
+            .column_fft
+            .get_inplace_scratch_len()
+            .max(self.column_ifft.get_inplace_scratch_len());
+        tasks.into_par_iter().enumerate().for_each_init(
+            || (vec![zero; py], vec![zero; scratch_len]),
+            |(column, scratch), (s, mut outs)| {
+                for ((input, rows), out) in inputs.iter().zip(&rows).zip(outs.iter_mut()) {
+                    let strip = Strip {
+                        index: s,
+                        strips,
+                        rows,
+                        spectrum: &self.spectra[input.channel],
+                    };
+                    #[cfg(target_arch = "x86_64")]
+                    if std::is_x86_feature_detected!("avx2") {
+                        // SAFETY: the CPU was just found to have AVX2.
+                        unsafe { self.strip_avx2(&strip, out, column, scratch) };
+                        continue;
+                    }
+                    self.strip(&strip, out, column, scratch);
                 }
             },
         );
-        let column_fft = &self.column_fft;
-        let mut columns = vec![zero; count * py];
-        columns
-            .par_chunks_mut(py)
-            .enumerate()
-            .for_each(|(c, column)| {
-                for (r, v) in column.iter_mut().enumerate() {
-                    *v = rows[r * count + c];
+    }
+
+    /// [`Convolver::strip`] compiled for AVX2: its element-wise complex
+    /// loops around the FFTs take 8 lanes instead of 4. They are the same
+    /// IEEE operations in the same order (Rust never fuses a multiply and an
+    /// add), so the result has the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn strip_avx2(
+        &self,
+        strip: &Strip,
+        out: &mut [Complex<f32>],
+        column: &mut [Complex<f32>],
+        scratch: &mut [Complex<f32>],
+    ) {
+        self.strip(strip, out, column, scratch)
+    }
+
+    /// One strip's columns of one input: its tiles of the row spectra into
+    /// `out` (H rows of [`STRIP`] values, in cache from here on), then each
+    /// column through the transforms, in place.
+    #[inline(always)]
+    fn strip(
+        &self,
+        strip: &Strip,
+        out: &mut [Complex<f32>],
+        column: &mut [Complex<f32>],
+        scratch: &mut [Complex<f32>],
+    ) {
+        let h = self.height;
+        let count = self.px / 2 + 1;
+        let py = self.columns.length();
+        let first = strip.index * STRIP;
+        let width = STRIP.min(count - first);
+        for (block, tiles) in strip.rows.chunks(strip.strips * TILE).enumerate() {
+            let at = block * TILE;
+            let n = TILE.min(h * STRIP - at);
+            out[at..at + n].copy_from_slice(&tiles[strip.index * TILE..strip.index * TILE + n]);
+        }
+        for j in 0..width {
+            let kernel = &strip.spectrum[(first + j) * py..(first + j + 1) * py];
+            self.column(out, j, kernel, column, scratch);
+        }
+    }
+
+    /// Column `j` of a strip (H rows of [`STRIP`] values) through the
+    /// padded column transform, the product with `kernel`'s column spectrum
+    /// and back, in place.
+    #[inline(always)]
+    fn column(
+        &self,
+        strip: &mut [Complex<f32>],
+        j: usize,
+        kernel: &[Complex<f32>],
+        column: &mut [Complex<f32>],
+        scratch: &mut [Complex<f32>],
+    ) {
+        let h = self.height;
+        let zero = Complex::new(0.0, 0.0);
+        match self.columns {
+            ColumnTransform::Full(_) => {
+                for (c, v) in column.iter_mut().zip(strip.iter().skip(j).step_by(STRIP)) {
+                    *c = *v;
                 }
-                column_fft.process(column);
-            });
-        columns
+                column[h..].iter_mut().for_each(|v| *v = zero);
+            }
+            ColumnTransform::Halves(n) => {
+                let (even, odd) = column.split_at_mut(n);
+                for (((e, o), v), t) in even
+                    .iter_mut()
+                    .zip(odd.iter_mut())
+                    .zip(strip.iter().skip(j).step_by(STRIP))
+                    .zip(&self.twiddles)
+                {
+                    *e = *v;
+                    *o = v * t;
+                }
+                even[h..].iter_mut().for_each(|v| *v = zero);
+                odd[h..].iter_mut().for_each(|v| *v = zero);
+            }
+        }
+        // For pruned columns both halves go in one call: rustfft transforms
+        // a buffer of several lengths one after the other.
+        self.column_fft.process_with_scratch(column, scratch);
+        for (a, b) in column.iter_mut().zip(kernel) {
+            *a *= *b;
+        }
+        self.column_ifft.process_with_scratch(column, scratch);
+        let values = strip.iter_mut().skip(j).step_by(STRIP);
+        match self.columns {
+            ColumnTransform::Full(_) => {
+                for (v, c) in values.zip(column.iter()) {
+                    *v = *c;
+                }
+            }
+            ColumnTransform::Halves(n) => {
+                let (even, odd) = column.split_at(n);
+                for (((v, e), o), t) in values.zip(even).zip(odd).zip(&self.twiddles) {
+                    *v = e + o * t.conj();
+                }
+            }
+        }
+    }
+}
+
+/// The 2-D spectrum, column by column, of the px×py plane whose rows
+/// `fill` writes (returning false for an all-zero row).
+fn spectrum<F>(
+    row_fft: &dyn RealToComplex<f32>,
+    column_fft: &dyn Fft<f32>,
+    px: usize,
+    py: usize,
+    fill: F,
+) -> Vec<Complex<f32>>
+where
+    F: Fn(usize, &mut [f32]) -> bool + Sync,
+{
+    let count = px / 2 + 1;
+    let zero = Complex::new(0.0, 0.0);
+    let mut rows = vec![zero; py * count];
+    rows.par_chunks_mut(count).enumerate().for_each_init(
+        || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
+        |(input, scratch), (row, out)| {
+            input.iter_mut().for_each(|v| *v = 0.0);
+            if fill(row, input) {
+                let _ = row_fft.process_with_scratch(input, out, scratch);
+            }
+        },
+    );
+    let mut columns = vec![zero; count * py];
+    columns.par_chunks_mut(py).enumerate().for_each_init(
+        || vec![zero; column_fft.get_inplace_scratch_len()],
+        |scratch, (c, column)| {
+            for (r, v) in column.iter_mut().enumerate() {
+                *v = rows[r * count + c];
+            }
+            column_fft.process_with_scratch(column, scratch);
+        },
+    );
+    columns
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn columns_are_pruned_when_the_rows_fit_in_half_the_period() {
+        // A full-frame kernel: 2H − 1 rows need a period of 2H.
+        assert_eq!(column_transform(4319, 2160), ColumnTransform::Halves(2160));
+        assert_eq!(column_transform(2159, 1080), ColumnTransform::Halves(1080));
+        // A small kernel: halves would need N ≥ H, more than one period.
+        assert_eq!(column_transform(1100, 1000), ColumnTransform::Full(1125));
     }
 }
