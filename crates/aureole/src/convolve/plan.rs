@@ -17,7 +17,6 @@ use realfft::num_complex::Complex;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 
-use super::fft::fast_size;
 use crate::kernel::Kernel;
 
 /// Row spectra (in tiles) and column results (strip-major), kept between
@@ -35,6 +34,26 @@ const BLOCK: usize = 8;
 
 /// Values in a tile.
 const TILE: usize = BLOCK * STRIP;
+
+/// The smallest 5-smooth number (2^a 3^b 5^c) at or above `n`: rustfft is
+/// fastest on those sizes.
+pub fn fast_size(n: usize) -> usize {
+    let mut best = usize::MAX;
+    let mut p2 = 1usize;
+    while p2 < 2 * n.max(1) {
+        let mut p3 = p2;
+        while p3 < 2 * n.max(1) {
+            let mut p5 = p3;
+            while p5 < n {
+                p5 *= 5;
+            }
+            best = best.min(p5);
+            p3 *= 3;
+        }
+        p2 *= 2;
+    }
+    best
+}
 
 /// The FFT size for a linear convolution of `width`×`height` images with a
 /// `kernel_width`×`kernel_height` kernel centred at its middle: output x in
@@ -525,22 +544,56 @@ where
             }
         },
     );
+    // Column transforms, a strip of columns per task, gathered a cache line
+    // or two per row rather than one value per row.
     let mut columns = vec![zero; count * py];
-    columns.par_chunks_mut(py).enumerate().for_each_init(
-        || vec![zero; column_fft.get_inplace_scratch_len()],
-        |scratch, (c, column)| {
-            for (r, v) in column.iter_mut().enumerate() {
-                *v = rows[r * count + c];
-            }
-            column_fft.process_with_scratch(column, scratch);
-        },
-    );
+    columns
+        .par_chunks_mut(STRIP * py)
+        .enumerate()
+        .for_each_init(
+            || {
+                (
+                    vec![zero; py * STRIP],
+                    vec![zero; column_fft.get_inplace_scratch_len()],
+                )
+            },
+            |(strip, scratch), (s, out)| {
+                let first = s * STRIP;
+                let width = out.len() / py;
+                for (r, row) in rows.chunks(count).enumerate() {
+                    strip[r * STRIP..r * STRIP + width].copy_from_slice(&row[first..first + width]);
+                }
+                for (j, column) in out.chunks_mut(py).enumerate() {
+                    for (v, s) in column.iter_mut().zip(strip.iter().skip(j).step_by(STRIP)) {
+                        *v = *s;
+                    }
+                    column_fft.process_with_scratch(column, scratch);
+                }
+            },
+        );
     columns
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fast_sizes_are_5_smooth_and_minimal() {
+        let smooth = |mut n: usize| {
+            for p in [2, 3, 5] {
+                while n % p == 0 {
+                    n /= p;
+                }
+            }
+            n == 1
+        };
+        for n in 1..2000 {
+            let f = fast_size(n);
+            assert!(f >= n && smooth(f), "{n} -> {f}");
+            assert!((n..f).all(|m| !smooth(m)), "{n} -> {f} is not the smallest");
+        }
+    }
 
     #[test]
     fn columns_are_pruned_when_the_rows_fit_in_half_the_period() {

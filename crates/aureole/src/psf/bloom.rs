@@ -67,6 +67,10 @@ pub(crate) struct BloomShape {
 }
 
 impl SpreadShape for BloomShape {
+    fn mirror_symmetric(&self) -> bool {
+        true
+    }
+
     fn density(&self, x: f64, y: f64) -> f64 {
         let q2 = (x * x + y * y) / (self.radius * self.radius);
         libm::pow(1.0 + q2, -self.beta)

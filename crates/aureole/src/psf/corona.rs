@@ -6,7 +6,7 @@
 //! l_m = l·(1 + j·ξ_m), and optionally its own width and intensity, drawn from
 //! one seed.
 
-use std::f64::consts::{FRAC_PI_2, TAU};
+use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, TAU};
 
 use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
@@ -201,6 +201,32 @@ impl Corona {
 
 /// A standard normal deviate by Box–Muller, with libm so that every
 /// platform computes the same bits.
+/// atan2(y, x) to within 2e-5 rad (Abramowitz & Stegun 4.4.49 for atan
+/// on [0, 1], then the octant), for tests that allow for that error: several
+/// times cheaper than libm's correctly rounded one.
+fn fast_atan2(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
+    if ax == 0.0 && ay == 0.0 {
+        return 0.0;
+    }
+    let z = ax.min(ay) / ax.max(ay);
+    let z2 = z * z;
+    let mut a = z
+        * (0.999_866_0
+            + z2 * (-0.330_299_5 + z2 * (0.180_141_0 + z2 * (-0.085_133_0 + z2 * 0.020_835_1))));
+    if ay > ax {
+        a = FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = std::f64::consts::PI - a;
+    }
+    if y < 0.0 {
+        -a
+    } else {
+        a
+    }
+}
+
 fn standard_normal(rng: &mut Pcg64) -> f64 {
     let unit = |bits: u64| (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
     let u1 = 1.0 - unit(rng.next_u64()); // (0, 1]: the logarithm stays finite
@@ -228,6 +254,22 @@ pub(crate) struct CoronaShape {
 }
 
 impl CoronaShape {
+    /// The least exponent n of any ray at radii in [near, far]: ω = (r/w)^(s−1)
+    /// and n = −1/ln cos ω falls as ω grows, so it is least at the widest ray
+    /// (s < 1, at `near`) or the narrowest (s > 1, at `far`).
+    fn least_exponent(&self, near: f64, far: f64) -> f64 {
+        let widths = self.rays.iter().map(|ray| ray.width);
+        match self.spread.partial_cmp(&1.0) {
+            Some(std::cmp::Ordering::Less) => {
+                self.exponent(near.max(0.0), widths.fold(0.0, f64::max))
+            }
+            Some(std::cmp::Ordering::Greater) => {
+                self.exponent(far, widths.fold(f64::INFINITY, f64::min))
+            }
+            _ => self.exponent(near.max(0.0), widths.fold(0.0, f64::max)),
+        }
+    }
+
     /// The nearest ray to direction φ (relative to φ₀) and the angle from its
     /// axis, in (−π/k, π/k].
     fn nearest_ray(&self, phi: f64) -> (&Ray, f64) {
@@ -258,6 +300,26 @@ impl CoronaShape {
 }
 
 impl SpreadShape for CoronaShape {
+    fn vanishes_over_pixel(&self, x: f64, y: f64) -> bool {
+        let r = (x * x + y * y).sqrt();
+        if r < 2.0 {
+            return false;
+        }
+        // The pixel spans radii within r ± √2/2 and directions within
+        // asin(√2/2 / r) < 0.78/r of the centre's, found here to 2e-5 rad.
+        let (_, offset) = self.nearest_ray(fast_atan2(y, x));
+        let closest = offset.abs() - 0.78 / r - 3e-5;
+        if closest <= 0.0 {
+            return false;
+        }
+        let n = self.least_exponent(r - FRAC_1_SQRT_2, r + FRAC_1_SQRT_2);
+        // |cos u| ≤ exp(−u²/2) for |u| ≤ π/2 bounds every lobe in the pixel
+        // by exp(−n (k δ/2)²/2); below e^−760 the exp of the lobe underflows
+        // to exactly 0, with room for the round-off of log and cos.
+        let u = 0.5 * self.k * closest;
+        0.5 * n * u * u > 760.0
+    }
+
     fn density(&self, x: f64, y: f64) -> f64 {
         let r = (x * x + y * y).sqrt();
         let (ray, offset) = self.nearest_ray(libm::atan2(y, x));
@@ -323,6 +385,54 @@ impl SpreadShape for CoronaShape {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fast_atan2_is_within_its_stated_error() {
+        let mut worst = 0f64;
+        for i in 0..20_000 {
+            let a = i as f64 * TAU / 20_000.0;
+            for r in [0.5, 3.0, 1e4] {
+                let (y, x) = (r * a.sin(), r * a.cos());
+                let d = (fast_atan2(y, x) - libm::atan2(y, x)).abs();
+                worst = worst.max(d.min(TAU - d));
+            }
+        }
+        assert!(worst < 2e-5, "{worst}");
+    }
+
+    #[test]
+    fn a_pixel_said_to_vanish_is_zero_everywhere() {
+        for spread in [-0.5, 0.0, 0.5, 1.5] {
+            let c = Corona {
+                spread,
+                width_jitter: 0.3,
+                length: Length::px(400.0),
+                ..corona()
+            };
+            let shape = c.shape(None, 3, 0).unwrap();
+            let mut vanished = 0;
+            for j in -150..150 {
+                for i in -150..150 {
+                    let (x, y) = (f64::from(i) + 0.37, f64::from(j) * 1.01);
+                    if !shape.vanishes_over_pixel(x, y) {
+                        continue;
+                    }
+                    vanished += 1;
+                    for a in 0..=4 {
+                        for b in 0..=4 {
+                            let (sx, sy) =
+                                (x - 0.5 + 0.25 * f64::from(b), y - 0.5 + 0.25 * f64::from(a));
+                            assert_eq!(shape.density(sx, sy), 0.0, "s = {spread} at ({sx}, {sy})");
+                        }
+                    }
+                }
+            }
+            // Thin rays (s ≤ 0) leave most of the plane dark.
+            if spread <= 0.0 {
+                assert!(vanished > 10_000, "s = {spread}: {vanished}");
+            }
+        }
+    }
 
     fn corona() -> Corona {
         Corona {

@@ -114,6 +114,19 @@ pub(crate) trait SpreadShape: Sync {
     fn spreads_centre(&self) -> bool {
         true
     }
+
+    /// Whether f(x, y) = f(|x|, |y|), so that a quarter of the kernel can
+    /// be computed and mirrored.
+    fn mirror_symmetric(&self) -> bool {
+        false
+    }
+
+    /// Whether f is exactly 0 (in f64) everywhere in the pixel centred at
+    /// (x, y), so that its mean is 0 without sampling. Only a cheap,
+    /// conservative test belongs here: false is always correct.
+    fn vanishes_over_pixel(&self, _x: f64, _y: f64) -> bool {
+        false
+    }
 }
 
 /// A supersampling grid: `x` columns by `y` rows of samples in a pixel.

@@ -57,6 +57,10 @@ pub(crate) struct VosShape {
 }
 
 impl SpreadShape for VosShape {
+    fn mirror_symmetric(&self) -> bool {
+        true
+    }
+
     fn density(&self, x: f64, y: f64) -> f64 {
         let theta = libm::atan((x * x + y * y).sqrt() * self.radians_per_px);
         let c = libm::cos(theta);
