@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use aureole::io::read::read_image;
-use aureole::{ApplyOptions, Config, Kernel, Plan};
+use aureole::{ApplyOptions, Config, Kernel, Method, Plan};
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
@@ -59,6 +59,12 @@ pub struct Args {
     /// the original in compositing.
     #[arg(long)]
     glare_only: bool,
+
+    /// How to spread the bright pixels: auto picks by a cost estimate; fft
+    /// costs the same however many are bright; splat adds the kernel at
+    /// each one (fast for a few hundred lights or a small --max-kernel).
+    #[arg(long, value_enum, default_value = "auto")]
+    method: MethodArg,
 
     /// Store EXR output as half floats instead of float32.
     #[arg(long)]
@@ -121,6 +127,11 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         knee: args.knee,
         scale: input.scale,
         glare_only: args.glare_only,
+        method: match args.method {
+            MethodArg::Auto => Method::Auto,
+            MethodArg::Fft => Method::Fft,
+            MethodArg::Splat => Method::Splat,
+        },
     };
     let applied = plan.apply(image, &options, &mut |f| progress.set(f))?;
     progress.stage("writing");
@@ -141,7 +152,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             "-".to_string()
         };
         eprintln!(
-            "wrote {}: {}x{} {:?}, kernel {}x{}, {} px above {} cd/m², energy in {:.6e} out {:.6e} ({ratio}){}, {:.2} s",
+            "wrote {}: {}x{} {:?}, kernel {}x{}, {} px above {} cd/m² ({}), energy in {:.6e} out {:.6e} ({ratio}){}, {:.2} s",
             args.output.display(),
             image.width,
             image.height,
@@ -150,6 +161,10 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             kernel.height(),
             applied.spread_pixels,
             options.threshold,
+            match applied.method {
+                Method::Splat => "splatted",
+                _ => "FFT",
+            },
             applied.energy_in,
             applied.energy_out,
             shown.map(|s| format!(", {s}")).unwrap_or_default(),
@@ -157,4 +172,11 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         );
     }
     Ok(())
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum MethodArg {
+    Auto,
+    Fft,
+    Splat,
 }

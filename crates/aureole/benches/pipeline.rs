@@ -29,6 +29,20 @@ fn apply(c: &mut Criterion) {
         group.bench_function(name, |b| {
             b.iter(|| black_box(plan.apply(&image, &ApplyOptions::default(), &mut |_| {})))
         });
+        let mut planes = Vec::new();
+        group.bench_function(format!("{name}-recycled"), |b| {
+            b.iter(|| {
+                let applied = plan
+                    .apply_recycling(
+                        &image,
+                        &ApplyOptions::default(),
+                        std::mem::take(&mut planes),
+                        &mut |_| {},
+                    )
+                    .expect("same size");
+                planes = applied.image.planes;
+            })
+        });
     }
     group.finish();
 }
@@ -54,30 +68,104 @@ fn floor(c: &mut Criterion) {
         let mut real = vec![0f32; h * px];
         let mut spectra = vec![Complex::new(0f32, 0.0); h * columns];
         let mut cols = vec![Complex::new(0f32, 0.0); columns * py];
+        let row_scratch = || row_fft.make_scratch_vec();
+        let column_scratch = || vec![Complex::new(0f32, 0.0); col_fft.get_inplace_scratch_len()];
         group.bench_function(name, |b| {
             b.iter(|| {
                 for _ in 0..3 {
                     real.par_chunks_mut(px)
                         .zip(spectra.par_chunks_mut(columns))
-                        .for_each(|(r, s)| {
-                            let _ = row_fft.process(r, s);
+                        .for_each_init(row_scratch, |scratch, (r, s)| {
+                            let _ = row_fft.process_with_scratch(r, s, scratch);
                         });
-                    cols.par_chunks_mut(py).for_each(|col| col_fft.process(col));
                     cols.par_chunks_mut(py)
-                        .for_each(|col| col_ifft.process(col));
+                        .for_each_init(column_scratch, |scratch, col| {
+                            col_fft.process_with_scratch(col, scratch)
+                        });
+                    cols.par_chunks_mut(py)
+                        .for_each_init(column_scratch, |scratch, col| {
+                            col_ifft.process_with_scratch(col, scratch)
+                        });
                     spectra
                         .par_chunks_mut(columns)
                         .zip(real.par_chunks_mut(px))
-                        .for_each(|(s, r)| {
+                        .for_each_init(row_scratch, |scratch, (s, r)| {
                             s[0].im = 0.0;
                             s[columns - 1].im = 0.0;
-                            let _ = row_ifft.process(s, r);
+                            let _ = row_ifft.process_with_scratch(s, r, scratch);
                         });
                 }
                 black_box(&real);
             })
         });
     }
+    group.finish();
+}
+
+/// The stages of one plane at 4K on their own, at the padded size a
+/// full-frame kernel needs: the forward real FFTs of the H rows, the
+/// forward and inverse FFTs of the px/2 + 1 columns, a transpose of the row
+/// spectra (what strips and tiles replace), and the product with the
+/// kernel's spectrum.
+fn stages(c: &mut Criterion) {
+    let mut group = c.benchmark_group("stage-4k");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(5));
+    let (w, h) = (3840, 2160);
+    let extent = Extent::for_image(w, h).expect("extent");
+    let (px, py) = padded_size(extent.width, extent.height, w, h);
+    let columns = px / 2 + 1;
+    let zero = Complex::new(0f32, 0.0);
+    let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(px);
+    let mut planner = FftPlanner::<f32>::new();
+    let (col_fft, col_ifft) = (planner.plan_fft_forward(py), planner.plan_fft_inverse(py));
+    let mut real = vec![0f32; h * px];
+    let mut spectra = vec![zero; h * columns];
+    let mut cols = vec![Complex::new(1f32, 0.5); columns * py];
+    let kernel = vec![Complex::new(0.5f32, 0.25); columns * py];
+    group.bench_function("row-ffts", |b| {
+        b.iter(|| {
+            real.par_chunks_mut(px)
+                .zip(spectra.par_chunks_mut(columns))
+                .for_each_init(
+                    || row_fft.make_scratch_vec(),
+                    |scratch, (r, s)| {
+                        let _ = row_fft.process_with_scratch(r, s, scratch);
+                    },
+                );
+        })
+    });
+    group.bench_function("column-ffts", |b| {
+        b.iter(|| {
+            for fft in [&col_fft, &col_ifft] {
+                cols.par_chunks_mut(py).for_each_init(
+                    || vec![zero; fft.get_inplace_scratch_len()],
+                    |scratch, col| fft.process_with_scratch(col, scratch),
+                );
+            }
+        })
+    });
+    group.bench_function("transpose", |b| {
+        b.iter(|| {
+            cols.par_chunks_mut(16 * py)
+                .enumerate()
+                .for_each(|(s, block)| {
+                    for (j, column) in block.chunks_mut(py).enumerate() {
+                        for (r, v) in column[..h].iter_mut().enumerate() {
+                            *v = spectra[r * columns + s * 16 + j];
+                        }
+                    }
+                });
+        })
+    });
+    group.bench_function("multiply", |b| {
+        b.iter(|| {
+            cols.par_chunks_mut(py)
+                .zip(kernel.par_chunks(py))
+                .for_each(|(a, k)| a.iter_mut().zip(k).for_each(|(a, k)| *a *= *k));
+        })
+    });
     group.finish();
 }
 
@@ -93,5 +181,5 @@ fn kernel_build(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, apply, floor, kernel_build);
+criterion_group!(benches, apply, floor, stages, kernel_build);
 criterion_main!(benches);

@@ -12,10 +12,16 @@ use rand_pcg::Pcg64;
 const BRIGHT_4K: f64 = 1350.0;
 
 pub fn image(width: usize, height: usize) -> Image {
+    let count = (BRIGHT_4K * (width * height) as f64 / (3840.0 * 2160.0)).round() as usize;
+    lights(width, height, count)
+}
+
+/// Background 0.05 and `count` bright pixels of 10³–10⁵ at places and
+/// levels drawn from a fixed seed.
+pub fn lights(width: usize, height: usize, count: usize) -> Image {
     let mut image = Image::filled(width, height, Layout::Rgb, 0.05);
     let mut rng = Pcg64::seed_from_u64(5);
     let mut uniform = move || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-    let count = (BRIGHT_4K * (width * height) as f64 / (3840.0 * 2160.0)).round() as usize;
     for _ in 0..count {
         let i = (uniform() * (width * height) as f64) as usize % (width * height);
         let luminance = 10f64.powf(3.0 + 2.0 * uniform()) as f32;

@@ -25,6 +25,23 @@ pub struct ApplyOptions {
     /// Write only the light the camera adds (output − input), for
     /// compositing additively over the original.
     pub glare_only: bool,
+    /// How the bright pixels are spread.
+    pub method: Method,
+}
+
+/// How the light of the bright pixels is spread. Both give the same result
+/// up to f32 round-off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// Whichever the cost estimate says is faster for this image.
+    #[default]
+    Auto,
+    /// The FFT convolution of the bright planes: its cost does not depend
+    /// on how many pixels are bright.
+    Fft,
+    /// The kernel added, weighted, at every bright pixel: cheaper for a few
+    /// bright pixels or a small kernel, and exact in f32.
+    Splat,
 }
 
 impl Default for ApplyOptions {
@@ -34,6 +51,7 @@ impl Default for ApplyOptions {
             knee: 0.0,
             scale: 1.0,
             glare_only: false,
+            method: Method::Auto,
         }
     }
 }
@@ -50,6 +68,8 @@ pub struct Applied {
     pub energy_out: f64,
     /// How many pixels were above the threshold and spread.
     pub spread_pixels: usize,
+    /// How they were spread ([`Method::Fft`] or [`Method::Splat`]).
+    pub method: Method,
 }
 
 /// The kernel of an optical chain for one image size, with its spectrum.
@@ -145,8 +165,19 @@ impl Plan {
             .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
         let energy_in = image.total_luminance();
 
+        let method = match options.method {
+            Method::Auto
+                if self.splat_cost(image, &luminance, threshold) < self.fft_cost(image) =>
+            {
+                Method::Splat
+            }
+            Method::Auto => Method::Fft,
+            chosen => chosen,
+        };
         let mut output = image.clone_without_planes();
-        if spread_pixels == 0 {
+        if spread_pixels > 0 && method == Method::Splat {
+            output.planes = self.splat(image, &luminance, threshold, knee, recycled);
+        } else if spread_pixels == 0 {
             recycled.truncate(image.planes.len());
             recycled.resize_with(image.planes.len(), Vec::new);
             for (out, plane) in recycled.iter_mut().zip(&image.planes) {
@@ -195,7 +226,133 @@ impl Plan {
             energy_in,
             energy_out,
             spread_pixels,
+            method,
         })
+    }
+
+    /// How many convolutions an image of `layout` takes.
+    fn convolutions(&self, layout: Layout) -> usize {
+        match layout {
+            Layout::Rgb => 3,
+            Layout::Luminance => self.convolver.channels(),
+        }
+    }
+
+    /// Nanoseconds the FFT route takes for `image`, estimated from the
+    /// transforms' n·log₂n count plus the passes over the planes around them
+    /// (fitted to runs at 4K with full-frame and 401×401 kernels on two
+    /// cores: `cargo run --release --example crossover`).
+    fn fft_cost(&self, image: &Image) -> f64 {
+        let (px, py) = self.convolver.padded_size();
+        let n_log = |n: usize| n as f64 * (n as f64).log2();
+        let h = image.height as f64;
+        let columns = (px / 2 + 1) as f64;
+        let per_plane = 2.0 * h * n_log(px) + 2.0 * columns * n_log(py);
+        let pixels = (image.width * image.height) as f64;
+        (0.04 * per_plane + 5.0 * pixels) * self.convolutions(image.layout) as f64
+    }
+
+    /// Nanoseconds splatting takes: every bright pixel adds the part of the
+    /// kernel that falls inside the frame to every output plane, after a
+    /// pass over the planes (fitted likewise).
+    fn splat_cost(&self, image: &Image, luminance: &Luminance, threshold: f64) -> f64 {
+        let (w, h) = (image.width, image.height);
+        let (kw, kh) = (self.kernel.width(), self.kernel.height());
+        let (cx, cy) = self.kernel.centre();
+        let overlap = |p: usize, k: usize, c: usize, n: usize| {
+            // Output positions p + i − c for kernel indices i in [0, k).
+            let low = p.saturating_sub(c);
+            let high = (p + k - c).min(n);
+            high.saturating_sub(low)
+        };
+        let area: usize = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                (0..w)
+                    .filter(|&x| f64::from(luminance.at(y * w + x)) > threshold)
+                    .map(|x| overlap(x, kw, cx, w) * overlap(y, kh, cy, h))
+                    .sum::<usize>()
+            })
+            .sum();
+        let pixels = (image.width * image.height) as f64;
+        // Kernel rows that stay in cache between bright pixels add faster.
+        let per_add = if kw * kh <= 1 << 20 { 0.055 } else { 0.19 };
+        (per_add * area as f64 + 2.0 * pixels) * self.convolutions(image.layout) as f64
+    }
+
+    /// O = I − B + Σ over bright pixels of B·K, row by row (each output row
+    /// adds the bright pixels in a fixed order: the same bits with any
+    /// number of threads).
+    fn splat(
+        &self,
+        image: &Image,
+        luminance: &Luminance,
+        threshold: f64,
+        knee: f64,
+        mut recycled: Vec<Vec<f32>>,
+    ) -> Vec<Vec<f32>> {
+        let (w, h) = (image.width, image.height);
+        let (kw, kh) = (self.kernel.width(), self.kernel.height());
+        let (cx, cy) = self.kernel.centre();
+        let kernels = self.kernel.channels();
+        // Bright pixels: position and spread fraction, in row-major order.
+        let rows: Vec<Vec<(usize, usize, f32)>> = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                (0..w)
+                    .filter_map(|x| {
+                        let f =
+                            spread_fraction(f64::from(luminance.at(y * w + x)), threshold, knee);
+                        (f > 0.0).then_some((x, y, f))
+                    })
+                    .collect()
+            })
+            .collect();
+        let bright: Vec<(usize, usize, f32)> = rows.iter().flatten().copied().collect();
+        // Each output plane as Σ weight · kernel channel.
+        let terms: Vec<Vec<(usize, f32)>> = (0..image.planes.len())
+            .map(|c| match (image.layout, kernels.len()) {
+                (Layout::Luminance, k) if k > 1 => REC709_LUMINANCE
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &wk)| (k, wk))
+                    .collect(),
+                (_, k) => vec![(c.min(k - 1), 1.0)],
+            })
+            .collect();
+        recycled.truncate(image.planes.len());
+        recycled.resize_with(image.planes.len(), Vec::new);
+        for ((out, plane), terms) in recycled.iter_mut().zip(&image.planes).zip(&terms) {
+            out.clear();
+            out.extend_from_slice(plane);
+            out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+                // The light that leaves: the bright part of this row.
+                for &(x, by, f) in &rows[y] {
+                    row[x] -= plane[by * w + x] * f;
+                }
+                for &(x, by, f) in &bright {
+                    // Kernel row j lands on output row by + j − cy.
+                    let Some(j) = (y + cy).checked_sub(by).filter(|&j| j < kh) else {
+                        continue;
+                    };
+                    let value = plane[by * w + x] * f;
+                    let first = x.saturating_sub(cx);
+                    let last = (x + kw - cx).min(w);
+                    if first >= last {
+                        continue;
+                    }
+                    for &(k, weight) in terms {
+                        let start = first + cx - x;
+                        let kernel = &kernels[k][j * kw + start..j * kw + start + (last - first)];
+                        let v = value * weight;
+                        for (o, &kv) in row[first..last].iter_mut().zip(kernel) {
+                            *o += v * kv;
+                        }
+                    }
+                }
+            });
+        }
+        recycled
     }
 
     /// The bright planes through the kernel, its centre weight applied

@@ -67,7 +67,7 @@ pub mod presets;
 pub mod psf;
 pub mod units;
 
-pub use apply::{Applied, ApplyOptions, Plan};
+pub use apply::{Applied, ApplyOptions, Method, Plan};
 pub use camera::Camera;
 pub use config::{Config, ConfigFile};
 pub use error::{Error, Result};

@@ -3,7 +3,7 @@
 
 use aureole::apply::spread_fraction;
 use aureole::convolve::plan::{Convolver, Input};
-use aureole::{ApplyOptions, Bloom, Config, Effect, Image, Kernel, Layout, Length, Plan};
+use aureole::{ApplyOptions, Bloom, Config, Effect, Image, Kernel, Layout, Length, Method, Plan};
 
 fn pseudo_random(n: usize, seed: u64) -> Vec<f32> {
     let mut state = seed
@@ -371,4 +371,100 @@ fn input_scale_sets_what_the_threshold_means() {
     };
     assert_eq!(spread(621.0), 1);
     assert_eq!(spread(1.0), 0);
+}
+
+/// A night scene: dim background and a few lamps, one of them at a corner.
+fn night(w: usize, h: usize, layout: Layout) -> Image {
+    let mut image = Image::filled(w, h, layout, 0.02);
+    for (i, plane) in image.planes.iter_mut().enumerate() {
+        plane[3 * w + 5] = 4e4 + 1e3 * i as f32;
+        plane[(h - 1) * w + w - 1] = 9e3;
+        plane[(h / 2) * w + w / 3] = 2.5e2;
+        plane[7 * w + w / 2] = 30.0 + i as f32;
+    }
+    image
+}
+
+#[test]
+fn splatting_gives_the_fft_result() {
+    let (w, h) = (48, 30);
+    let coloured = Kernel::from_planes(
+        31,
+        21,
+        (0..3).map(|c| pseudo_random(31 * 21, 40 + c)).collect(),
+    )
+    .unwrap();
+    for layout in [Layout::Rgb, Layout::Luminance] {
+        let image = night(w, h, layout);
+        for plan in [
+            Plan::new(&paper_config(), w, h, None).unwrap(),
+            Plan::from_kernel(coloured.clone(), w, h),
+        ] {
+            for (threshold, knee) in [(0.0, 0.0), (100.0, 0.0), (100.0, 2.0)] {
+                let run = |method| {
+                    let options = ApplyOptions {
+                        threshold,
+                        knee,
+                        method,
+                        ..ApplyOptions::default()
+                    };
+                    plan.apply(&image, &options, &mut |_| {}).unwrap()
+                };
+                let (fft, splat) = (run(Method::Fft), run(Method::Splat));
+                assert_eq!((fft.method, splat.method), (Method::Fft, Method::Splat));
+                // FFT round-off is relative to the brightest input.
+                let scale = image.planes[0].iter().fold(0f32, |m, v| m.max(v.abs()));
+                for (a, b) in fft.image.planes.iter().zip(&splat.image.planes) {
+                    for (x, y) in a.iter().zip(b) {
+                        assert!(
+                            (x - y).abs() <= 2e-6 * scale,
+                            "{layout:?} T={threshold}: {x} vs {y}"
+                        );
+                    }
+                }
+                assert!((fft.energy_out - splat.energy_out).abs() <= 1e-5 * fft.energy_out);
+            }
+        }
+    }
+}
+
+#[test]
+fn auto_splats_a_few_lights_and_transforms_a_bright_frame() {
+    let (w, h) = (64, 40);
+    let capped = Plan::new(&paper_config(), w, h, Some((9, 9))).unwrap();
+    let options = |threshold| ApplyOptions {
+        threshold,
+        ..ApplyOptions::default()
+    };
+    let lights = night(w, h, Layout::Rgb);
+    let few = capped.apply(&lights, &options(100.0), &mut |_| {}).unwrap();
+    assert_eq!((few.spread_pixels, few.method), (3, Method::Splat));
+    let full = Plan::new(&paper_config(), w, h, None).unwrap();
+    let all = full.apply(&lights, &options(0.0), &mut |_| {}).unwrap();
+    assert_eq!((all.spread_pixels, all.method), (w * h, Method::Fft));
+}
+
+#[test]
+fn splatting_gives_the_same_bytes_with_any_number_of_threads() {
+    let (w, h) = (40, 24);
+    let image = night(w, h, Layout::Rgb);
+    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+    let options = ApplyOptions {
+        threshold: 100.0,
+        method: Method::Splat,
+        ..ApplyOptions::default()
+    };
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                plan.apply(&image, &options, &mut |_| {})
+                    .unwrap()
+                    .image
+                    .planes
+            })
+    };
+    assert_eq!(run(1), run(3));
 }
