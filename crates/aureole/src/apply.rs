@@ -104,8 +104,8 @@ impl Plan {
     /// A plan for `width`×`height` images with a kernel built before (e.g.
     /// by `aureole psf`, read back from a file): kernels are cacheable.
     pub fn from_kernel(kernel: Kernel, width: usize, height: usize) -> Plan {
-        let (centres, spread) = kernel.split_centre();
-        let convolver = Convolver::new(&spread, width, height);
+        let centres = kernel.centre_weights();
+        let convolver = Convolver::without_centre(&kernel, width, height);
         Plan {
             width,
             height,

@@ -154,8 +154,39 @@ impl Convolver {
     /// Plans the convolution of `width`×`height` images with `kernel`
     /// (centre at column `w/2`, row `h/2`) and transforms the kernel.
     pub fn new(kernel: &Kernel, width: usize, height: usize) -> Convolver {
-        let (kw, kh) = (kernel.width(), kernel.height());
-        let (cx, cy) = kernel.centre();
+        let planes: Vec<&[f32]> = kernel.channels().iter().map(Vec::as_slice).collect();
+        let size = (kernel.width(), kernel.height());
+        Convolver::build(&planes, size, width, height, false)
+    }
+
+    /// [`Convolver::new`] for a one-channel kernel given as a plane
+    /// (row-major, `size` = width × height, centre in the middle), taken as
+    /// it is: not normalised.
+    pub(crate) fn for_plane(
+        plane: &[f32],
+        size: (usize, usize),
+        width: usize,
+        height: usize,
+    ) -> Convolver {
+        Convolver::build(&[plane], size, width, height, false)
+    }
+
+    /// [`Convolver::new`] for the kernel less its centre weight: the light
+    /// that moves, for a caller that applies the centre exactly itself.
+    pub fn without_centre(kernel: &Kernel, width: usize, height: usize) -> Convolver {
+        let planes: Vec<&[f32]> = kernel.channels().iter().map(Vec::as_slice).collect();
+        let size = (kernel.width(), kernel.height());
+        Convolver::build(&planes, size, width, height, true)
+    }
+
+    fn build(
+        planes: &[&[f32]],
+        (kw, kh): (usize, usize),
+        width: usize,
+        height: usize,
+        leave_centre: bool,
+    ) -> Convolver {
+        let (cx, cy) = (kw / 2, kh / 2);
         let px = fast_size(needed(kw, width));
         let columns = column_transform(needed(kh, height), height);
         let py = columns.length();
@@ -176,34 +207,16 @@ impl Convolver {
         };
         let row_fft = real_planner.plan_fft_forward(px);
         let full_column = planner.plan_fft_forward(py);
-        let spectra = kernel
-            .channels()
+        let spectra = planes
             .iter()
-            .map(|k| {
-                let mut spectrum = spectrum(&*row_fft, &*full_column, px, py, |row, input| {
-                    // Kernel row j sits at offset j − cy, wrapped.
-                    let j = (row + cy) % py;
-                    if j >= kh {
-                        return false;
-                    }
-                    for (i, &v) in k[j * kw..(j + 1) * kw].iter().enumerate() {
-                        input[(i + px - cx) % px] = v;
-                    }
-                    true
-                });
-                if let ColumnTransform::Halves(n) = columns {
-                    spectrum.par_chunks_mut(py).for_each_init(
-                        || vec![Complex::new(0.0, 0.0); py],
-                        |copy, column| {
-                            copy.copy_from_slice(column);
-                            for m in 0..n {
-                                column[m] = copy[2 * m];
-                                column[n + m] = copy[2 * m + 1];
-                            }
-                        },
-                    );
-                }
-                spectrum
+            .map(|plane| {
+                let placed = Placed {
+                    plane,
+                    size: (kw, kh),
+                    centre: (cx, cy),
+                    leave_centre,
+                };
+                kernel_spectrum(&*row_fft, &*full_column, px, columns, &placed)
             })
             .collect();
         Convolver {
@@ -520,58 +533,87 @@ impl Convolver {
     }
 }
 
-/// The 2-D spectrum, column by column, of the px×py plane whose rows
-/// `fill` writes (returning false for an all-zero row).
-fn spectrum<F>(
+/// A kernel plane (row-major, kw×kh) to be placed with its centre at index
+/// (0, 0) of the period, the rest wrapped.
+struct Placed<'a> {
+    plane: &'a [f32],
+    size: (usize, usize),
+    centre: (usize, usize),
+    /// Leave the centre weight out.
+    leave_centre: bool,
+}
+
+/// The 2-D spectrum of a placed kernel plane at px×P, column by column
+/// (pruned columns: even frequencies, then odd). Only the kernel's own rows
+/// are transformed and stored: the other rows of the period are zeros.
+fn kernel_spectrum(
     row_fft: &dyn RealToComplex<f32>,
     column_fft: &dyn Fft<f32>,
     px: usize,
-    py: usize,
-    fill: F,
-) -> Vec<Complex<f32>>
-where
-    F: Fn(usize, &mut [f32]) -> bool + Sync,
-{
+    columns: ColumnTransform,
+    placed: &Placed,
+) -> Vec<Complex<f32>> {
+    let py = columns.length();
+    let (kw, kh) = placed.size;
+    let (cx, cy) = placed.centre;
     let count = px / 2 + 1;
     let zero = Complex::new(0.0, 0.0);
-    let mut rows = vec![zero; py * count];
+    let mut rows = vec![zero; kh * count];
     rows.par_chunks_mut(count).enumerate().for_each_init(
         || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
-        |(input, scratch), (row, out)| {
+        |(input, scratch), (j, out)| {
             input.iter_mut().for_each(|v| *v = 0.0);
-            if fill(row, input) {
-                let _ = row_fft.process_with_scratch(input, out, scratch);
+            for (i, &v) in placed.plane[j * kw..(j + 1) * kw].iter().enumerate() {
+                input[(i + px - cx) % px] = v;
             }
+            if placed.leave_centre && j == cy {
+                input[0] = 0.0;
+            }
+            let _ = row_fft.process_with_scratch(input, out, scratch);
         },
     );
     // Column transforms, a strip of columns per task, gathered a cache line
     // or two per row rather than one value per row.
-    let mut columns = vec![zero; count * py];
-    columns
+    let mut spectrum = vec![zero; count * py];
+    spectrum
         .par_chunks_mut(STRIP * py)
         .enumerate()
         .for_each_init(
             || {
                 (
                     vec![zero; py * STRIP],
+                    vec![zero; py],
                     vec![zero; column_fft.get_inplace_scratch_len()],
                 )
             },
-            |(strip, scratch), (s, out)| {
+            |(strip, column, scratch), (s, out)| {
                 let first = s * STRIP;
                 let width = out.len() / py;
-                for (r, row) in rows.chunks(count).enumerate() {
+                strip.iter_mut().for_each(|v| *v = zero);
+                for (j, row) in rows.chunks(count).enumerate() {
+                    // Kernel row j sits at offset j − cy, wrapped.
+                    let r = (j + py - cy) % py;
                     strip[r * STRIP..r * STRIP + width].copy_from_slice(&row[first..first + width]);
                 }
-                for (j, column) in out.chunks_mut(py).enumerate() {
+                for (j, out) in out.chunks_mut(py).enumerate() {
                     for (v, s) in column.iter_mut().zip(strip.iter().skip(j).step_by(STRIP)) {
                         *v = *s;
                     }
                     column_fft.process_with_scratch(column, scratch);
+                    match columns {
+                        ColumnTransform::Full(_) => out.copy_from_slice(column),
+                        ColumnTransform::Halves(n) => {
+                            let (even, odd) = out.split_at_mut(n);
+                            for ((e, o), pair) in even.iter_mut().zip(odd).zip(column.chunks(2)) {
+                                *e = pair[0];
+                                *o = pair[1];
+                            }
+                        }
+                    }
                 }
             },
         );
-    columns
+    spectrum
 }
 
 #[cfg(test)]

@@ -170,17 +170,11 @@ impl Kernel {
         self.channels[channel][j as usize * self.width + i as usize]
     }
 
-    /// The kernel split into its centre weights (one per channel) and the
-    /// rest, the light that moves: K = centre·δ + spread.
-    pub(crate) fn split_centre(&self) -> (Vec<f32>, Kernel) {
+    /// K at the centre, one weight per channel.
+    pub(crate) fn centre_weights(&self) -> Vec<f32> {
         let (cx, cy) = self.centre();
         let at = cy * self.width + cx;
-        let centres = self.channels.iter().map(|plane| plane[at]).collect();
-        let mut spread = self.clone();
-        for plane in &mut spread.channels {
-            plane[at] = 0.0;
-        }
-        (centres, spread)
+        self.channels.iter().map(|plane| plane[at]).collect()
     }
 
     /// ΣK of one channel, in f64.
@@ -272,7 +266,9 @@ struct Psf {
 
 struct Layer {
     centre: f64,
-    spread: Vec<f64>,
+    /// f32 like the kernel it becomes: half the memory of f64 while a 4K
+    /// chain is built, and sums over it run in f64.
+    spread: Vec<f32>,
 }
 
 impl Psf {
@@ -283,10 +279,14 @@ impl Psf {
             None
         };
         let layer = match spread {
-            Some(f) => Layer {
-                centre: 1.0 - epsilon,
-                spread: f.into_iter().map(|v| epsilon * v).collect(),
-            },
+            Some(mut f) => {
+                f.par_iter_mut()
+                    .for_each(|v| *v = (epsilon * f64::from(*v)) as f32);
+                Layer {
+                    centre: 1.0 - epsilon,
+                    spread: f,
+                }
+            }
             // Nothing spread, or nowhere to spread it within the extent: all
             // light stays.
             None => Layer {
@@ -306,9 +306,9 @@ impl Psf {
             extent: *extent,
             channels: planes
                 .into_iter()
-                .map(|spread| Layer {
+                .map(|plane| Layer {
                     centre: 0.0,
-                    spread,
+                    spread: plane.iter().map(|&v| v as f32).collect(),
                 })
                 .collect(),
         }
@@ -324,25 +324,28 @@ impl Psf {
             .map(|c| {
                 let a = &self.channels[c.min(self.channels.len() - 1)];
                 let b = &next.channels[c.min(next.channels.len() - 1)];
-                let mut spread: Vec<f64> = a
-                    .spread
-                    .iter()
+                let width = self.extent.width;
+                let mass = sum_f64(&a.spread, width) * sum_f64(&b.spread, width);
+                let mut twice = if mass > 0.0 {
+                    compose(&a.spread, &b.spread, &self.extent)
+                } else {
+                    vec![0.0; a.spread.len()]
+                };
+                // FFT round-off leaves tiny negatives where the true value
+                // is ~0; light is never negative.
+                twice.par_iter_mut().for_each(|v| *v = v.max(0.0));
+                let kept = sum_f64(&twice, width);
+                let scale = if kept > 0.0 { mass / kept } else { 0.0 };
+                twice
+                    .par_iter_mut()
+                    .zip(&a.spread)
                     .zip(&b.spread)
-                    .map(|(s, t)| a.centre * t + b.centre * s)
-                    .collect();
-                let mass = a.spread.iter().sum::<f64>() * b.spread.iter().sum::<f64>();
-                if mass > 0.0 {
-                    let twice = compose(&a.spread, &b.spread, &self.extent);
-                    // FFT round-off leaves tiny negatives where the true
-                    // value is ~0; light is never negative.
-                    let kept: f64 = twice.iter().map(|v| v.max(0.0)).sum();
-                    if kept > 0.0 {
-                        let scale = mass / kept;
-                        for (s, t) in spread.iter_mut().zip(&twice) {
-                            *s += t.max(0.0) * scale;
-                        }
-                    }
-                }
+                    .for_each(|((v, &s), &t)| {
+                        *v = (a.centre * f64::from(t)
+                            + b.centre * f64::from(s)
+                            + f64::from(*v) * scale) as f32;
+                    });
+                let spread = twice;
                 Layer {
                     centre: a.centre * b.centre,
                     spread,
@@ -363,8 +366,8 @@ impl Psf {
             .channels
             .into_iter()
             .map(|layer| {
-                let mut plane: Vec<f32> = layer.spread.iter().map(|&v| v as f32).collect();
-                plane[centre] = (layer.spread[centre] + layer.centre) as f32;
+                let mut plane = layer.spread;
+                plane[centre] = (f64::from(plane[centre]) + layer.centre) as f32;
                 plane
             })
             .collect();
@@ -377,30 +380,21 @@ impl Psf {
 }
 
 /// S ⊛ T over the extent, both centred: the linear convolution in f32 (the
-/// plans of `apply`, zero padded so that nothing wraps), as f64. Its
-/// round-off, ~10⁻⁷ of the largest value, stays far below what the f32
-/// convolution of an image with the kernel adds anyway.
-fn compose(s: &[f64], t: &[f64], extent: &Extent) -> Vec<f64> {
-    let kernel = Kernel {
-        width: extent.width,
-        height: extent.height,
-        channels: vec![t.iter().map(|&v| v as f32).collect()],
-    };
-    let plane: Vec<f32> = s.iter().map(|&v| v as f32).collect();
-    Convolver::new(&kernel, extent.width, extent.height)
-        .convolve(&plane, 0)
-        .into_iter()
-        .map(f64::from)
-        .collect()
+/// plans of `apply`, zero padded so that nothing wraps). Its round-off,
+/// ~10⁻⁷ of the largest value, stays far below what the f32 convolution of
+/// an image with the kernel adds anyway.
+fn compose(s: &[f32], t: &[f32], extent: &Extent) -> Vec<f32> {
+    let size = (extent.width, extent.height);
+    Convolver::for_plane(t, size, extent.width, extent.height).convolve(s, 0)
 }
 
 /// f averaged over every pixel's area and normalised to ΣF = 1; `None` when
 /// f puts nothing inside the extent. A mirror-symmetric f is computed on a
 /// quarter and mirrored.
-fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f64>> {
+fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f32>> {
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = extent.centre();
-    let mut plane = vec![0.0; width * height];
+    let mut plane = vec![0f32; width * height];
     if shape.mirror_symmetric() {
         // Offsets 0..=reach along each axis cover both sides of the centre.
         let (reach_x, reach_y) = (cx.max(width - 1 - cx), cy.max(height - 1 - cy));
@@ -410,7 +404,7 @@ fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f64>> {
             .enumerate()
             .for_each(|(dy, row)| {
                 for (dx, value) in row.iter_mut().enumerate() {
-                    *value = pixel_mean(shape, dx as f64, dy as f64, (dx, dy) == (0, 0));
+                    *value = pixel_mean(shape, dx as f64, dy as f64, (dx, dy) == (0, 0)) as f32;
                 }
             });
         plane
@@ -431,22 +425,29 @@ fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f64>> {
                 let y = cy as f64 - j as f64;
                 for (i, value) in row.iter_mut().enumerate() {
                     let x = i as f64 - cx as f64;
-                    *value = pixel_mean(shape, x, y, (i, j) == (cx, cy));
+                    *value = pixel_mean(shape, x, y, (i, j) == (cx, cy)) as f32;
                 }
             });
     }
-    // Row sums in parallel, added in row order: the same bits on every run.
-    let row_sums: Vec<f64> = plane
-        .par_chunks(width)
-        .map(|row| row.iter().sum())
-        .collect();
-    let total: f64 = row_sums.iter().sum();
+    let total = sum_f64(&plane, width);
     if !(total > 0.0 && total.is_finite()) {
         return None;
     }
     let scale = 1.0 / total;
-    plane.par_iter_mut().for_each(|v| *v *= scale);
+    plane
+        .par_iter_mut()
+        .for_each(|v| *v = (f64::from(*v) * scale) as f32);
     Some(plane)
+}
+
+/// Σ of a plane in f64: row sums in parallel, added in row order, so the
+/// same bits with any number of threads.
+fn sum_f64(plane: &[f32], width: usize) -> f64 {
+    let rows: Vec<f64> = plane
+        .par_chunks(width.max(1))
+        .map(|row| row.iter().map(|&v| f64::from(v)).sum::<f64>())
+        .collect();
+    rows.iter().sum()
 }
 
 /// The mean of f over the pixel centred at (x, y) (`centre`: the kernel's
@@ -512,17 +513,17 @@ mod tests {
 
     #[test]
     fn composing_is_the_linear_convolution_over_the_extent() {
-        let at = |p: &[f64], w: usize, h: usize, x: i64, y: i64| {
+        let at = |p: &[f32], w: usize, h: usize, x: i64, y: i64| {
             let (i, j) = (x + (w / 2) as i64, y + (h / 2) as i64);
             if i < 0 || j < 0 || i >= w as i64 || j >= h as i64 {
                 0.0
             } else {
-                p[j as usize * w + i as usize]
+                f64::from(p[j as usize * w + i as usize])
             }
         };
         for (w, h) in [(1, 1), (5, 4), (8, 7), (12, 9), (3, 16)] {
-            let s: Vec<f64> = (0..w * h).map(|i| (i * 37 % 11) as f64 + 0.25).collect();
-            let t: Vec<f64> = (0..w * h).map(|i| (i * 13 % 7) as f64 + 0.5).collect();
+            let s: Vec<f32> = (0..w * h).map(|i| (i * 37 % 11) as f32 + 0.25).collect();
+            let t: Vec<f32> = (0..w * h).map(|i| (i * 13 % 7) as f32 + 0.5).collect();
             let fast = compose(&s, &t, &Extent::new(w, h).unwrap());
             let (cx, cy) = ((w / 2) as i64, (h / 2) as i64);
             for oy in -cy..h as i64 - cy {
@@ -533,7 +534,7 @@ mod tests {
                             sum += at(&s, w, h, px, py) * at(&t, w, h, ox - px, oy - py);
                         }
                     }
-                    let f = fast[(oy + cy) as usize * w + (ox + cx) as usize];
+                    let f = f64::from(fast[(oy + cy) as usize * w + (ox + cx) as usize]);
                     assert!(
                         (f - sum).abs() < 1e-5 * sum.max(1.0),
                         "{w}x{h}: {f} vs {sum}"

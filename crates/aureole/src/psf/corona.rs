@@ -283,7 +283,15 @@ impl CoronaShape {
 
     /// n(r) of MODEL.md §4 for a ray of width `width`; 0 where ω ≥ π/2.
     fn exponent(&self, r: f64, width: f64) -> f64 {
-        let omega = libm::pow(r / width, self.spread - 1.0);
+        // The paper's cases s = 0 and s = 1 without a pow: millions of
+        // samples near the rays need this.
+        let omega = if self.spread == 0.0 {
+            width / r
+        } else if self.spread == 1.0 {
+            1.0
+        } else {
+            libm::pow(r / width, self.spread - 1.0)
+        };
         if omega >= FRAC_PI_2 || omega.is_nan() {
             return 0.0;
         }
