@@ -188,31 +188,15 @@ impl Plan {
         } else if full_pixels == pixels {
             // Every plane is its own bright part and nothing stays.
             let planes: Vec<&[f32]> = image.planes.iter().map(Vec::as_slice).collect();
-            output.planes = self.spread(&planes, image.layout, recycled, progress);
+            output.planes = self.spread(&planes, None, image.layout, recycled, progress);
         } else {
             let fractions: Vec<f32> = (0..pixels)
                 .into_par_iter()
                 .map(|i| spread_fraction(f64::from(luminance.at(i)), threshold, knee))
                 .collect();
-            let bright: Vec<Vec<f32>> = image
-                .planes
-                .iter()
-                .map(|plane| {
-                    plane
-                        .par_iter()
-                        .zip(&fractions)
-                        .map(|(v, f)| v * f)
-                        .collect()
-                })
-                .collect();
-            let planes: Vec<&[f32]> = bright.iter().map(Vec::as_slice).collect();
-            output.planes = self.spread(&planes, image.layout, recycled, progress);
-            for ((out, plane), bright) in output.planes.iter_mut().zip(&image.planes).zip(&bright) {
-                out.par_iter_mut()
-                    .zip(plane)
-                    .zip(bright)
-                    .for_each(|((s, v), b)| *s += v - b);
-            }
+            let planes: Vec<&[f32]> = image.planes.iter().map(Vec::as_slice).collect();
+            output.planes =
+                self.spread(&planes, Some(&fractions), image.layout, recycled, progress);
         }
         progress(1.0);
         let energy_out = output.total_luminance();
@@ -360,28 +344,50 @@ impl Plan {
     /// Y = Σ w_c K_c ⊛ Y.
     fn spread(
         &self,
-        bright: &[&[f32]],
+        planes: &[&[f32]],
+        fractions: Option<&[f32]>,
         layout: Layout,
         recycled: Vec<Vec<f32>>,
         progress: &mut dyn FnMut(f64),
     ) -> Vec<Vec<f32>> {
         let kernels = self.convolver.channels();
-        let input = |plane, channel: usize| Input {
-            plane,
-            channel,
-            centre: self.centres[channel],
-        };
         match (layout, kernels) {
             (_, 1) | (Layout::Rgb, _) => {
-                let inputs: Vec<Input> = bright
+                let inputs: Vec<Input> = planes
                     .iter()
                     .enumerate()
-                    .map(|(c, plane)| input(*plane, c.min(kernels - 1)))
+                    .map(|(c, plane)| {
+                        let channel = c.min(kernels - 1);
+                        Input {
+                            plane,
+                            fractions,
+                            channel,
+                            centre: self.centres[channel],
+                        }
+                    })
                     .collect();
                 self.convolver.convolve_all(&inputs, recycled, progress)
             }
             (Layout::Luminance, _) => {
-                let inputs: Vec<Input> = (0..kernels).map(|k| input(bright[0], k)).collect();
+                // Three kernels over one plane: its bright part goes through
+                // each, and what stays is added once.
+                let plane = planes[0];
+                let bright: Option<Vec<f32>> = fractions.map(|fractions| {
+                    plane
+                        .par_iter()
+                        .zip(fractions)
+                        .map(|(v, f)| v * f)
+                        .collect()
+                });
+                let source = bright.as_deref().unwrap_or(plane);
+                let inputs: Vec<Input> = (0..kernels)
+                    .map(|channel| Input {
+                        plane: source,
+                        fractions: None,
+                        channel,
+                        centre: self.centres[channel],
+                    })
+                    .collect();
                 let mut parts = self.convolver.convolve_all(&inputs, recycled, progress);
                 let mut sum = parts.remove(0);
                 sum.par_iter_mut().for_each(|s| *s *= REC709_LUMINANCE[0]);
@@ -389,6 +395,12 @@ impl Plan {
                     sum.par_iter_mut()
                         .zip(part)
                         .for_each(|(s, p)| *s += weight * p);
+                }
+                if let Some(bright) = &bright {
+                    sum.par_iter_mut()
+                        .zip(plane)
+                        .zip(bright)
+                        .for_each(|((s, v), b)| *s += v - b);
                 }
                 vec![sum]
             }

@@ -98,6 +98,7 @@ fn planes_convolved_together_match_planes_convolved_alone() {
         .map(|(c, plane)| Input {
             plane,
             channel: 2 - c,
+            fractions: None,
             centre: 0.25 * c as f32,
         })
         .collect();

@@ -124,6 +124,9 @@ struct Strip<'a> {
 pub struct Input<'a> {
     /// Row-major, the convolver's width × height.
     pub plane: &'a [f32],
+    /// The share of each pixel's light that is spread, if not all: the rest
+    /// stays where it is, added back unconvolved.
+    pub fractions: Option<&'a [f32]>,
     /// The kernel channel to convolve with.
     pub channel: usize,
     /// Added to the result times the plane itself: a kernel weight at the
@@ -250,6 +253,7 @@ impl Convolver {
         self.convolve_all(
             &[Input {
                 plane,
+                fractions: None,
                 channel,
                 centre: 0.0,
             }],
@@ -302,6 +306,7 @@ impl Convolver {
         for (input, (rows, _)) in inputs.iter().zip(buffers.iter_mut()) {
             rows.par_chunks_mut(strips * TILE)
                 .zip(input.plane.par_chunks(BLOCK * w))
+                .enumerate()
                 .for_each_init(
                     || {
                         (
@@ -310,9 +315,19 @@ impl Convolver {
                             row_fft.make_scratch_vec(),
                         )
                     },
-                    |(padded, spectrum, scratch), (tiles, src)| {
+                    |(padded, spectrum, scratch), (block, (tiles, src))| {
                         for (r, row) in src.chunks(w).enumerate() {
-                            padded[..w].copy_from_slice(row);
+                            match input.fractions {
+                                Some(fractions) => {
+                                    let at = (block * BLOCK + r) * w;
+                                    for ((p, v), f) in
+                                        padded.iter_mut().zip(row).zip(&fractions[at..at + w])
+                                    {
+                                        *p = v * f;
+                                    }
+                                }
+                                None => padded[..w].copy_from_slice(row),
+                            }
                             padded[w..].iter_mut().for_each(|v| *v = 0.0);
                             let _ = row_fft.process_with_scratch(padded, spectrum, scratch);
                             for (s, values) in spectrum.chunks(STRIP).enumerate() {
@@ -364,11 +379,13 @@ impl Convolver {
                                         .copy_from_slice(&values[..width]);
                                 }
                             }
-                            for ((spectrum, dst), src) in spectra
+                            for (r, ((spectrum, dst), src)) in spectra
                                 .chunks_mut(count)
                                 .zip(dst.chunks_mut(w))
                                 .zip(src.chunks(w))
+                                .enumerate()
                             {
+                                let y = block * BLOCK + r;
                                 // A real signal's DC and Nyquist bins are
                                 // real; the inverse refuses their round-off.
                                 spectrum[0].im = 0.0;
@@ -376,8 +393,22 @@ impl Convolver {
                                     spectrum[count - 1].im = 0.0;
                                 }
                                 let _ = row_ifft.process_with_scratch(spectrum, output, scratch);
-                                for ((d, v), s) in dst.iter_mut().zip(output.iter()).zip(src) {
-                                    *d = v * scale + input.centre * s;
+                                let convolved = dst.iter_mut().zip(output.iter()).zip(src);
+                                match input.fractions {
+                                    Some(fractions) => {
+                                        let at = y * w;
+                                        for (((d, v), s), f) in
+                                            convolved.zip(&fractions[at..at + w])
+                                        {
+                                            let bright = s * f;
+                                            *d = v * scale + input.centre * bright + (s - bright);
+                                        }
+                                    }
+                                    None => {
+                                        for ((d, v), s) in convolved {
+                                            *d = v * scale + input.centre * s;
+                                        }
+                                    }
                                 }
                             }
                         },
