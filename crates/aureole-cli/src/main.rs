@@ -13,6 +13,7 @@ mod psf;
 
 use std::process::ExitCode;
 
+use clap::error::{ContextKind, ContextValue};
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Physically based camera bloom, corona and glare for HDR images in cd/m².
@@ -77,10 +78,18 @@ fn main() -> ExitCode {
             // Clap's message is followed by a hint; one line is what the
             // user (and a log scanner) needs.
             let rendered = e.render().to_string();
-            let line = rendered
+            let mut line = rendered
                 .lines()
                 .find(|l| !l.trim().is_empty())
-                .unwrap_or("");
+                .unwrap_or("")
+                .to_string();
+            // The hint lines say what is allowed: keep that on the line.
+            if let Some(ContextValue::String(close)) = e.get(ContextKind::SuggestedValue) {
+                line.push_str(&format!(" (did you mean '{close}'?)"));
+            }
+            if let Some(ContextValue::Strings(values)) = e.get(ContextKind::ValidValue) {
+                line.push_str(&format!("; allowed: {}", values.join(", ")));
+            }
             eprintln!("aureole: {line}");
             return ExitCode::from(2);
         }

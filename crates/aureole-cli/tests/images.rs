@@ -320,3 +320,41 @@ fn apply_reuses_a_kernel_written_by_psf() {
         .failure()
         .code(2);
 }
+
+#[test]
+fn apply_spreads_by_fft_or_splatting_as_asked_and_says_which() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, _) = scene(dir.path(), "night.exr");
+    let mut results = Vec::new();
+    for (method, said) in [
+        ("fft", "(FFT)"),
+        ("splat", "(splatted)"),
+        ("auto", "(splatted)"),
+    ] {
+        let out = dir.path().join(format!("{method}.exr"));
+        aureole()
+            .args(["apply", "--preset", "paper-fig5-both", "--threshold", "1"])
+            .args(["--method", method])
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .success()
+            .stderr(predicate::str::contains(said));
+        results.push(read_image(&out).unwrap().image);
+    }
+    let scale = 5e4;
+    for (a, b) in results[0].planes.iter().zip(&results[1].planes) {
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() <= 1e-6 * scale, "{x} vs {y}");
+        }
+    }
+    aureole()
+        .args(["apply", "--method", "wavelet"])
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("w.exr"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("wavelet").and(predicate::str::contains("fft")));
+}
