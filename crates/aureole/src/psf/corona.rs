@@ -191,6 +191,8 @@ impl Corona {
                 .map(|r| r.fade_per_px)
                 .fold(f64::INFINITY, f64::min),
             brightest: rays.iter().map(|r| r.intensity).fold(0.0, f64::max),
+            widest: rays.iter().map(|r| r.width).fold(0.0, f64::max),
+            narrowest: rays.iter().map(|r| r.width).fold(f64::INFINITY, f64::min),
             k: f64::from(self.rays),
             rotation: self.rotation_deg.to_radians(),
             spread: self.spread,
@@ -247,6 +249,9 @@ pub(crate) struct CoronaShape {
     slowest_fade: f64,
     /// The largest ray intensity.
     brightest: f64,
+    /// The widest and the narrowest ray, in px.
+    widest: f64,
+    narrowest: f64,
     k: f64,
     rotation: f64,
     spread: f64,
@@ -258,15 +263,10 @@ impl CoronaShape {
     /// and n = −1/ln cos ω falls as ω grows, so it is least at the widest ray
     /// (s < 1, at `near`) or the narrowest (s > 1, at `far`).
     fn least_exponent(&self, near: f64, far: f64) -> f64 {
-        let widths = self.rays.iter().map(|ray| ray.width);
-        match self.spread.partial_cmp(&1.0) {
-            Some(std::cmp::Ordering::Less) => {
-                self.exponent(near.max(0.0), widths.fold(0.0, f64::max))
-            }
-            Some(std::cmp::Ordering::Greater) => {
-                self.exponent(far, widths.fold(f64::INFINITY, f64::min))
-            }
-            _ => self.exponent(near.max(0.0), widths.fold(0.0, f64::max)),
+        if self.spread > 1.0 {
+            self.exponent(far, self.narrowest)
+        } else {
+            self.exponent(near.max(0.0), self.widest)
         }
     }
 
