@@ -488,7 +488,11 @@ fn kernels_and_fft_results_have_the_same_bytes_with_any_number_of_threads() {
             .install(|| {
                 let plan = Plan::new(&paper_config(), w, h, None).unwrap();
                 let applied = plan.apply(&image, &options, &mut |_| {}).unwrap();
-                (plan.kernel().clone(), applied.image.planes, applied.energy_out)
+                (
+                    plan.kernel().clone(),
+                    applied.image.planes,
+                    applied.energy_out,
+                )
             })
     };
     assert_eq!(run(1), run(3));

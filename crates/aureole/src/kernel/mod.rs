@@ -423,8 +423,15 @@ fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f32>> {
             .enumerate()
             .for_each(|(j, row)| {
                 let y = cy as f64 - j as f64;
+                let spans = shape.lit_spans(y);
                 for (i, value) in row.iter_mut().enumerate() {
                     let x = i as f64 - cx as f64;
+                    // Pixels outside the lit spans stay 0.
+                    if let Some(spans) = &spans {
+                        if !spans.iter().any(|&(a, b)| a <= x && x <= b) {
+                            continue;
+                        }
+                    }
                     *value = pixel_mean(shape, x, y, (i, j) == (cx, cy)) as f32;
                 }
             });

@@ -325,6 +325,58 @@ fn neg_ln_cos(x: f64) -> f64 {
 }
 
 impl SpreadShape for CoronaShape {
+    fn lit_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
+        // Every pixel of the row lies at r ≥ |y|. Where n grows with r
+        // (s ≤ 1) the least exponent on the row is at |y| − √2/2, and the
+        // bound of `vanishes_over_pixel` then holds for every direction
+        // farther than `reach` from a ray's axis.
+        if self.spread > 1.0 || y.abs() < 2.0 {
+            return None;
+        }
+        let n = self.least_exponent(y.abs() - FRAC_1_SQRT_2, y.abs());
+        if n <= 0.0 {
+            return None;
+        }
+        let reach = 2.0 / self.k * (1520.0 / n).sqrt() + 0.78 / y.abs() + 3e-5;
+        let period = TAU / self.k;
+        if reach >= 0.5 * period {
+            return None;
+        }
+        // Directions on this row: (0, π) above the centre, (−π, 0) below;
+        // x = y·cot φ runs monotonically over them.
+        let (low, high) = if y > 0.0 {
+            (0.0, std::f64::consts::PI)
+        } else {
+            (-std::f64::consts::PI, 0.0)
+        };
+        let x_at = |phi: f64| y * libm::cos(phi) / libm::sin(phi);
+        let mut spans = Vec::new();
+        for m in 0..self.rays.len() {
+            let axis = (self.rotation + m as f64 * period).rem_euclid(TAU);
+            for shift in [-TAU, 0.0] {
+                let (a, b) = (axis + shift - reach, axis + shift + reach);
+                if b <= low || a >= high {
+                    continue;
+                }
+                let ends = [
+                    if a <= low { None } else { Some(x_at(a)) },
+                    if b >= high { None } else { Some(x_at(b)) },
+                ];
+                // Above the centre x falls as φ grows, below it rises.
+                let (first, last) = if y > 0.0 {
+                    (ends[1], ends[0])
+                } else {
+                    (ends[0], ends[1])
+                };
+                spans.push((
+                    first.map_or(f64::NEG_INFINITY, |x| x - 1.0),
+                    last.map_or(f64::INFINITY, |x| x + 1.0),
+                ));
+            }
+        }
+        Some(spans)
+    }
+
     fn vanishes_over_pixel(&self, x: f64, y: f64) -> bool {
         let r = (x * x + y * y).sqrt();
         if r < 2.0 {
@@ -438,6 +490,44 @@ mod tests {
         }
         assert_eq!(neg_ln_cos(FRAC_PI_2), -libm::log(libm::cos(FRAC_PI_2)));
         assert_eq!(neg_ln_cos(0.0), 0.0);
+    }
+
+    #[test]
+    fn pixels_outside_a_rows_lit_spans_are_zero_everywhere() {
+        for (spread, rotation_deg) in [(-0.5, 0.0), (0.0, 7.0), (0.5, 90.0), (1.0, 3.0)] {
+            let c = Corona {
+                spread,
+                rotation_deg,
+                width_jitter: 0.3,
+                length: Length::px(400.0),
+                ..corona()
+            };
+            let shape = c.shape(None, 3, 0).unwrap();
+            let mut dark = 0;
+            for j in -300..300 {
+                let y = f64::from(j);
+                let Some(spans) = shape.lit_spans(y) else {
+                    continue;
+                };
+                for i in -300..300 {
+                    let x = f64::from(i);
+                    if spans.iter().any(|&(a, b)| a <= x && x <= b) {
+                        continue;
+                    }
+                    dark += 1;
+                    for a in 0..=4 {
+                        for b in 0..=4 {
+                            let (sx, sy) =
+                                (x - 0.5 + 0.25 * f64::from(b), y - 0.5 + 0.25 * f64::from(a));
+                            assert_eq!(shape.density(sx, sy), 0.0, "s = {spread} at ({sx}, {sy})");
+                        }
+                    }
+                }
+            }
+            if spread <= 0.0 {
+                assert!(dark > 100_000, "s = {spread}: {dark}");
+            }
+        }
     }
 
     #[test]

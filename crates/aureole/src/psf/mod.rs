@@ -127,6 +127,14 @@ pub(crate) trait SpreadShape: Sync {
     fn vanishes_over_pixel(&self, _x: f64, _y: f64) -> bool {
         false
     }
+
+    /// On the row of pixels centred at height y: ranges of x (pixel
+    /// centres, inclusive) outside which f is exactly 0 over every pixel,
+    /// or `None` where any pixel may be lit. Like
+    /// [`SpreadShape::vanishes_over_pixel`], a conservative, cheap answer.
+    fn lit_spans(&self, _y: f64) -> Option<Vec<(f64, f64)>> {
+        None
+    }
 }
 
 /// A supersampling grid: `x` columns by `y` rows of samples in a pixel.
