@@ -138,7 +138,7 @@ impl Plan {
         &self,
         image: &Image,
         options: &ApplyOptions,
-        mut recycled: Vec<Vec<f32>>,
+        recycled: Vec<Vec<f32>>,
         progress: &mut dyn FnMut(f64),
     ) -> Result<Applied> {
         if (image.width, image.height) != (self.width, self.height) {
@@ -151,24 +151,33 @@ impl Plan {
         let knee = options.knee;
         let luminance = Luminance::of(image);
         let pixels = image.width * image.height;
-        // Counted row by row without a plane of fractions: with every pixel
-        // fully spread (threshold 0, the complete camera) none is needed.
-        let width = image.width;
-        let (spread_pixels, full_pixels) = (0..image.height)
+        // Counted row by row without a plane of fractions (with every pixel
+        // fully spread, threshold 0, none is needed), with what splatting
+        // the bright pixels would cost.
+        let (w, h) = (image.width, image.height);
+        let (kw, kh) = (self.kernel.width(), self.kernel.height());
+        let (cx, cy) = self.kernel.centre();
+        let counts = (0..h)
             .into_par_iter()
             .map(|y| {
-                (y * width..(y + 1) * width).fold((0, 0), |(spread, full), i| {
-                    let f = spread_fraction(f64::from(luminance.at(i)), threshold, knee);
-                    (spread + usize::from(f > 0.0), full + usize::from(f == 1.0))
-                })
+                let mut row = Counts::default();
+                for x in 0..w {
+                    let f = spread_fraction(f64::from(luminance.at(y * w + x)), threshold, knee);
+                    if f > 0.0 {
+                        row.spread += 1;
+                        row.full += usize::from(f == 1.0);
+                        row.splat_area += covered(x, kw, cx, w);
+                    }
+                }
+                row.splat_area *= covered(y, kh, cy, h);
+                row
             })
-            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            .reduce(Counts::default, Counts::add);
+        let spread_pixels = counts.spread;
         let energy_in = image.total_luminance();
 
         let method = match options.method {
-            Method::Auto
-                if self.splat_cost(image, &luminance, threshold) < self.fft_cost(image) =>
-            {
+            Method::Auto if self.splat_cost(image, counts.splat_area) < self.fft_cost(image) => {
                 Method::Splat
             }
             Method::Auto => Method::Fft,
@@ -178,14 +187,8 @@ impl Plan {
         if spread_pixels > 0 && method == Method::Splat {
             output.planes = self.splat(image, &luminance, threshold, knee, recycled);
         } else if spread_pixels == 0 {
-            recycled.truncate(image.planes.len());
-            recycled.resize_with(image.planes.len(), Vec::new);
-            for (out, plane) in recycled.iter_mut().zip(&image.planes) {
-                out.clear();
-                out.extend_from_slice(plane);
-            }
-            output.planes = recycled;
-        } else if full_pixels == pixels {
+            output.planes = copies(&image.planes, recycled);
+        } else if counts.full == pixels {
             // Every plane is its own bright part and nothing stays.
             let planes: Vec<&[f32]> = image.planes.iter().map(Vec::as_slice).collect();
             output.planes = self.spread(&planes, None, image.layout, recycled, progress);
@@ -237,30 +240,16 @@ impl Plan {
     }
 
     /// Nanoseconds splatting takes: every bright pixel adds the part of the
-    /// kernel that falls inside the frame to every output plane, after a
-    /// pass over the planes (fitted likewise).
-    fn splat_cost(&self, image: &Image, luminance: &Luminance, threshold: f64) -> f64 {
-        let (w, h) = (image.width, image.height);
-        let (kw, kh) = (self.kernel.width(), self.kernel.height());
-        let (cx, cy) = self.kernel.centre();
-        let overlap = |p: usize, k: usize, c: usize, n: usize| {
-            // Output positions p + i − c for kernel indices i in [0, k).
-            let low = p.saturating_sub(c);
-            let high = (p + k - c).min(n);
-            high.saturating_sub(low)
-        };
-        let area: usize = (0..h)
-            .into_par_iter()
-            .map(|y| {
-                (0..w)
-                    .filter(|&x| f64::from(luminance.at(y * w + x)) > threshold)
-                    .map(|x| overlap(x, kw, cx, w) * overlap(y, kh, cy, h))
-                    .sum::<usize>()
-            })
-            .sum();
+    /// kernel that falls inside the frame (`area` output pixels in all) to
+    /// every output plane, after a pass over the planes (fitted likewise).
+    fn splat_cost(&self, image: &Image, area: usize) -> f64 {
         let pixels = (image.width * image.height) as f64;
         // Kernel rows that stay in cache between bright pixels add faster.
-        let per_add = if kw * kh <= 1 << 20 { 0.055 } else { 0.19 };
+        let per_add = if self.kernel.width() * self.kernel.height() <= 1 << 20 {
+            0.055
+        } else {
+            0.19
+        };
         (per_add * area as f64 + 2.0 * pixels) * self.convolutions(image.layout) as f64
     }
 
@@ -273,7 +262,7 @@ impl Plan {
         luminance: &Luminance,
         threshold: f64,
         knee: f64,
-        mut recycled: Vec<Vec<f32>>,
+        recycled: Vec<Vec<f32>>,
     ) -> Vec<Vec<f32>> {
         let (w, h) = (image.width, image.height);
         let (kw, kh) = (self.kernel.width(), self.kernel.height());
@@ -304,11 +293,8 @@ impl Plan {
                 (_, k) => vec![(c.min(k - 1), 1.0)],
             })
             .collect();
-        recycled.truncate(image.planes.len());
-        recycled.resize_with(image.planes.len(), Vec::new);
-        for ((out, plane), terms) in recycled.iter_mut().zip(&image.planes).zip(&terms) {
-            out.clear();
-            out.extend_from_slice(plane);
+        let mut outputs = copies(&image.planes, recycled);
+        for ((out, plane), terms) in outputs.iter_mut().zip(&image.planes).zip(&terms) {
             out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
                 // The light that leaves: the bright part of this row.
                 for &(x, by, f) in &rows[y] {
@@ -336,7 +322,7 @@ impl Plan {
                 }
             });
         }
-        recycled
+        outputs
     }
 
     /// The bright planes through the kernel, its centre weight applied
@@ -406,6 +392,46 @@ impl Plan {
             }
         }
     }
+}
+
+/// What the pass over the luminance finds.
+#[derive(Debug, Clone, Copy, Default)]
+struct Counts {
+    /// Pixels with some light spread.
+    spread: usize,
+    /// Pixels with all their light spread.
+    full: usize,
+    /// Σ over spread pixels of the output pixels their kernel reaches (the
+    /// kernel's reach is a rectangle: row sums of its widths times its
+    /// height on that row).
+    splat_area: usize,
+}
+
+impl Counts {
+    fn add(self, other: Counts) -> Counts {
+        Counts {
+            spread: self.spread + other.spread,
+            full: self.full + other.full,
+            splat_area: self.splat_area + other.splat_area,
+        }
+    }
+}
+
+/// How many of the `n` output positions p + i − c, for kernel indices i in
+/// [0, k), fall inside [0, n): a kernel's reach from p along one axis.
+fn covered(p: usize, k: usize, c: usize, n: usize) -> usize {
+    (p + k - c).min(n).saturating_sub(p.saturating_sub(c))
+}
+
+/// `planes` copied into the planes of `recycled` (resized to match).
+fn copies(planes: &[Vec<f32>], mut recycled: Vec<Vec<f32>>) -> Vec<Vec<f32>> {
+    recycled.truncate(planes.len());
+    recycled.resize_with(planes.len(), Vec::new);
+    for (out, plane) in recycled.iter_mut().zip(planes) {
+        out.clear();
+        out.extend_from_slice(plane);
+    }
+    recycled
 }
 
 /// The fraction of a pixel's light that is spread, from its luminance `y`

@@ -199,7 +199,7 @@ impl Image {
 /// Σ values in f64, in eight interleaved partial sums (a fixed order, so
 /// the same bits every run) that the CPU adds in parallel rather than one
 /// addition waiting for the last.
-fn sum_f64(values: &[f32]) -> f64 {
+pub(crate) fn sum_f64(values: &[f32]) -> f64 {
     let mut lanes = [0f64; 8];
     let chunks = values.chunks_exact(8);
     let rest: f64 = chunks.remainder().iter().map(|&v| f64::from(v)).sum();

@@ -89,6 +89,15 @@ enum ColumnTransform {
 }
 
 impl ColumnTransform {
+    /// The length of each 1-D transform.
+    fn transform_length(self) -> usize {
+        match self {
+            ColumnTransform::Full(p) => p,
+            ColumnTransform::Halves(n) => n,
+        }
+    }
+
+    /// The padded column length P.
     fn length(self) -> usize {
         match self {
             ColumnTransform::Full(p) => p,
@@ -157,9 +166,7 @@ impl Convolver {
     /// Plans the convolution of `width`×`height` images with `kernel`
     /// (centre at column `w/2`, row `h/2`) and transforms the kernel.
     pub fn new(kernel: &Kernel, width: usize, height: usize) -> Convolver {
-        let planes: Vec<&[f32]> = kernel.channels().iter().map(Vec::as_slice).collect();
-        let size = (kernel.width(), kernel.height());
-        Convolver::build(&planes, size, width, height, false)
+        Convolver::of_kernel(kernel, width, height, false)
     }
 
     /// [`Convolver::new`] for a one-channel kernel given as a plane
@@ -177,9 +184,13 @@ impl Convolver {
     /// [`Convolver::new`] for the kernel less its centre weight: the light
     /// that moves, for a caller that applies the centre exactly itself.
     pub fn without_centre(kernel: &Kernel, width: usize, height: usize) -> Convolver {
+        Convolver::of_kernel(kernel, width, height, true)
+    }
+
+    fn of_kernel(kernel: &Kernel, width: usize, height: usize, leave_centre: bool) -> Convolver {
         let planes: Vec<&[f32]> = kernel.channels().iter().map(Vec::as_slice).collect();
         let size = (kernel.width(), kernel.height());
-        Convolver::build(&planes, size, width, height, true)
+        Convolver::build(&planes, size, width, height, leave_centre)
     }
 
     fn build(
@@ -195,10 +206,6 @@ impl Convolver {
         let py = columns.length();
         let mut real_planner = RealFftPlanner::<f32>::new();
         let mut planner = FftPlanner::<f32>::new();
-        let transform = match columns {
-            ColumnTransform::Full(p) => p,
-            ColumnTransform::Halves(n) => n,
-        };
         let twiddles = match columns {
             ColumnTransform::Full(_) => Vec::new(),
             ColumnTransform::Halves(n) => (0..n)
@@ -231,8 +238,8 @@ impl Convolver {
             twiddles,
             row_fft,
             row_ifft: real_planner.plan_fft_inverse(px),
-            column_fft: planner.plan_fft_forward(transform),
-            column_ifft: planner.plan_fft_inverse(transform),
+            column_fft: planner.plan_fft_forward(columns.transform_length()),
+            column_ifft: planner.plan_fft_inverse(columns.transform_length()),
             scratch: Mutex::new(Vec::new()),
         }
     }
@@ -271,11 +278,12 @@ impl Convolver {
     /// kernel's spectrum is read from memory once for all of them;
     /// `progress` hears the fraction done after each pass.
     ///
-    /// Rows are transformed into a row-major buffer; each strip of
-    /// [`STRIP`] columns is gathered from it, transformed (padded, multiplied
-    /// by the kernel's spectrum, transformed back and cut to the H output
-    /// rows) in cache, and written strip-major; the inverse row transforms
-    /// gather their rows from the strips. No pass transposes a whole plane.
+    /// Rows are transformed, a block of [`BLOCK`] at a time, into tiles of
+    /// [`BLOCK`] rows × [`STRIP`] columns; each strip of columns gathers its
+    /// tiles, is transformed (padded, multiplied by the kernel's spectrum,
+    /// transformed back and cut to the H output rows) in cache, and written
+    /// strip-major; the inverse row transforms gather their block's tile from
+    /// each strip. No pass transposes a whole plane.
     pub fn convolve_all(
         &self,
         inputs: &[Input],

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::convolve::plan::Convolver;
 use crate::error::{Error, Result};
+use crate::image::sum_f64;
 use crate::psf::aperture::Optics;
 use crate::psf::{spectrum, Effect, Samples, Source, SpreadShape};
 
@@ -325,7 +326,7 @@ impl Psf {
                 let a = &self.channels[c.min(self.channels.len() - 1)];
                 let b = &next.channels[c.min(next.channels.len() - 1)];
                 let width = self.extent.width;
-                let mass = sum_f64(&a.spread, width) * sum_f64(&b.spread, width);
+                let mass = plane_sum(&a.spread, width) * plane_sum(&b.spread, width);
                 let mut twice = if mass > 0.0 {
                     compose(&a.spread, &b.spread, &self.extent)
                 } else {
@@ -334,7 +335,7 @@ impl Psf {
                 // FFT round-off leaves tiny negatives where the true value
                 // is ~0; light is never negative.
                 twice.par_iter_mut().for_each(|v| *v = v.max(0.0));
-                let kept = sum_f64(&twice, width);
+                let kept = plane_sum(&twice, width);
                 let scale = if kept > 0.0 { mass / kept } else { 0.0 };
                 twice
                     .par_iter_mut()
@@ -345,10 +346,9 @@ impl Psf {
                             + b.centre * f64::from(s)
                             + f64::from(*v) * scale) as f32;
                     });
-                let spread = twice;
                 Layer {
                     centre: a.centre * b.centre,
-                    spread,
+                    spread: twice,
                 }
             })
             .collect();
@@ -436,7 +436,7 @@ fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f32>> {
                 }
             });
     }
-    let total = sum_f64(&plane, width);
+    let total = plane_sum(&plane, width);
     if !(total > 0.0 && total.is_finite()) {
         return None;
     }
@@ -449,11 +449,8 @@ fn rasterise(shape: &dyn SpreadShape, extent: &Extent) -> Option<Vec<f32>> {
 
 /// Σ of a plane in f64: row sums in parallel, added in row order, so the
 /// same bits with any number of threads.
-fn sum_f64(plane: &[f32], width: usize) -> f64 {
-    let rows: Vec<f64> = plane
-        .par_chunks(width.max(1))
-        .map(|row| row.iter().map(|&v| f64::from(v)).sum::<f64>())
-        .collect();
+fn plane_sum(plane: &[f32], width: usize) -> f64 {
+    let rows: Vec<f64> = plane.par_chunks(width.max(1)).map(sum_f64).collect();
     rows.iter().sum()
 }
 

@@ -8,7 +8,7 @@ use std::f64::consts::{PI, TAU};
 use serde::Deserialize;
 
 use super::pupil::Pupil;
-use super::{check_count, check_range};
+use super::{check_angle, check_count, check_range};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 
@@ -105,13 +105,7 @@ impl Aperture {
             self.blades == 0 || (3..=MAX_BLADES).contains(&self.blades),
             "0 (a circular stop) or 3 to 64 blades",
         )?;
-        check_range(
-            NAME,
-            "rotation_deg",
-            self.rotation_deg,
-            true,
-            "a finite angle in degrees",
-        )?;
+        check_angle(NAME, "rotation_deg", self.rotation_deg)?;
         check_range(
             NAME,
             "roundness",
@@ -155,13 +149,7 @@ impl Aperture {
             "at most 6 families of lines",
         )?;
         for f in &self.filters {
-            check_range(
-                "aperture filter",
-                "angle_deg",
-                f.angle_deg,
-                true,
-                "a finite angle in degrees",
-            )?;
+            check_angle("aperture filter", "angle_deg", f.angle_deg)?;
             check_range(
                 "aperture filter",
                 "spacing_um",

@@ -12,7 +12,7 @@ use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::Deserialize;
 
-use super::{check_count, check_epsilon, check_range, Samples, SpreadShape};
+use super::{check_angle, check_count, check_epsilon, check_range, Samples, SpreadShape};
 use crate::error::Result;
 use crate::units::Length;
 
@@ -133,13 +133,7 @@ impl Corona {
             (0.0..=1.0).contains(&self.intensity_jitter),
             jitter,
         )?;
-        check_range(
-            NAME,
-            "rotation_deg",
-            self.rotation_deg,
-            true,
-            "a finite angle in degrees",
-        )
+        check_angle(NAME, "rotation_deg", self.rotation_deg)
     }
 
     /// Each ray's random factors, ray 0 first (ray m points at
@@ -259,6 +253,17 @@ pub(crate) struct CoronaShape {
 }
 
 impl CoronaShape {
+    /// The angle from a ray's axis beyond which a pixel centred at distance
+    /// r (or more) from the centre is exactly 0, for a least exponent n over
+    /// its radii. |cos u| ≤ exp(−u²/2) for |u| ≤ π/2 bounds the lobe by
+    /// exp(−n (k δ/2)²/2); below e^−760 its exp underflows to exactly 0,
+    /// with room for the round-off of log and cos. The pixel spans
+    /// directions within asin(√2/2 / r) < 0.78/r of its centre's, which
+    /// `fast_atan2` finds to 2e-5 rad. Infinite where n = 0.
+    fn dark_angle(&self, n: f64, r: f64) -> f64 {
+        2.0 / self.k * (1520.0 / n).sqrt() + 0.78 / r + 3e-5
+    }
+
     /// The least exponent n of any ray at radii in [near, far]: ω = (r/w)^(s−1)
     /// and n = −1/ln cos ω falls as ω grows, so it is least at the widest ray
     /// (s < 1, at `near`) or the narrowest (s > 1, at `far`).
@@ -334,10 +339,7 @@ impl SpreadShape for CoronaShape {
             return None;
         }
         let n = self.least_exponent(y.abs() - FRAC_1_SQRT_2, y.abs());
-        if n <= 0.0 {
-            return None;
-        }
-        let reach = 2.0 / self.k * (1520.0 / n).sqrt() + 0.78 / y.abs() + 3e-5;
+        let reach = self.dark_angle(n, y.abs());
         let period = TAU / self.k;
         if reach >= 0.5 * period {
             return None;
@@ -382,19 +384,9 @@ impl SpreadShape for CoronaShape {
         if r < 2.0 {
             return false;
         }
-        // The pixel spans radii within r ± √2/2 and directions within
-        // asin(√2/2 / r) < 0.78/r of the centre's, found here to 2e-5 rad.
         let (_, offset) = self.nearest_ray(fast_atan2(y, x));
-        let closest = offset.abs() - 0.78 / r - 3e-5;
-        if closest <= 0.0 {
-            return false;
-        }
         let n = self.least_exponent(r - FRAC_1_SQRT_2, r + FRAC_1_SQRT_2);
-        // |cos u| ≤ exp(−u²/2) for |u| ≤ π/2 bounds every lobe in the pixel
-        // by exp(−n (k δ/2)²/2); below e^−760 the exp of the lobe underflows
-        // to exactly 0, with room for the round-off of log and cos.
-        let u = 0.5 * self.k * closest;
-        0.5 * n * u * u > 760.0
+        offset.abs() > self.dark_angle(n, r)
     }
 
     fn density(&self, x: f64, y: f64) -> f64 {
@@ -492,6 +484,17 @@ mod tests {
         assert_eq!(neg_ln_cos(0.0), 0.0);
     }
 
+    /// f is exactly 0 at 5×5 points over the pixel centred at (x, y),
+    /// its corners and edges included.
+    fn assert_dark(shape: &CoronaShape, x: f64, y: f64, spread: f64) {
+        for a in 0..=4 {
+            for b in 0..=4 {
+                let (sx, sy) = (x - 0.5 + 0.25 * f64::from(b), y - 0.5 + 0.25 * f64::from(a));
+                assert_eq!(shape.density(sx, sy), 0.0, "s = {spread} at ({sx}, {sy})");
+            }
+        }
+    }
+
     #[test]
     fn pixels_outside_a_rows_lit_spans_are_zero_everywhere() {
         for (spread, rotation_deg) in [(-0.5, 0.0), (0.0, 7.0), (0.5, 90.0), (1.0, 3.0)] {
@@ -515,13 +518,7 @@ mod tests {
                         continue;
                     }
                     dark += 1;
-                    for a in 0..=4 {
-                        for b in 0..=4 {
-                            let (sx, sy) =
-                                (x - 0.5 + 0.25 * f64::from(b), y - 0.5 + 0.25 * f64::from(a));
-                            assert_eq!(shape.density(sx, sy), 0.0, "s = {spread} at ({sx}, {sy})");
-                        }
-                    }
+                    assert_dark(&shape, x, y, spread);
                 }
             }
             if spread <= 0.0 {
@@ -548,13 +545,7 @@ mod tests {
                         continue;
                     }
                     vanished += 1;
-                    for a in 0..=4 {
-                        for b in 0..=4 {
-                            let (sx, sy) =
-                                (x - 0.5 + 0.25 * f64::from(b), y - 0.5 + 0.25 * f64::from(a));
-                            assert_eq!(shape.density(sx, sy), 0.0, "s = {spread} at ({sx}, {sy})");
-                        }
-                    }
+                    assert_dark(&shape, x, y, spread);
                 }
             }
             // Thin rays (s ≤ 0) leave most of the plane dark.

@@ -193,6 +193,11 @@ pub(crate) fn check_epsilon(effect: &str, epsilon: f64) -> Result<()> {
     )
 }
 
+/// Refuses an angle in degrees unless it is finite.
+pub(crate) fn check_angle(effect: &str, name: &'static str, degrees: f64) -> Result<()> {
+    check_range(effect, name, degrees, true, "a finite angle in degrees")
+}
+
 /// Samples per axis so that the midpoint rule's relative error, about
 /// (h²/24)·|f''/f| with h = 1/m, stays near 10⁻³ for a curvature
 /// `relative_curvature` = |f''/f| in px⁻².
