@@ -445,54 +445,31 @@ fn auto_splats_a_few_lights_and_transforms_a_bright_frame() {
 }
 
 #[test]
-fn splatting_gives_the_same_bytes_with_any_number_of_threads() {
-    let (w, h) = (40, 24);
-    let image = night(w, h, Layout::Rgb);
-    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
-    let options = ApplyOptions {
-        threshold: 100.0,
-        method: Method::Splat,
-        ..ApplyOptions::default()
-    };
-    let run = |threads| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| {
-                plan.apply(&image, &options, &mut |_| {})
-                    .unwrap()
-                    .image
-                    .planes
-            })
-    };
-    assert_eq!(run(1), run(3));
-}
-
-#[test]
-fn kernels_and_fft_results_have_the_same_bytes_with_any_number_of_threads() {
+fn kernels_and_results_have_the_same_bytes_with_any_number_of_threads() {
     let (w, h) = (52, 30);
     let image = night(w, h, Layout::Rgb);
-    let options = ApplyOptions {
-        threshold: 100.0,
-        knee: 0.5,
-        method: Method::Fft,
-        ..ApplyOptions::default()
-    };
-    let run = |threads| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| {
-                let plan = Plan::new(&paper_config(), w, h, None).unwrap();
-                let applied = plan.apply(&image, &options, &mut |_| {}).unwrap();
-                (
-                    plan.kernel().clone(),
-                    applied.image.planes,
-                    applied.energy_out,
-                )
-            })
-    };
-    assert_eq!(run(1), run(3));
+    for method in [Method::Fft, Method::Splat] {
+        let options = ApplyOptions {
+            threshold: 100.0,
+            knee: 0.5,
+            method,
+            ..ApplyOptions::default()
+        };
+        let run = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+                    let applied = plan.apply(&image, &options, &mut |_| {}).unwrap();
+                    (
+                        plan.kernel().clone(),
+                        applied.image.planes,
+                        applied.energy_out,
+                    )
+                })
+        };
+        assert_eq!(run(1), run(3), "{method:?}");
+    }
 }
