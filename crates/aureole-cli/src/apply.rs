@@ -3,14 +3,16 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aureole::io::read::read_image;
-use aureole::{ApplyOptions, Config, Kernel, Method, Plan};
+use anyhow::anyhow;
+use aureole::io::read::{read_image_limited, Limits};
+use aureole::memory::{format_bytes, Workload};
+use aureole::{ApplyOptions, Config, Image, Kernel, Method, Plan};
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
 use crate::display_args::{parse_positive, DisplayArgs};
 use crate::progress::Progress;
-use crate::{input, output, Failure};
+use crate::{batch, input, output, Failure};
 
 #[derive(clap::Args)]
 #[command(
@@ -20,12 +22,34 @@ and .tif are pictures for a display (exposure, tone curve, sRGB). Without --pres
 the default camera (preset paper-fig5-both) is used."
 )]
 pub struct Args {
-    /// The HDR image: OpenEXR, Radiance .hdr, PFM, or PNG, JPEG, TIFF.
-    input: PathBuf,
+    /// The HDR images: OpenEXR, Radiance .hdr, PFM, or PNG, JPEG, TIFF.
+    /// Several may be given, or with --frames one pattern such as
+    /// shot.%04d.exr.
+    #[arg(required = true, value_name = "INPUT")]
+    inputs: Vec<PathBuf>,
 
-    /// Where to write the result (.exr, .hdr, .pfm, .png, .jpg, .tif).
+    /// Where to write the result (.exr, .hdr, .pfm, .png, .jpg, .tif). With
+    /// several inputs: a folder (each output takes its input's name) or,
+    /// with --frames, a pattern such as out/shot.%04d.exr.
     #[arg(short, long, value_name = "OUTPUT")]
     output: PathBuf,
+
+    /// The frame numbers that a %d (or %04d …) in the input stands for:
+    /// 1-240, or a list such as 1-10,20,30-40.
+    #[arg(long, value_name = "LIST", value_parser = batch::parse_frames)]
+    frames: Option<batch::Frames>,
+
+    /// Leave a frame whose output already exists (outputs are written whole
+    /// or not at all, so an existing one is complete): an interrupted batch
+    /// resumes where it stopped.
+    #[arg(long)]
+    skip_existing: bool,
+
+    /// Stop before allocating when a frame would need more memory than this
+    /// (e.g. 4G, 512M). Default: three quarters of the memory available
+    /// when the run starts.
+    #[arg(long, value_name = "SIZE", value_parser = parse_memory)]
+    max_memory: Option<u64>,
 
     #[command(flatten)]
     chain: ChainArgs,
@@ -51,9 +75,15 @@ pub struct Args {
     #[arg(long, value_name = "X", value_parser = parse_positive)]
     input_scale: Option<f64>,
 
-    /// Replace NaN and infinite pixels by 0 (with a warning) instead of refusing the file.
+    /// Replace NaN, infinite and negative samples by 0 (with a warning)
+    /// instead of refusing the file.
     #[arg(long)]
     sanitize: bool,
+
+    /// Keep negative samples as they are (they are never spread) instead of
+    /// refusing the file.
+    #[arg(long)]
+    keep_negative: bool,
 
     /// Write only the light the camera adds (result − input), to add over
     /// the original in compositing.
@@ -87,91 +117,271 @@ fn parse_non_negative(text: &str) -> Result<f64, String> {
         .ok_or_else(|| format!("{text:?} is not a finite number of at least 0"))
 }
 
+fn parse_memory(text: &str) -> Result<u64, String> {
+    aureole::memory::parse_bytes(text).map_err(|e| e.to_string())
+}
+
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
-    output::check(&args.output, Some(&args.input))?;
+    let jobs = batch::jobs(
+        &args.inputs,
+        &args.output,
+        args.frames.as_ref().map(|f| f.0.as_slice()),
+    )?;
+    for job in &jobs {
+        output::check(&job.output, Some(&job.input))?;
+    }
     let (config, defaulted) = match &args.kernel {
         Some(_) => (Config::default(), false),
         None => args.chain.compose_or_default(matches)?,
     };
-    let start = Instant::now();
-    let input = input::read(&args.input, args.input_scale, args.sanitize, quiet)?;
-    let image = &input.loaded.image;
-    if !quiet {
-        if defaulted {
-            eprintln!(
-                "aureole: note: no --preset or --config: using the default camera, preset {}",
-                aureole::presets::DEFAULT_PRESET
-            );
-        }
+    if defaulted && !quiet {
         eprintln!(
-            "aureole: note: {}: luminance scale {} cd/m² per unit ({})",
-            args.input.display(),
-            input.scale,
-            input.scale_source
+            "aureole: note: no --preset or --config: using the default camera, preset {}",
+            aureole::presets::DEFAULT_PRESET
         );
     }
-    let progress = Progress::new(quiet);
-    progress.stage("building kernel");
-    let plan = match &args.kernel {
-        Some(path) => {
-            let file = read_image(path)?.image;
-            let kernel = Kernel::from_planes(file.width, file.height, file.planes)
-                .map_err(|e| Failure::Usage(anyhow::anyhow!("{}: {e}", path.display())))?;
-            Plan::from_kernel(kernel, image.width, image.height)
-        }
-        None => Plan::new(&config, image.width, image.height, args.max_kernel)?,
-    };
-    progress.stage("convolving");
-    let options = ApplyOptions {
-        threshold: args.threshold.unwrap_or(config.threshold),
-        knee: args.knee,
-        scale: input.scale,
-        glare_only: args.glare_only,
-        method: match args.method {
-            MethodArg::Auto => Method::Auto,
-            MethodArg::Fft => Method::Fft,
-            MethodArg::Splat => Method::Splat,
-        },
-    };
-    let applied = plan.apply(image, &options, &mut |f| progress.set(f))?;
-    progress.stage("writing");
-    let shown = output::write(
-        &args.output,
-        &applied.image,
-        input.scale,
-        &args.display,
-        args.half,
+    let limit = args
+        .max_memory
+        .unwrap_or_else(aureole::memory::default_limit);
+    let mut session = Session {
+        args,
+        config,
+        limit,
         quiet,
-    )?;
-    progress.finish();
-    if !quiet {
-        let kernel = plan.kernel();
-        let ratio = if applied.energy_in != 0.0 {
-            format!("{:.4} %", 100.0 * applied.energy_out / applied.energy_in)
-        } else {
-            "-".to_string()
-        };
+        plan: None,
+        recycled: Vec::new(),
+    };
+    if jobs.len() == 1 {
+        return session.frame(&jobs[0]).map(|_| ());
+    }
+    let mut failed = 0;
+    let mut skipped = 0;
+    for job in &jobs {
+        if args.skip_existing && job.output.is_file() {
+            skipped += 1;
+            continue;
+        }
+        if let Err(failure) = session.frame(job) {
+            failed += 1;
+            let (Failure::Usage(e) | Failure::Run(e)) = failure;
+            eprintln!("aureole: error: {}", crate::one_line(&e));
+        }
+    }
+    let written = jobs.len() - failed - skipped;
+    if !quiet || failed > 0 {
         eprintln!(
-            "wrote {}: {}x{} {:?}, kernel {}x{}, {} px above {} cd/m² ({}), energy in {:.6e} out {:.6e} ({ratio}){}, {:.2} s",
-            args.output.display(),
-            image.width,
-            image.height,
-            image.layout,
-            kernel.width(),
-            kernel.height(),
-            applied.spread_pixels,
-            options.threshold,
-            match applied.method {
-                Method::Splat => "splatted",
-                _ => "FFT",
-            },
-            applied.energy_in,
-            applied.energy_out,
-            shown.map(|s| format!(", {s}")).unwrap_or_default(),
-            start.elapsed().as_secs_f64()
+            "aureole: {written} of {} frames written, {skipped} skipped (already there), {failed} failed",
+            jobs.len()
         );
+    }
+    if failed > 0 {
+        return Err(Failure::Run(anyhow::anyhow!(
+            "{failed} of {} frames failed (see above); rerun with --skip-existing to do only those",
+            jobs.len()
+        )));
     }
     Ok(())
+}
+
+/// What stays from frame to frame: the plan (rebuilt only when the size
+/// changes) and the previous result's planes.
+struct Session<'a> {
+    args: &'a Args,
+    config: Config,
+    limit: u64,
+    quiet: bool,
+    plan: Option<Plan>,
+    recycled: Vec<Vec<f32>>,
+}
+
+impl Session<'_> {
+    fn frame(&mut self, job: &batch::Job) -> Result<(), Failure> {
+        let (args, quiet) = (self.args, self.quiet);
+        let start = Instant::now();
+        let options = input::Options {
+            input_scale: args.input_scale,
+            sanitize: args.sanitize,
+            keep_negative: args.keep_negative,
+            limits: Limits {
+                max_bytes: self.limit,
+            },
+            quiet,
+        };
+        let input = input::read(&job.input, &options)?;
+        let image = &input.loaded.image;
+        if !quiet {
+            eprintln!(
+                "aureole: note: {}: luminance scale {} cd/m² per unit ({})",
+                job.input.display(),
+                input.scale,
+                input.scale_source
+            );
+        }
+        let progress = Progress::new(quiet);
+        let reusable = self
+            .plan
+            .as_ref()
+            .is_some_and(|p| p.size() == (image.width, image.height));
+        if !reusable {
+            // The old plan goes before the new one is built.
+            self.plan = None;
+            self.recycled = Vec::new();
+            progress.stage("building kernel");
+            self.plan = Some(self.build_plan(&job.input, image)?);
+        }
+        let Some(plan) = self.plan.as_ref() else {
+            return Ok(());
+        };
+        progress.stage("convolving");
+        let options = ApplyOptions {
+            threshold: args.threshold.unwrap_or(self.config.threshold),
+            knee: args.knee,
+            scale: input.scale,
+            glare_only: args.glare_only,
+            method: match args.method {
+                MethodArg::Auto => Method::Auto,
+                MethodArg::Fft => Method::Fft,
+                MethodArg::Splat => Method::Splat,
+            },
+        };
+        let recycled = std::mem::take(&mut self.recycled);
+        let applied = plan.apply_recycling(image, &options, recycled, &mut |f| progress.set(f))?;
+        progress.stage("writing");
+        let shown = output::write(
+            &job.output,
+            &applied.image,
+            input.scale,
+            &args.display,
+            args.half,
+            quiet,
+        )?;
+        progress.finish();
+        if !quiet {
+            let kernel = plan.kernel();
+            let ratio = if applied.energy_in != 0.0 {
+                format!("{:.4} %", 100.0 * applied.energy_out / applied.energy_in)
+            } else {
+                "-".to_string()
+            };
+            eprintln!(
+                "wrote {}: {}x{} {:?}, kernel {}x{}, {} px above {} cd/m² ({}), energy in {:.6e} out {:.6e} ({ratio}){}, {:.2} s",
+                job.output.display(),
+                image.width,
+                image.height,
+                image.layout,
+                kernel.width(),
+                kernel.height(),
+                applied.spread_pixels,
+                options.threshold,
+                match applied.method {
+                    Method::Splat => "splatted",
+                    _ => "FFT",
+                },
+                applied.energy_in,
+                applied.energy_out,
+                shown.map(|s| format!(", {s}")).unwrap_or_default(),
+                start.elapsed().as_secs_f64()
+            );
+        }
+        self.recycled = applied.image.planes;
+        Ok(())
+    }
+
+    /// The plan for `image`, once its memory is known to fit.
+    fn build_plan(&self, path: &std::path::Path, image: &Image) -> Result<Plan, Failure> {
+        let args = self.args;
+        let channels = image.planes.len();
+        let alpha = image.alpha.is_some();
+        match &args.kernel {
+            Some(kernel_path) => {
+                let file = read_image_limited(
+                    kernel_path,
+                    Limits {
+                        max_bytes: self.limit,
+                    },
+                )?
+                .image;
+                let workload = Workload {
+                    width: image.width,
+                    height: image.height,
+                    channels,
+                    alpha,
+                    kernel: (file.width, file.height),
+                    kernel_channels: file.planes.len(),
+                };
+                self.check_memory(path, &workload, &[], None)?;
+                let kernel = Kernel::from_planes(file.width, file.height, file.planes)
+                    .map_err(|e| Failure::Usage(anyhow!("{}: {e}", kernel_path.display())))?;
+                Ok(Plan::from_kernel(kernel, image.width, image.height))
+            }
+            None => {
+                let workload = Workload::of_config(
+                    &self.config,
+                    image.width,
+                    image.height,
+                    channels,
+                    alpha,
+                    args.max_kernel,
+                )?;
+                self.check_memory(path, &workload, &self.config.effects, args.max_kernel)?;
+                Ok(Plan::new(
+                    &self.config,
+                    image.width,
+                    image.height,
+                    args.max_kernel,
+                )?)
+            }
+        }
+    }
+
+    /// Refuses a run that would need more than the limit, saying how much it
+    /// needs and what would fit.
+    fn check_memory(
+        &self,
+        path: &std::path::Path,
+        workload: &Workload,
+        effects: &[aureole::Effect],
+        max_kernel: Option<(usize, usize)>,
+    ) -> Result<(), Failure> {
+        let estimate = workload.estimate(effects);
+        if estimate.bytes <= self.limit {
+            return Ok(());
+        }
+        // The largest kernel extent, halving, that would fit.
+        let (mut w, mut h) = max_kernel.unwrap_or(workload.kernel);
+        let mut fits = None;
+        while w > 16 && h > 16 {
+            w /= 2;
+            h /= 2;
+            let smaller = Workload {
+                kernel: (w.min(workload.kernel.0), h.min(workload.kernel.1)),
+                ..*workload
+            };
+            let bytes = smaller.estimate(effects).bytes;
+            if bytes <= self.limit {
+                fits = Some((w, h, bytes));
+                break;
+            }
+        }
+        let hint = match (fits, effects.is_empty()) {
+            (Some((w, h, bytes)), false) => format!(
+                "--max-kernel {w}x{h} would need about {} (light then reaches {} px around a source)",
+                format_bytes(bytes),
+                w / 2
+            ),
+            (Some((w, h, _)), true) => {
+                format!("a kernel of at most {w}x{h} (aureole psf --size {w}x{h}) would fit")
+            }
+            (None, _) => "the image alone is too large for it".to_string(),
+        };
+        Err(Failure::Run(anyhow!(
+            "{}: needs about {} (peak while {}) but --max-memory is {}; {hint}, or raise --max-memory",
+            path.display(),
+            format_bytes(estimate.bytes),
+            estimate.stage,
+            format_bytes(self.limit)
+        )))
+    }
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]

@@ -42,7 +42,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     let start = Instant::now();
     let scene = aureole::demo::night_street(args.size.0, args.size.1);
     if let Some(hdr) = &args.hdr {
-        write_linear(hdr, &scene, LinearOptions::default())?;
+        crate::interrupt::writing(|| write_linear(hdr, &scene, LinearOptions::default()))?;
     }
     let progress = Progress::new(quiet);
     progress.stage("building kernel");

@@ -22,7 +22,16 @@ pub struct Args {
 
 pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     // info describes bad pixels instead of refusing them.
-    let input = input::read(&args.input, args.input_scale, true, quiet)?;
+    let options = input::Options {
+        input_scale: args.input_scale,
+        sanitize: true,
+        keep_negative: true,
+        limits: aureole::io::read::Limits {
+            max_bytes: aureole::memory::default_limit(),
+        },
+        quiet,
+    };
+    let input = input::read(&args.input, &options)?;
     let image = &input.loaded.image;
     let mut luminance: Vec<f64> = image
         .luminance()

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use anyhow::anyhow;
-use aureole::io::read::{read_image, Loaded};
+use aureole::io::read::{read_image_limited, Limits, Loaded};
 
 use crate::Failure;
 
@@ -16,13 +16,21 @@ pub struct Input {
     pub scale_source: &'static str,
 }
 
-pub fn read(
-    path: &Path,
-    input_scale: Option<f64>,
-    sanitize: bool,
-    quiet: bool,
-) -> Result<Input, Failure> {
-    let mut loaded = read_image(path)?;
+/// How to read: the scale, what to do with samples that are not luminance,
+/// the decoder's memory bound.
+pub struct Options {
+    pub input_scale: Option<f64>,
+    /// Replace NaN, infinite and negative samples by 0.
+    pub sanitize: bool,
+    /// Let negative samples through (they never pass a threshold).
+    pub keep_negative: bool,
+    pub limits: Limits,
+    pub quiet: bool,
+}
+
+pub fn read(path: &Path, options: &Options) -> Result<Input, Failure> {
+    let (input_scale, sanitize, quiet) = (options.input_scale, options.sanitize, options.quiet);
+    let mut loaded = read_image_limited(path, options.limits)?;
     let note = |text: &str| {
         if !quiet {
             eprintln!("aureole: note: {}: {text}", path.display());
@@ -38,21 +46,34 @@ pub fn read(
             loaded.format
         );
     }
-    if let Some(bad) = loaded.image.non_finite() {
-        if !sanitize {
+    let negatives = if options.keep_negative {
+        None
+    } else {
+        loaded.image.negatives()
+    };
+    let refused = [
+        (loaded.image.non_finite(), "NaN or infinite", ""),
+        (negatives, "negative", ", --keep-negative keeps them"),
+    ];
+    for (found, what, keep) in refused {
+        if let (Some(bad), false) = (found, sanitize) {
             return Err(Failure::Run(anyhow!(
-                "{}: {} NaN or infinite samples, the first at column {} row {} (from the top); --sanitize replaces them by 0",
+                "{}: {} {what} samples (luminance must be a finite number of at least 0), the first at column {} row {} (from the top); --sanitize replaces them by 0{keep}",
                 path.display(),
                 bad.count,
                 bad.first.0,
                 bad.first.1
             )));
         }
-        let count = loaded.image.sanitize();
-        eprintln!(
-            "aureole: warning: {}: {count} NaN or infinite samples replaced by 0 (--sanitize)",
-            path.display()
-        );
+    }
+    if sanitize {
+        let count = loaded.image.sanitize(!options.keep_negative);
+        if count > 0 {
+            eprintln!(
+                "aureole: warning: {}: {count} NaN, infinite or negative samples replaced by 0 (--sanitize)",
+                path.display()
+            );
+        }
     }
     let (scale, scale_source) = match (input_scale, loaded.image.white_luminance) {
         (Some(scale), _) => (scale, "--input-scale"),

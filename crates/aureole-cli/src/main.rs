@@ -1,11 +1,13 @@
 //! `aureole`: the command-line shell over the aureole library.
 
 mod apply;
+mod batch;
 mod chain;
 mod demo;
 mod display_args;
 mod info;
 mod input;
+mod interrupt;
 mod output;
 mod presets;
 mod progress;
@@ -23,6 +25,11 @@ struct Cli {
     /// Print nothing on stderr but errors.
     #[arg(long, short, global = true)]
     quiet: bool,
+
+    /// Worker threads (default: RAYON_NUM_THREADS if set, else every core).
+    /// The output is the same, byte for byte, for any count.
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1024))]
+    threads: Option<u16>,
 
     #[command(subcommand)]
     command: Command,
@@ -94,6 +101,16 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if let Some(threads) = cli.threads {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::from(threads))
+            .build_global();
+        if let Err(e) = pool {
+            eprintln!("aureole: error: cannot start {threads} threads: {e}");
+            return ExitCode::from(1);
+        }
+    }
+    interrupt::install();
     let sub = |name| matches.subcommand_matches(name).unwrap_or(&matches);
     let result = match &cli.command {
         Command::Apply(args) => apply::run(args, sub("apply"), cli.quiet),
@@ -105,12 +122,21 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Usage(e)) => {
-            eprintln!("aureole: error: {e:#}");
+            eprintln!("aureole: error: {}", one_line(&e));
             ExitCode::from(2)
         }
         Err(Failure::Run(e)) => {
-            eprintln!("aureole: error: {e:#}");
+            eprintln!("aureole: error: {}", one_line(&e));
             ExitCode::from(1)
         }
     }
+}
+
+/// An error and its context on one line, whatever a dependency put in its
+/// message: a log scanner reads a failure per line.
+pub fn one_line(error: &anyhow::Error) -> String {
+    format!("{error:#}")
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
 }

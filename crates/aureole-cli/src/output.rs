@@ -12,8 +12,9 @@ use aureole::Image;
 use crate::display_args::DisplayArgs;
 use crate::Failure;
 
-/// Refuses, before any work, an output whose extension we do not write or
-/// that would overwrite the input.
+/// Refuses, before any work, an output whose extension we do not write,
+/// that would overwrite the input, that is not a plain file, or whose
+/// folder is missing or cannot be written.
 pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
     let known =
         matches!(extension(output).as_str(), "exr" | "hdr" | "pfm") || is_display_format(output);
@@ -33,6 +34,41 @@ pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
             )));
         }
     }
+    let folder = match output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        return Err(Failure::Usage(anyhow!(
+            "{}: the output folder {} does not exist; create it first",
+            output.display(),
+            folder.display()
+        )));
+    }
+    // The result replaces a file by renaming over it, which would replace
+    // a device or a named pipe by a file.
+    if let Ok(meta) = std::fs::metadata(output) {
+        if !meta.is_file() {
+            return Err(Failure::Usage(anyhow!(
+                "{}: exists and is not a plain file (a folder, device or pipe); write to a file",
+                output.display()
+            )));
+        }
+    }
+    // A folder we cannot write in should fail now, not after the work.
+    crate::interrupt::writing(|| {
+        tempfile::Builder::new()
+            .prefix(".aureole-probe-")
+            .tempfile_in(folder)
+    })
+    .map_err(|e| {
+        Failure::Run(anyhow!(
+            "{}: cannot write in the folder {}: {}",
+            output.display(),
+            folder.display(),
+            std::io::Error::from(e.kind())
+        ))
+    })?;
     Ok(())
 }
 
@@ -63,14 +99,16 @@ pub fn write(
 ) -> Result<Option<String>, Failure> {
     if is_display_format(path) {
         let picture = render(image, scale, &display.options());
-        write_picture(path, &picture, display.depth(path))?;
+        crate::interrupt::writing(|| write_picture(path, &picture, display.depth(path)))?;
         Ok(Some(format!(
             "white {:.4} cd/m² (EV100 {:.1})",
             picture.white,
             picture.ev100()
         )))
     } else {
-        for note in write_linear(path, image, LinearOptions { half })? {
+        let notes =
+            crate::interrupt::writing(|| write_linear(path, image, LinearOptions { half }))?;
+        for note in notes {
             if !quiet {
                 eprintln!("aureole: note: {}: {note}", path.display());
             }

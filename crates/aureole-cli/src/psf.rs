@@ -86,13 +86,13 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
 
     let start = Instant::now();
     let kernel = config.kernel(&extent)?;
-    write_kernel(&args.output, &kernel)?;
+    crate::interrupt::writing(|| write_kernel(&args.output, &kernel))?;
     if let Some(plot) = &args.profile {
         let (cx, cy) = kernel.centre();
         let radius = args
             .profile_radius
             .unwrap_or_else(|| (cx.min(cy) as f64 / 4.0).max(1.0));
-        aureole::plot::write_profile_plot(plot, &kernel, radius)?;
+        crate::interrupt::writing(|| aureole::plot::write_profile_plot(plot, &kernel, radius))?;
     }
     if !quiet {
         let sums: Vec<String> = (0..kernel.channels().len())

@@ -185,7 +185,7 @@ fn apply_refuses_nan_unless_sanitized() {
         .assert()
         .success()
         .stderr(predicate::str::contains(
-            "2 NaN or infinite samples replaced by 0",
+            "2 NaN, infinite or negative samples replaced by 0",
         ));
     assert!(read_image(&out).unwrap().image.non_finite().is_none());
 }

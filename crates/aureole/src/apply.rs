@@ -115,6 +115,11 @@ impl Plan {
         }
     }
 
+    /// The image size the plan is for, width × height.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
     /// The kernel in use.
     pub fn kernel(&self) -> &Kernel {
         &self.kernel

@@ -53,15 +53,11 @@ impl ConfigFile {
                 source_name: source_name.to_string(),
                 line,
                 column,
-                message,
+                message: printable(&message),
             }
         };
-        let raw: RawFile = toml::from_str(text).map_err(|e| {
-            located(
-                e.span().unwrap_or(0..0),
-                e.message().trim().replace('\n', " "),
-            )
-        })?;
+        let raw: RawFile = toml::from_str(text)
+            .map_err(|e| located(e.span().unwrap_or(0..0), with_suggestion(e.message())))?;
 
         if let Some(threshold) = &raw.threshold {
             check_range(
@@ -87,19 +83,33 @@ impl ConfigFile {
                 .get_ref()
                 .get("type")
                 .and_then(toml::Value::as_str)
-                .unwrap_or("without a type")
-                .to_string();
+                .map_or_else(
+                    || "without a type".to_string(),
+                    // Whatever the file holds there is echoed: keep it short.
+                    |kind| kind.chars().take(40).collect(),
+                );
             let effect =
                 Effect::deserialize(toml::Value::Table(table.into_inner())).map_err(|e| {
-                    let message = e.message().trim().replace('\n', " ");
+                    let mut message = with_suggestion(e.message());
+                    if message.starts_with("missing field") {
+                        if let Some(preset) = crate::presets::example_of(&kind) {
+                            message.push_str(&format!(
+                                "; `aureole presets {preset}` prints a complete {kind} effect"
+                            ));
+                        }
+                    }
                     located(
                         key_span(text, &span, &message),
                         format!("{}: {message}", context(&kind)),
                     )
                 })?;
-            effect
-                .validate()
-                .map_err(|e| located(span.clone(), format!("{}: {e}", context(effect.kind()))))?;
+            effect.validate().map_err(|e| {
+                let at = match &e {
+                    Error::Parameter { name, .. } => key_span(text, &span, &format!("`{name}`")),
+                    _ => span.clone(),
+                };
+                located(at, format!("{}: {e}", context(effect.kind())))
+            })?;
             effects.push(effect);
         }
         Ok(ConfigFile {
@@ -116,6 +126,35 @@ impl ConfigFile {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         ConfigFile::parse(&text, &path.display().to_string())
     }
+}
+
+/// `text` with control characters (a newline in a quoted value, say)
+/// escaped, so that a message stays one line.
+fn printable(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
+
+/// A serde message on one line, with "did you mean" when it refuses a name
+/// (unknown field `radus`, expected one of `radius`, …) close to an allowed one.
+fn with_suggestion(message: &str) -> String {
+    let mut line = message.trim().replace('\n', " ");
+    let quoted: Vec<&str> = line.split('`').skip(1).step_by(2).collect();
+    let refused = line.starts_with("unknown field") || line.starts_with("unknown variant");
+    if let (true, Some((found, allowed))) = (refused, quoted.split_first()) {
+        if let Some(close) = crate::error::closest(found, allowed.iter().copied()) {
+            let close = close.to_string();
+            line.push_str(&format!("; did you mean `{close}`?"));
+        }
+    }
+    line
 }
 
 /// Where, in the `[[effect]]` table whose header is at `header`, the key that
@@ -263,7 +302,8 @@ exponent = 2.0
     fn out_of_range_values_name_file_effect_and_parameter() {
         let e =
             error("[[effect]]\ntype = \"bloom\"\nepsilon = 0.1\nbeta = 0.5\nradius = \"3px\"\n");
-        assert!(e.starts_with("my.toml:1:"), "{e}");
+        // The position is the offending key's.
+        assert!(e.starts_with("my.toml:4:1:"), "{e}");
         assert!(
             e.contains("effect 1 (bloom)") && e.contains("beta = 0.5"),
             "{e}"

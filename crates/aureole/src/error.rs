@@ -54,10 +54,12 @@ pub enum Error {
     },
 
     /// A preset name that is not built in.
-    #[error("unknown preset {name:?}; the presets are: {available}")]
+    #[error("unknown preset {name:?}{}; the presets are: {available}", suggestion.map(|s| format!(" (did you mean {s:?}?)")).unwrap_or_default())]
     UnknownPreset {
         /// The name asked for.
         name: String,
+        /// A built-in name close to it.
+        suggestion: Option<&'static str>,
         /// The built-in names, comma separated.
         available: String,
     },
@@ -100,13 +102,13 @@ pub enum Error {
     },
 
     /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
+    #[error("{path}: {}", describe(error))]
     Io {
         /// The file concerned.
         path: PathBuf,
-        /// The underlying failure.
-        #[source]
-        source: std::io::Error,
+        /// The underlying failure (not a `source`: the message already says
+        /// it, and a chain would say it twice).
+        error: std::io::Error,
     },
 
     /// A file whose content is not what its format requires.
@@ -144,10 +146,47 @@ impl Error {
         }
     }
 
-    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub(crate) fn io(path: impl Into<PathBuf>, error: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
-            source,
+            error,
         }
     }
+}
+
+/// The candidate closest to `word` by edit distance, if it is close enough
+/// to be a likely typo.
+pub(crate) fn closest<'a>(
+    word: &str,
+    candidates: impl IntoIterator<Item = &'a str>,
+) -> Option<&'a str> {
+    candidates
+        .into_iter()
+        .map(|c| (strsim::damerau_levenshtein(word, c), c))
+        .filter(|(distance, c)| *distance <= (c.chars().count() / 3).max(1))
+        .min_by_key(|(distance, _)| *distance)
+        .map(|(_, c)| c)
+}
+
+/// An I/O failure in a user's words, without the OS error number.
+fn describe(error: &std::io::Error) -> String {
+    use std::io::ErrorKind as K;
+    let words = match error.kind() {
+        _ if error.raw_os_error().is_none() => return error.to_string(),
+        K::NotFound => "no such file or folder",
+        K::PermissionDenied => "permission denied",
+        K::IsADirectory => "is a folder, not a file",
+        K::NotADirectory => "a folder on the path is a file",
+        K::StorageFull => "no space left on the device",
+        K::FileTooLarge => "the file exceeds the size this system allows",
+        K::ReadOnlyFilesystem => "the file system is read-only",
+        _ => {
+            let text = error.to_string();
+            return match text.find(" (os error") {
+                Some(at) => text[..at].to_string(),
+                None => text,
+            };
+        }
+    };
+    words.to_string()
 }

@@ -76,10 +76,11 @@ pub struct Image {
     pub primaries: Option<Primaries>,
 }
 
-/// Pixels that are NaN or infinite: how many and where the first one is.
+/// Samples that a luminance image must not hold (NaN or infinite, or
+/// negative): how many and where the first one is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct NonFinite {
-    /// How many samples (over all colour planes) are not finite.
+pub struct BadSamples {
+    /// How many samples (over all colour planes) there are.
     pub count: usize,
     /// Column and row (from the top) of the first.
     pub first: (usize, usize),
@@ -166,28 +167,39 @@ impl Image {
     }
 
     /// The NaN and infinite samples of the colour planes, if any.
-    pub fn non_finite(&self) -> Option<NonFinite> {
+    pub fn non_finite(&self) -> Option<BadSamples> {
+        self.find(|v| !v.is_finite())
+    }
+
+    /// The negative samples of the colour planes, if any: luminance cannot
+    /// be negative, but resampling filters and denoisers leave some.
+    pub fn negatives(&self) -> Option<BadSamples> {
+        self.find(|v| v < 0.0)
+    }
+
+    fn find(&self, bad: impl Fn(f32) -> bool) -> Option<BadSamples> {
         let mut count = 0;
         let mut first = usize::MAX;
         for plane in &self.planes {
-            for (i, v) in plane.iter().enumerate() {
-                if !v.is_finite() {
+            for (i, &v) in plane.iter().enumerate() {
+                if bad(v) {
                     count += 1;
                     first = first.min(i);
                 }
             }
         }
-        (count > 0).then(|| NonFinite {
+        (count > 0).then(|| BadSamples {
             count,
             first: (first % self.width, first / self.width),
         })
     }
 
-    /// Replaces NaN and infinite samples by 0; returns how many there were.
-    pub fn sanitize(&mut self) -> usize {
+    /// Replaces NaN and infinite samples by 0, and negative ones too when
+    /// `negatives` is set; returns how many were replaced.
+    pub fn sanitize(&mut self, negatives: bool) -> usize {
         let mut count = 0;
         for v in self.planes.iter_mut().flatten() {
-            if !v.is_finite() {
+            if !v.is_finite() || (negatives && *v < 0.0) {
                 *v = 0.0;
                 count += 1;
             }

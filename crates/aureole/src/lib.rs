@@ -59,9 +59,12 @@ pub mod convolve;
 pub mod demo;
 pub mod display;
 pub mod error;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod image;
 pub mod io;
 pub mod kernel;
+pub mod memory;
 pub mod plot;
 pub mod presets;
 pub mod psf;

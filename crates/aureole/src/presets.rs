@@ -62,12 +62,25 @@ pub fn find(name: &str) -> Result<&'static Preset> {
         .find(|p| p.name == name)
         .ok_or_else(|| Error::UnknownPreset {
             name: name.to_string(),
+            suggestion: crate::error::closest(name, PRESETS.iter().map(|p| p.name)),
             available: PRESETS
                 .iter()
                 .map(|p| p.name)
                 .collect::<Vec<_>>()
                 .join(", "),
         })
+}
+
+/// A built-in preset with a complete effect of type `kind` (`bloom`,
+/// `corona`, `vos`, `aperture`), to point a user at.
+pub fn example_of(kind: &str) -> Option<&'static str> {
+    match kind {
+        "bloom" => Some("paper-fig4-bloom"),
+        "corona" => Some("paper-fig5-corona"),
+        "vos" => Some("human-eye-vos"),
+        "aperture" => Some("camera-f8-7blade"),
+        _ => None,
+    }
 }
 
 #[cfg(test)]

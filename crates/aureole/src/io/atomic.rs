@@ -27,9 +27,17 @@ where
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let mut temp = builder
-        .tempfile_in(folder)
-        .map_err(|e| Error::io(path, e))?;
+    let mut temp = builder.tempfile_in(folder).map_err(|e| {
+        // tempfile names its own temporary path; the user named `path`.
+        let error = match e.kind() {
+            std::io::ErrorKind::NotFound => std::io::Error::new(
+                e.kind(),
+                format!("the folder {} does not exist", folder.display()),
+            ),
+            _ => std::io::Error::from(e.kind()),
+        };
+        Error::io(path, error)
+    })?;
     {
         let mut writer = BufWriter::new(temp.as_file_mut());
         fill(&mut writer)?;

@@ -60,6 +60,12 @@ pub fn read(path: &Path) -> Result<Pfm> {
 
 /// Decodes PFM bytes; the error says what is wrong.
 pub fn decode(bytes: &[u8]) -> std::result::Result<Pfm, String> {
+    decode_limited(bytes, u64::MAX)
+}
+
+/// As [`decode`], refusing images whose planes would take more than
+/// `max_bytes`.
+pub fn decode_limited(bytes: &[u8], max_bytes: u64) -> std::result::Result<Pfm, String> {
     let mut at = 0;
     let mut token = |what: &str| -> std::result::Result<String, String> {
         while at < bytes.len() && bytes[at].is_ascii_whitespace() {
@@ -107,6 +113,13 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<Pfm, String> {
         return Err(format!(
             "PFM declares {width}x{height}x{channels} floats ({needed} bytes) but holds {} bytes",
             data.len()
+        ));
+    }
+    if needed as u64 > max_bytes {
+        return Err(format!(
+            "PFM of {width}x{height} needs {} but the memory limit is {}",
+            crate::memory::format_bytes(needed as u64),
+            crate::memory::format_bytes(max_bytes)
         ));
     }
     let little = scale < 0.0;

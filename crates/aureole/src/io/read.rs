@@ -1,7 +1,7 @@
 //! Reading HDR and display images by their content: OpenEXR (through `exr`),
 //! Radiance RGBE, PFM (ours), PNG, JPEG and TIFF (through `image`).
 
-use std::io::Read;
+use std::io::Cursor;
 use std::path::Path;
 
 use exr::prelude::{self as x, ReadChannels, ReadLayers};
@@ -50,20 +50,63 @@ fn sniff(head: &[u8]) -> Option<Kind> {
     }
 }
 
+/// Bounds on what a decoder may allocate, checked against the dimensions a
+/// file declares before any pixel is decoded (a header is untrusted input).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// The most bytes the decoded image and the decoder's own buffers may take.
+    pub max_bytes: u64,
+}
+
+impl Limits {
+    /// No bound but the address space.
+    pub const NONE: Limits = Limits {
+        max_bytes: u64::MAX,
+    };
+}
+
 /// Reads the image at `path`, recognising the format by its content.
 pub fn read_image(path: &Path) -> Result<Loaded> {
-    let mut head = [0u8; 16];
-    let got = std::fs::File::open(path)
-        .and_then(|mut f| f.read(&mut head))
-        .map_err(|e| Error::io(path, e))?;
-    let decode_error = |message: String| Error::Decode {
+    read_image_limited(path, Limits::NONE)
+}
+
+/// As [`read_image`], refusing a file whose decoding would need more than
+/// `limits` allows.
+pub fn read_image_limited(path: &Path, limits: Limits) -> Result<Loaded> {
+    let metadata = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if metadata.is_dir() {
+        return Err(Error::Decode {
+            path: path.to_path_buf(),
+            message: "is a folder, not an image file".into(),
+        });
+    }
+    // Every format we read stores at least a byte per pixel's worth of
+    // data for its planes, so a file larger than the bound cannot fit.
+    if metadata.len() > limits.max_bytes {
+        return Err(Error::Decode {
+            path: path.to_path_buf(),
+            message: format!(
+                "the file ({}) is larger than the memory limit ({})",
+                crate::memory::format_bytes(metadata.len()),
+                crate::memory::format_bytes(limits.max_bytes)
+            ),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode_image(&bytes, limits).map_err(|message| Error::Decode {
         path: path.to_path_buf(),
         message,
-    };
-    match sniff(&head[..got]) {
-        Some(Kind::Exr) => read_exr(path),
+    })
+}
+
+/// Decodes an image file held in memory, recognising the format by its
+/// content. The error is one line saying what is wrong.
+pub fn decode_image(bytes: &[u8], limits: Limits) -> std::result::Result<Loaded, String> {
+    let head = &bytes[..bytes.len().min(16)];
+    match sniff(head) {
+        Some(Kind::Exr) => decode_exr(bytes, limits),
         Some(Kind::Pfm) => {
-            let pfm = super::pfm::read(path)?;
+            let pfm = super::pfm::decode_limited(bytes, limits.max_bytes)?;
             let layout = if pfm.channels.len() == 1 {
                 Layout::Luminance
             } else {
@@ -84,30 +127,73 @@ pub fn read_image(path: &Path) -> Result<Loaded> {
                 notes: Vec::new(),
             })
         }
-        Some(Kind::Other) => read_with_image_crate(path),
-        None if got == 0 => Err(decode_error(format!(
-            "the file is empty; expected {READ_FORMATS}"
-        ))),
-        None => Err(decode_error(format!(
+        Some(Kind::Other) => decode_with_image_crate(bytes, limits),
+        None if bytes.is_empty() => Err(format!("the file is empty; expected {READ_FORMATS}")),
+        None => Err(format!(
             "not an image this tool reads (first bytes {:02x?}); expected {READ_FORMATS}",
-            &head[..got.min(8)]
-        ))),
+            &head[..head.len().min(8)]
+        )),
     }
 }
 
-fn read_exr(path: &Path) -> Result<Loaded> {
-    let decode_error = |message: String| Error::Decode {
-        path: path.to_path_buf(),
-        message,
-    };
+/// A decoder's message in the user's words: most of the ways a file can be
+/// cut short surface as one of these.
+fn explain(format: &str, message: String) -> String {
+    // Some decoders' messages span lines; ours are one line each.
+    let message = message.split_whitespace().collect::<Vec<_>>().join(" ");
+    let lower = message.to_lowercase();
+    let truncated = [
+        "missing bytes",
+        "fill whole buffer",
+        "unexpected end",
+        "unexpected eof",
+        "eof in header",
+    ]
+    .iter()
+    .any(|m| lower.contains(m));
+    if truncated {
+        format!("cannot read {format}: the file ends early (truncated?): {message}")
+    } else {
+        format!("cannot read {format}: {message}")
+    }
+}
+
+fn decode_exr(bytes: &[u8], limits: Limits) -> std::result::Result<Loaded, String> {
+    let meta = x::MetaData::read_from_buffered(Cursor::new(bytes), false)
+        .map_err(|e| explain("OpenEXR", e.to_string()))?;
+    // Every layer is decoded, then ours are copied out as f32 planes.
+    let mut needed: u64 = 0;
+    for header in &meta.headers {
+        let pixels = header.layer_size.0 as u64 * header.layer_size.1 as u64;
+        let stored: u64 = header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample() as u64)
+            .sum();
+        needed = needed.saturating_add(pixels.saturating_mul(stored + 4 * 4));
+    }
+    if needed > limits.max_bytes {
+        return Err(format!(
+            "OpenEXR declares {} pixels ({}x{} in its first part), which need {} to decode but the memory limit is {}",
+            meta.headers
+                .iter()
+                .map(|h| h.layer_size.0 as u64 * h.layer_size.1 as u64)
+                .sum::<u64>(),
+            meta.headers.first().map_or(0, |h| h.layer_size.0),
+            meta.headers.first().map_or(0, |h| h.layer_size.1),
+            crate::memory::format_bytes(needed),
+            crate::memory::format_bytes(limits.max_bytes)
+        ));
+    }
     let image = x::read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .all_layers()
         .all_attributes()
-        .from_file(path)
-        .map_err(|e| decode_error(format!("cannot read OpenEXR: {e}")))?;
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| explain("OpenEXR", e.to_string()))?;
 
     let mut notes = Vec::new();
     // The default view of a multi-view file is the channels without a view
@@ -130,10 +216,10 @@ fn read_exr(path: &Path) -> Result<Loaded> {
                 .iter()
                 .flat_map(|l| l.channel_data.list.iter().map(|c| c.name.to_string()))
                 .collect();
-            decode_error(format!(
+            format!(
                 "no R, G, B or Y channel in any layer (channels: {})",
                 names.join(", ")
-            ))
+            )
         })?;
     for (i, layer) in image.layer_data.iter().enumerate() {
         if i != chosen {
@@ -214,16 +300,11 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
-fn read_with_image_crate(path: &Path) -> Result<Loaded> {
+fn decode_with_image_crate(bytes: &[u8], limits: Limits) -> std::result::Result<Loaded, String> {
     use image::DynamicImage as D;
-    let decode_error = |message: String| Error::Decode {
-        path: path.to_path_buf(),
-        message,
-    };
-    let mut reader = image::ImageReader::open(path)
-        .map_err(|e| Error::io(path, e))?
+    let mut reader = image::ImageReader::new(Cursor::new(bytes))
         .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?;
+        .map_err(|e| explain("image", e.to_string()))?;
     let format = match reader.format() {
         Some(image::ImageFormat::Hdr) => "Radiance HDR",
         Some(image::ImageFormat::Png) => "PNG",
@@ -231,11 +312,29 @@ fn read_with_image_crate(path: &Path) -> Result<Loaded> {
         Some(image::ImageFormat::Tiff) => "TIFF",
         _ => "image",
     };
-    // Float images of 8K and more exceed the crate's 512 MiB default.
-    reader.no_limits();
-    let decoded = reader
-        .decode()
-        .map_err(|e| decode_error(format!("cannot read {format}: {e}")))?;
+    // The decoder checks the declared size before it allocates; the crate's
+    // 512 MiB default would refuse float images of 8K, so ours replaces it.
+    // Beyond the decoded image come its RGBA f32 copy and our planes.
+    let mut bounds = image::Limits::default();
+    bounds.max_alloc = Some(limits.max_bytes / 3);
+    reader.limits(bounds);
+    let decoded = reader.decode().map_err(|e| match e {
+        image::ImageError::Limits(_) => format!(
+            "cannot read {format}: decoding it would exceed the memory limit of {}",
+            crate::memory::format_bytes(limits.max_bytes)
+        ),
+        e => explain(format, e.to_string()),
+    })?;
+    let rgba_bytes = decoded.width() as u64 * decoded.height() as u64 * 32;
+    if rgba_bytes > limits.max_bytes {
+        return Err(format!(
+            "{format} of {}x{} needs {} to decode but the memory limit is {}",
+            decoded.width(),
+            decoded.height(),
+            crate::memory::format_bytes(rgba_bytes),
+            crate::memory::format_bytes(limits.max_bytes)
+        ));
+    }
     let (width, height) = (decoded.width() as usize, decoded.height() as usize);
     let float = matches!(decoded, D::ImageRgb32F(_) | D::ImageRgba32F(_));
     let grey = matches!(

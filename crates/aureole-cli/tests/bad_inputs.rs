@@ -1,0 +1,500 @@
+//! The catalogue of bad inputs: for each, `aureole` exits non-zero (2 for
+//! usage and configuration, 1 for failures while running) with one line on
+//! stderr naming the file and the problem, leaves no output behind and does
+//! not touch its input.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command as Process;
+
+use assert_cmd::Command;
+use aureole::io::write::{write_linear, LinearOptions};
+use aureole::{Image, Layout};
+
+/// A case: the files it starts from, the arguments, what must come back.
+struct Case {
+    name: &'static str,
+    args: Vec<String>,
+    code: i32,
+    expected: Vec<&'static str>,
+}
+
+fn small_scene() -> Image {
+    let (w, h) = (24, 16);
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.05);
+    for plane in &mut image.planes {
+        plane[5 * w + 7] = 2e4;
+    }
+    image.white_luminance = None;
+    image
+}
+
+/// Every file under `dir` with its bytes (and mode), to see that nothing
+/// was touched, added or left behind.
+fn snapshot(dir: &Path) -> BTreeMap<PathBuf, (Vec<u8>, u32)> {
+    use std::os::unix::fs::PermissionsExt;
+    let mut files = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(folder) = stack.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap() {
+            let path = entry.unwrap().path();
+            let meta = std::fs::symlink_metadata(&path).unwrap();
+            if meta.is_dir() {
+                stack.push(path.clone());
+                files.insert(path, (Vec::new(), meta.permissions().mode()));
+            } else if meta.is_file() {
+                let bytes = if meta.permissions().mode() & 0o444 != 0 {
+                    std::fs::read(&path).unwrap_or_default()
+                } else {
+                    Vec::new()
+                };
+                files.insert(path, (bytes, meta.permissions().mode()));
+            } else {
+                files.insert(path, (Vec::new(), meta.permissions().mode()));
+            }
+        }
+    }
+    files
+}
+
+fn is_root() -> bool {
+    Process::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+}
+
+/// Runs `args` in `dir`; as the unprivileged user `nobody` when `unprivileged`
+/// (root reads and writes whatever the permissions say).
+fn run(dir: &Path, args: &[String], unprivileged: bool) -> std::process::Output {
+    let binary = assert_cmd::cargo::cargo_bin("aureole");
+    let mut command = if unprivileged && is_root() {
+        let mut c = Command::new("setpriv");
+        c.args(["--reuid=65534", "--regid=65534", "--clear-groups"])
+            .arg(binary);
+        c
+    } else {
+        Command::new(binary)
+    };
+    command.current_dir(dir).args(args).output().unwrap()
+}
+
+fn check(dir: &Path, case: &Case, unprivileged: bool) {
+    let before = snapshot(dir);
+    let output = run(dir, &case.args, unprivileged);
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    let name = case.name;
+    assert_eq!(output.status.code(), Some(case.code), "{name}: {stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{name}: {stderr}");
+    assert!(stderr.starts_with("aureole: error: "), "{name}: {stderr}");
+    for word in ["panicked", "backtrace", "RUST_BACKTRACE"] {
+        assert!(!stderr.contains(word), "{name}: {stderr}");
+    }
+    for expected in &case.expected {
+        assert!(
+            stderr.contains(expected),
+            "{name}: {expected:?} not in {stderr}"
+        );
+    }
+    assert_eq!(snapshot(dir), before, "{name}: files changed; {stderr}");
+}
+
+fn case(name: &'static str, args: &[&str], code: i32, expected: &[&'static str]) -> Case {
+    Case {
+        name,
+        args: args.iter().map(|s| s.to_string()).collect(),
+        code,
+        expected: expected.to_vec(),
+    }
+}
+
+/// Writes the test inputs into `dir`.
+fn make_inputs(dir: &Path) {
+    let scene = small_scene();
+    let write = |name: &str, image: &Image| {
+        write_linear(&dir.join(name), image, LinearOptions::default()).unwrap();
+    };
+    write("scene.exr", &scene);
+    write("scene.hdr", &scene);
+    write("scene.pfm", &scene);
+    let png = dir.join("scene.png");
+    aureole::display::write_picture(
+        &png,
+        &aureole::display::render(
+            &scene,
+            1.0,
+            &aureole::display::DisplayOptions {
+                exposure: aureole::display::Exposure::Auto,
+                tone: aureole::display::ToneCurve::Filmic,
+            },
+        ),
+        aureole::display::Depth::Eight,
+    )
+    .unwrap();
+    let file = |name: &str, bytes: &[u8]| std::fs::write(dir.join(name), bytes).unwrap();
+    file("empty.exr", b"");
+    file("text.exr", b"this is not an image at all\n");
+    for (source, ext) in [
+        ("scene.exr", "exr"),
+        ("scene.hdr", "hdr"),
+        ("scene.pfm", "pfm"),
+        ("scene.png", "png"),
+    ] {
+        let bytes = std::fs::read(dir.join(source)).unwrap();
+        for fraction in [0.02, 0.3, 0.6, 0.95] {
+            let cut = ((bytes.len() as f64 * fraction) as usize).max(3);
+            file(
+                &format!("cut{}.{ext}", (fraction * 100.0) as u32),
+                &bytes[..cut],
+            );
+        }
+    }
+    // EXR headers that declare an absurd image, and an inverted data window.
+    let exr = std::fs::read(dir.join("scene.exr")).unwrap();
+    let window = |xmax: i32, ymax: i32, xmin: i32| {
+        let key = b"dataWindow\0box2i\0";
+        let at = exr.windows(key.len()).position(|w| w == key).unwrap() + key.len() + 4;
+        let mut bytes = exr.clone();
+        bytes[at..at + 4].copy_from_slice(&xmin.to_le_bytes());
+        bytes[at + 8..at + 12].copy_from_slice(&xmax.to_le_bytes());
+        bytes[at + 12..at + 16].copy_from_slice(&ymax.to_le_bytes());
+        bytes
+    };
+    file("huge.exr", &window(99_999, 99_999, 0));
+    file("absurd.exr", &window(2_000_000_000, 2_000_000_000, 0));
+    file("wide.exr", &window(1 << 24, 15, 0));
+    file("inverted.exr", &window(0, 15, 100));
+    file("claims.pfm", b"PF\n100000 100000\n-1.0\n\0\0\0\0\0\0\0\0");
+    file("zerowide.pfm", b"PF\n0 16\n-1.0\n");
+    file("zerohigh.pfm", b"Pf\n16 0\n-1.0\n");
+    let pfm = |name: &str, values: &[f32]| {
+        let mut bytes = b"Pf\n4 4\n-1.0\n".to_vec();
+        for v in values {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        file(name, &bytes);
+    };
+    let mut values = [1.0f32; 16];
+    values[5] = f32::NAN;
+    pfm("nan.pfm", &values);
+    values[5] = f32::INFINITY;
+    pfm("inf.pfm", &values);
+    values[5] = -0.5;
+    pfm("negative.pfm", &values);
+    let config = |name: &str, text: &str| file(name, text.as_bytes());
+    let bloom = "[[effect]]\ntype = \"bloom\"\nradius = \"10px\"\nbeta = 2\nepsilon = 0.05\n";
+    config("typo.toml", &format!("{bloom}radus = 3\n"));
+    config("toptypo.toml", &format!("treshold = 1\n{bloom}"));
+    config("type.toml", &bloom.replace("beta = 2", "beta = \"two\""));
+    config("missing.toml", &bloom.replace("epsilon = 0.05\n", ""));
+    config(
+        "range.toml",
+        &bloom.replace("epsilon = 0.05", "epsilon = 1.5"),
+    );
+    config("kind.toml", &bloom.replace("\"bloom\"", "\"blom\""));
+    config("syntax.toml", "[[effect]\ntype = \"bloom\"\n");
+    config("um.toml", &bloom.replace("10px", "60um"));
+    std::fs::create_dir(dir.join("folder.exr")).unwrap();
+    std::fs::create_dir(dir.join("out")).unwrap();
+}
+
+#[test]
+fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
+    make_inputs(dir);
+    let apply = |input: &str| -> Vec<String> {
+        [
+            "apply",
+            "-q",
+            input,
+            "-o",
+            "out/result.exr",
+            "--preset",
+            "paper-fig4-bloom",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    };
+    let mut cases = vec![
+        case("missing file", &[], 1, &["nothing.exr", "no such file"]),
+        case("a folder", &[], 1, &["folder.exr", "folder"]),
+        case("empty file", &[], 1, &["empty.exr", "empty"]),
+        case("wrong magic", &[], 1, &["text.exr", "not an image"]),
+        case("absurd EXR size", &[], 1, &["huge.exr", "memory limit"]),
+        case(
+            "absurd EXR window",
+            &[],
+            1,
+            &["absurd.exr", "OpenEXR", "data window"],
+        ),
+        case("wide EXR", &[], 1, &["wide.exr", "OpenEXR"]),
+        case("inverted EXR window", &[], 1, &["inverted.exr", "OpenEXR"]),
+        case("PFM claims more", &[], 1, &["claims.pfm", "holds"]),
+        case("zero width", &[], 1, &["zerowide.pfm", "width"]),
+        case("zero height", &[], 1, &["zerohigh.pfm", "height"]),
+        case(
+            "NaN",
+            &[],
+            1,
+            &[
+                "nan.pfm",
+                "NaN",
+                "column 1 row 2 (from the top)",
+                "--sanitize",
+            ],
+        ),
+        case("infinity", &[], 1, &["inf.pfm", "infinite", "--sanitize"]),
+        case(
+            "negative",
+            &[],
+            1,
+            &["negative.pfm", "negative", "--keep-negative"],
+        ),
+    ];
+    let inputs = [
+        "nothing.exr",
+        "folder.exr",
+        "empty.exr",
+        "text.exr",
+        "huge.exr",
+        "absurd.exr",
+        "wide.exr",
+        "inverted.exr",
+        "claims.pfm",
+        "zerowide.pfm",
+        "zerohigh.pfm",
+        "nan.pfm",
+        "inf.pfm",
+        "negative.pfm",
+    ];
+    for (case, input) in cases.iter_mut().zip(inputs) {
+        case.args = apply(input);
+    }
+    for ext in ["exr", "hdr", "pfm", "png"] {
+        for cut in [2, 30, 60, 95] {
+            let name: &'static str = Box::leak(format!("cut{cut}.{ext}").into_boxed_str());
+            let mut c = case("truncated", &[], 1, &[name]);
+            c.args = apply(name);
+            cases.push(c);
+        }
+    }
+    let with = |extra: &[&str]| -> Vec<String> {
+        let mut args: Vec<String> = ["apply", "-q", "scene.exr", "-o", "out/result.exr"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args
+    };
+    let configured = [
+        (
+            "unknown preset",
+            vec!["--preset", "paper-fig5-corna"],
+            2,
+            vec![
+                "paper-fig5-corna",
+                "did you mean \"paper-fig5-corona\"",
+                "paper-fig4-bloom",
+            ],
+        ),
+        (
+            "unknown key",
+            vec!["--config", "typo.toml"],
+            2,
+            vec!["typo.toml:6:1", "`radus`", "did you mean `radius`"],
+        ),
+        (
+            "unknown top key",
+            vec!["--config", "toptypo.toml"],
+            2,
+            vec!["toptypo.toml:1:1", "`treshold`", "did you mean `threshold`"],
+        ),
+        (
+            "wrong type",
+            vec!["--config", "type.toml"],
+            2,
+            vec!["type.toml", "\"two\"", "expected"],
+        ),
+        (
+            "missing field",
+            vec!["--config", "missing.toml"],
+            2,
+            vec![
+                "missing.toml:1:1",
+                "missing field `epsilon`",
+                "aureole presets paper-fig4-bloom",
+            ],
+        ),
+        (
+            "out of range",
+            vec!["--config", "range.toml"],
+            2,
+            vec!["range.toml:5:1", "epsilon = 1.5", "from 0 to 1"],
+        ),
+        (
+            "unknown effect",
+            vec!["--config", "kind.toml"],
+            2,
+            vec!["kind.toml", "`blom`", "did you mean `bloom`"],
+        ),
+        (
+            "syntax",
+            vec!["--config", "syntax.toml"],
+            2,
+            vec!["syntax.toml:1:", "expected"],
+        ),
+        (
+            "missing config",
+            vec!["--config", "nothing.toml"],
+            2,
+            vec!["nothing.toml", "no such file"],
+        ),
+        (
+            "um without camera",
+            vec!["--config", "um.toml"],
+            2,
+            vec!["60um", "sensor_width_mm"],
+        ),
+    ];
+    for (name, extra, code, expected) in configured {
+        let mut c = case(name, &[], code, &[]);
+        c.args = with(&extra);
+        c.expected = expected;
+        cases.push(c);
+    }
+    let outputs = [
+        (
+            "output folder missing",
+            vec!["-o", "nowhere/r.exr"],
+            2,
+            vec!["nowhere/r.exr", "does not exist"],
+        ),
+        (
+            "output is the input",
+            vec!["-o", "./scene.exr"],
+            2,
+            vec!["scene.exr", "overwrite the input"],
+        ),
+        (
+            "output extension",
+            vec!["-o", "out/r.gif"],
+            2,
+            vec!["out/r.gif", "\"gif\"", ".exr"],
+        ),
+        (
+            "no extension",
+            vec!["-o", "out/r"],
+            2,
+            vec!["out/r", "extension"],
+        ),
+        (
+            "output is a device",
+            vec!["-o", "/dev/null"],
+            2,
+            vec!["/dev/null"],
+        ),
+    ];
+    for (name, extra, code, expected) in outputs {
+        let mut args: Vec<String> = ["apply", "-q", "scene.exr", "--preset", "paper-fig4-bloom"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        args.extend(extra.iter().map(|s| s.to_string()));
+        cases.push(Case {
+            name,
+            args,
+            code,
+            expected,
+        });
+    }
+    for c in &cases {
+        check(dir, c, false);
+    }
+    eprintln!("{} bad inputs refused", cases.len());
+    assert!(cases.len() >= 40);
+}
+
+#[test]
+fn files_it_may_not_read_or_write_are_refused() {
+    use std::os::unix::fs::PermissionsExt;
+    if is_root() && Process::new("setpriv").arg("--version").output().is_err() {
+        eprintln!("skipped: running as root without setpriv to drop privileges");
+        return;
+    }
+    let temp = tempfile::tempdir().unwrap();
+    let dir = temp.path();
+    std::fs::set_permissions(dir, std::fs::Permissions::from_mode(0o777)).unwrap();
+    make_inputs(dir);
+    let locked = dir.join("locked.exr");
+    std::fs::copy(dir.join("scene.exr"), &locked).unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o000)).unwrap();
+    let closed = dir.join("closed");
+    std::fs::create_dir(&closed).unwrap();
+    std::fs::set_permissions(&closed, std::fs::Permissions::from_mode(0o555)).unwrap();
+    for path in [dir.join("scene.exr"), dir.join("out")] {
+        let mode = if path.is_dir() { 0o777 } else { 0o644 };
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode)).unwrap();
+    }
+    let args = |input: &str, output: &str| -> Vec<String> {
+        [
+            "apply",
+            "-q",
+            input,
+            "-o",
+            output,
+            "--preset",
+            "paper-fig4-bloom",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    };
+    let cases = [
+        Case {
+            name: "unreadable input",
+            args: args("locked.exr", "out/r.exr"),
+            code: 1,
+            expected: vec!["locked.exr", "permission denied"],
+        },
+        Case {
+            name: "unwritable folder",
+            args: args("scene.exr", "closed/r.exr"),
+            code: 1,
+            expected: vec!["closed/r.exr", "cannot write", "permission denied"],
+        },
+    ];
+    for c in &cases {
+        check(dir, c, true);
+    }
+}
+
+/// A write that fails half way (the file-size limit is hit, as on a full
+/// disk): the run fails, and neither the output nor its temporary file
+/// remains.
+#[test]
+fn a_write_that_fails_half_way_leaves_nothing() {
+    let temp = tempfile::tempdir().unwrap();
+    let dir = temp.path();
+    make_inputs(dir);
+    let binary = assert_cmd::cargo::cargo_bin("aureole");
+    // 1 block of 512 bytes: the EXR header fits, its pixels do not. SIGXFSZ
+    // is ignored so that the write returns an error instead of killing us.
+    let script = format!(
+        "trap '' XFSZ; ulimit -f 1; exec {} apply -q scene.pfm -o out/r.pfm --preset paper-fig4-bloom",
+        binary.display()
+    );
+    let before = snapshot(dir);
+    let output = Process::new("sh")
+        .current_dir(dir)
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("out/r.pfm"), "{stderr}");
+    assert!(stderr.contains("exceeds the size"), "{stderr}");
+    assert_eq!(snapshot(dir), before, "{stderr}");
+}

@@ -1,0 +1,272 @@
+//! Batch runs: several inputs or a frame pattern, failures that do not stop
+//! the others, resuming with --skip-existing, Ctrl-C, thread counts, the
+//! memory limit.
+
+use std::path::Path;
+use std::process::{Command as Process, Stdio};
+use std::time::Duration;
+
+use assert_cmd::Command;
+use aureole::io::write::{write_linear, LinearOptions};
+use aureole::{Image, Layout};
+
+fn aureole() -> Command {
+    Command::cargo_bin("aureole").unwrap()
+}
+
+/// Frame `n` of a small sequence: a lamp that moves.
+fn frame(n: usize, size: (usize, usize)) -> Image {
+    let (w, h) = size;
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.03);
+    for plane in &mut image.planes {
+        plane[(h / 2) * w + (5 + 3 * n) % w] = 3e4;
+        plane[(h / 3) * w + w / 3] = 800.0;
+    }
+    image.white_luminance = None;
+    image
+}
+
+fn write_frames(dir: &Path, count: usize, size: (usize, usize)) {
+    for n in 1..=count {
+        let path = dir.join(format!("shot.{n:04}.exr"));
+        write_linear(&path, &frame(n, size), LinearOptions::default()).unwrap();
+    }
+}
+
+fn leftovers(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".aureole"))
+        .collect()
+}
+
+#[test]
+fn one_bad_frame_is_reported_and_the_others_are_written_then_resumed() {
+    let temp = tempfile::tempdir().unwrap();
+    let dir = temp.path();
+    write_frames(dir, 4, (40, 30));
+    let good = std::fs::read(dir.join("shot.0003.exr")).unwrap();
+    std::fs::write(dir.join("shot.0003.exr"), &good[..good.len() / 2]).unwrap();
+    std::fs::create_dir(dir.join("out")).unwrap();
+    let args = [
+        "apply",
+        "shot.%04d.exr",
+        "--frames",
+        "1-5",
+        "-o",
+        "out/glow.%04d.exr",
+        "--preset",
+        "paper-fig4-bloom",
+        "--skip-existing",
+    ];
+    let run = aureole()
+        .current_dir(dir)
+        .args(args)
+        .assert()
+        .failure()
+        .code(1);
+    let stderr = String::from_utf8_lossy(&run.get_output().stderr).into_owned();
+    assert!(
+        stderr.contains("shot.0003.exr: cannot read OpenEXR"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("shot.0005.exr: no such file"), "{stderr}");
+    assert!(stderr.contains("3 of 5 frames written"), "{stderr}");
+    for n in [1, 2, 4] {
+        assert!(dir.join(format!("out/glow.{n:04}.exr")).is_file());
+    }
+    assert!(!dir.join("out/glow.0003.exr").exists());
+    let first = std::fs::read(dir.join("out/glow.0001.exr")).unwrap();
+
+    // Repair frame 3, drop frame 5 from the list, and resume.
+    std::fs::write(dir.join("shot.0003.exr"), &good).unwrap();
+    let mut resumed = args;
+    resumed[3] = "1-4";
+    let run = aureole().current_dir(dir).args(resumed).assert().success();
+    let stderr = String::from_utf8_lossy(&run.get_output().stderr).into_owned();
+    assert!(
+        stderr.contains("1 of 4 frames written, 3 skipped"),
+        "{stderr}"
+    );
+    assert!(dir.join("out/glow.0003.exr").is_file());
+    assert_eq!(std::fs::read(dir.join("out/glow.0001.exr")).unwrap(), first);
+    assert!(leftovers(&dir.join("out")).is_empty());
+}
+
+#[test]
+fn several_inputs_into_a_folder_give_the_bytes_of_single_runs() {
+    let temp = tempfile::tempdir().unwrap();
+    let dir = temp.path();
+    write_frames(dir, 3, (36, 28));
+    std::fs::create_dir(dir.join("out")).unwrap();
+    aureole()
+        .current_dir(dir)
+        .args([
+            "apply",
+            "-q",
+            "shot.0001.exr",
+            "shot.0002.exr",
+            "shot.0003.exr",
+        ])
+        .args(["-o", "out", "--preset", "paper-fig5-both"])
+        .assert()
+        .success();
+    for n in 1..=3 {
+        let single = dir.join(format!("single{n}.exr"));
+        aureole()
+            .current_dir(dir)
+            .args(["apply", "-q", &format!("shot.{n:04}.exr"), "-o"])
+            .arg(&single)
+            .args(["--preset", "paper-fig5-both"])
+            .assert()
+            .success();
+        assert_eq!(
+            std::fs::read(dir.join(format!("out/shot.{n:04}.exr"))).unwrap(),
+            std::fs::read(&single).unwrap(),
+            "frame {n}"
+        );
+    }
+    // Several inputs need a folder to write into.
+    aureole()
+        .current_dir(dir)
+        .args(["apply", "shot.0001.exr", "shot.0002.exr", "-o", "both.exr"])
+        .assert()
+        .failure()
+        .code(2)
+        .stderr(predicates::str::contains("must be an existing folder"));
+}
+
+#[test]
+fn ctrl_c_stops_the_batch_leaving_only_whole_files() {
+    let temp = tempfile::tempdir().unwrap();
+    let dir = temp.path();
+    write_frames(dir, 40, (200, 150));
+    std::fs::create_dir(dir.join("out")).unwrap();
+    let child = Process::new(assert_cmd::cargo::cargo_bin("aureole"))
+        .current_dir(dir)
+        .args([
+            "apply",
+            "-q",
+            "shot.%04d.exr",
+            "--frames",
+            "1-40",
+            "-o",
+            "out",
+        ])
+        .args(["--preset", "paper-fig5-both"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Interrupt once a few frames are out.
+    let out = dir.join("out");
+    let started = std::time::Instant::now();
+    while std::fs::read_dir(&out).unwrap().count() < 3
+        && started.elapsed() < Duration::from_secs(60)
+    {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    Process::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted"), "{stderr}");
+    assert!(leftovers(&out).is_empty(), "{:?}", leftovers(&out));
+    let written: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert!(written.len() < 40, "the batch was not interrupted");
+    for path in written {
+        let loaded = aureole::io::read::read_image(&path).unwrap();
+        assert_eq!((loaded.image.width, loaded.image.height), (200, 150));
+    }
+}
+
+#[test]
+fn thread_counts_give_the_same_bytes() {
+    let temp = tempfile::tempdir().unwrap();
+    let dir = temp.path();
+    write_frames(dir, 1, (90, 60));
+    let run = |name: &str, threads: Option<&str>, env: Option<&str>| {
+        let mut command = aureole();
+        command.current_dir(dir);
+        if let Some(n) = env {
+            command.env("RAYON_NUM_THREADS", n);
+        }
+        if let Some(n) = threads {
+            command.args(["--threads", n]);
+        }
+        command
+            .args(["apply", "-q", "shot.0001.exr", "-o", name])
+            .args(["--preset", "paper-fig5-both", "--method", "fft"])
+            .assert()
+            .success();
+        std::fs::read(dir.join(name)).unwrap()
+    };
+    let one = run("one.exr", Some("1"), None);
+    assert_eq!(run("three.exr", Some("3"), None), one);
+    assert_eq!(run("env.exr", None, Some("1")), one);
+    assert_eq!(run("all.exr", None, None), one);
+}
+
+#[test]
+fn a_run_over_the_memory_limit_stops_before_allocating_and_says_how_to_fit() {
+    let temp = tempfile::tempdir().unwrap();
+    let dir = temp.path();
+    write_frames(dir, 1, (400, 300));
+    let run = aureole()
+        .current_dir(dir)
+        .args([
+            "apply",
+            "shot.0001.exr",
+            "-o",
+            "r.exr",
+            "--max-memory",
+            "30M",
+        ])
+        .args(["--preset", "paper-fig5-both"])
+        .assert()
+        .failure()
+        .code(1);
+    let stderr = String::from_utf8_lossy(&run.get_output().stderr).into_owned();
+    assert_eq!(
+        stderr.lines().filter(|l| l.contains("error")).count(),
+        1,
+        "{stderr}"
+    );
+    for expected in [
+        "shot.0001.exr: needs about",
+        "MiB",
+        "--max-memory is 30.0 MiB",
+        "--max-kernel",
+    ] {
+        assert!(stderr.contains(expected), "{expected:?} not in {stderr}");
+    }
+    assert!(!dir.join("r.exr").exists());
+    // The suggested cap fits.
+    let cap = stderr
+        .split("--max-kernel ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .unwrap()
+        .to_string();
+    aureole()
+        .current_dir(dir)
+        .args([
+            "apply",
+            "-q",
+            "shot.0001.exr",
+            "-o",
+            "r.exr",
+            "--max-memory",
+            "30M",
+        ])
+        .args(["--preset", "paper-fig5-both", "--max-kernel", &cap])
+        .assert()
+        .success();
+}

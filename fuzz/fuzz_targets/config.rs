@@ -1,0 +1,8 @@
+//! Config text → a checked configuration or one error line.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    aureole::fuzzing::config(data);
+});

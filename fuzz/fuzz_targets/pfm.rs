@@ -1,0 +1,8 @@
+//! PFM bytes → an image or one error line.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    aureole::fuzzing::pfm(data);
+});
