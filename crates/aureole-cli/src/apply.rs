@@ -273,8 +273,9 @@ impl Session<'_> {
                 kernel.height(),
                 applied.spread_pixels,
                 options.threshold,
-                match applied.method {
-                    Method::Splat => "splatted",
+                match (applied.method, applied.double) {
+                    (Method::Splat, _) => "splatted",
+                    (_, true) => "FFT in f64: the scene's range is beyond f32",
                     _ => "FFT",
                 },
                 applied.energy_in,

@@ -6,6 +6,7 @@
 use rayon::prelude::*;
 
 use crate::config::Config;
+use crate::convolve::double::DoubleConvolver;
 use crate::convolve::plan::{Convolver, Input};
 use crate::error::{Error, Result};
 use crate::image::{Image, Layout, REC709_LUMINANCE};
@@ -70,6 +71,8 @@ pub struct Applied {
     pub spread_pixels: usize,
     /// How they were spread ([`Method::Fft`] or [`Method::Splat`]).
     pub method: Method,
+    /// Whether the FFT ran in f64 because the scene's range is beyond f32.
+    pub double: bool,
 }
 
 /// The kernel of an optical chain for one image size, with its spectrum.
@@ -82,6 +85,8 @@ pub struct Plan {
     /// Convolves with the rest of K, the light that moves. Leaving the
     /// (1 − ε) peak out of the FFT keeps its f32 round-off ~1/ε times smaller.
     convolver: Convolver,
+    /// The same in f64, built the first time a scene's range needs it.
+    double: std::sync::OnceLock<DoubleConvolver>,
 }
 
 impl Plan {
@@ -112,6 +117,7 @@ impl Plan {
             kernel,
             centres,
             convolver,
+            double: std::sync::OnceLock::new(),
         }
     }
 
@@ -169,6 +175,8 @@ impl Plan {
                 for x in 0..w {
                     let f = spread_fraction(f64::from(luminance.at(y * w + x)), threshold, knee);
                     if f > 0.0 {
+                        let b = f64::from(luminance.at(y * w + x)) * f64::from(f);
+                        row.squares += b * b;
                         row.spread += 1;
                         row.full += usize::from(f == 1.0);
                         row.splat_area += covered(x, kw, cx, w);
@@ -177,7 +185,10 @@ impl Plan {
                 row.splat_area *= covered(y, kh, cy, h);
                 row
             })
-            .reduce(Counts::default, Counts::add);
+            .collect::<Vec<Counts>>()
+            .into_iter()
+            // In row order: the same sums with any number of threads.
+            .fold(Counts::default(), Counts::add);
         let spread_pixels = counts.spread;
         let energy_in = image.total_luminance();
 
@@ -189,8 +200,13 @@ impl Plan {
             chosen => chosen,
         };
         let mut output = image.clone_without_planes();
+        let double = spread_pixels > 0
+            && method == Method::Fft
+            && self.beyond_f32(image, &luminance, counts.squares);
         if spread_pixels > 0 && method == Method::Splat {
             output.planes = self.splat(image, &luminance, threshold, knee, recycled);
+        } else if double {
+            output.planes = self.spread_double(image, &luminance, threshold, knee);
         } else if spread_pixels == 0 {
             output.planes = copies(&image.planes, recycled);
         } else if counts.full == pixels {
@@ -219,7 +235,87 @@ impl Plan {
             energy_out,
             spread_pixels,
             method,
+            double,
         })
+    }
+
+    /// Whether f32 FFT round-off would show in the dark pixels: its
+    /// expected size ([`f32_round_off`]) must stay below [`DARK_TOLERANCE`]
+    /// of the dark level, the 1st percentile of the positive luminances
+    /// (sampled); `squares` is ‖B‖₂².
+    fn beyond_f32(&self, image: &Image, luminance: &Luminance, squares: f64) -> bool {
+        let pixels = image.width * image.height;
+        let stride = (pixels / 65536).max(1);
+        let mut sample: Vec<f32> = (0..pixels)
+            .step_by(stride)
+            .map(|i| luminance.at(i))
+            .filter(|&y| y > 0.0)
+            .collect();
+        if sample.is_empty() {
+            return false;
+        }
+        let at = sample.len() / 100;
+        let (_, dark, _) = sample.select_nth_unstable_by(at, f32::total_cmp);
+        let moved = 1.0 - self.centres.iter().copied().fold(1.0f32, f32::min);
+        let noise = f32_round_off(
+            squares.sqrt(),
+            f64::from(moved),
+            self.convolver.padded_size(),
+        );
+        noise > DARK_TOLERANCE * f64::from(*dark)
+    }
+
+    /// [`Plan::spread`] in f64 for every bright pixel: O = I − B + c·B + K′ ⊛ B
+    /// per plane (K′ the kernel less its centre weight c).
+    fn spread_double(
+        &self,
+        image: &Image,
+        luminance: &Luminance,
+        threshold: f64,
+        knee: f64,
+    ) -> Vec<Vec<f32>> {
+        let double = self
+            .double
+            .get_or_init(|| DoubleConvolver::without_centre(&self.kernel, self.width, self.height));
+        let fractions: Vec<f64> = (0..image.width * image.height)
+            .into_par_iter()
+            .map(|i| f64::from(spread_fraction(f64::from(luminance.at(i)), threshold, knee)))
+            .collect();
+        let kernels = self.centres.len();
+        image
+            .planes
+            .iter()
+            .enumerate()
+            .map(|(c, plane)| {
+                let bright: Vec<f64> = plane
+                    .par_iter()
+                    .zip(&fractions)
+                    .map(|(&v, f)| f64::from(v) * f)
+                    .collect();
+                let terms: Vec<(usize, f64)> = match (image.layout, kernels) {
+                    (Layout::Luminance, k) if k > 1 => REC709_LUMINANCE
+                        .iter()
+                        .enumerate()
+                        .map(|(k, &w)| (k, f64::from(w)))
+                        .collect(),
+                    (_, k) => vec![(c.min(k - 1), 1.0)],
+                };
+                let mut out: Vec<f64> = plane
+                    .par_iter()
+                    .zip(&bright)
+                    .map(|(&v, b)| f64::from(v) - b)
+                    .collect();
+                for (k, weight) in terms {
+                    let spread = double.convolve(&bright, k);
+                    let centre = f64::from(self.centres[k]);
+                    out.par_iter_mut()
+                        .zip(&spread)
+                        .zip(&bright)
+                        .for_each(|((o, s), b)| *o += weight * (s + centre * b));
+                }
+                out.into_iter().map(|v| v as f32).collect()
+            })
+            .collect()
     }
 
     /// How many convolutions an image of `layout` takes.
@@ -399,6 +495,20 @@ impl Plan {
     }
 }
 
+/// The share of the dark level the round-off may reach before f64 is used:
+/// a tenth of the 1 % that a user could see.
+const DARK_TOLERANCE: f64 = 1e-3;
+
+/// The round-off an f32 FFT convolution leaves in a pixel, as an upper
+/// estimate: per pixel about u·√(log₂ N)·‖B‖₂·m/√N for N padded samples,
+/// bright part B (‖·‖₂ over the image) and moved mass m (the kernel less its
+/// centre sums to m), u = 2⁻²⁴; times 4 to cover the largest pixel rather
+/// than the typical one (checked against direct sums in tests/apply.rs).
+pub fn f32_round_off(bright_l2: f64, moved: f64, padded: (usize, usize)) -> f64 {
+    let n = (padded.0 * padded.1) as f64;
+    4.0 * f64::from(f32::EPSILON) / 2.0 * n.log2().sqrt() * bright_l2 * moved / n.sqrt()
+}
+
 /// What the pass over the luminance finds.
 #[derive(Debug, Clone, Copy, Default)]
 struct Counts {
@@ -406,6 +516,8 @@ struct Counts {
     spread: usize,
     /// Pixels with all their light spread.
     full: usize,
+    /// Σ of the squared spread luminance: ‖B‖₂², for the round-off estimate.
+    squares: f64,
     /// Σ over spread pixels of the output pixels their kernel reaches (the
     /// kernel's reach is a rectangle: row sums of its widths times its
     /// height on that row).
@@ -417,6 +529,7 @@ impl Counts {
         Counts {
             spread: self.spread + other.spread,
             full: self.full + other.full,
+            squares: self.squares + other.squares,
             splat_area: self.splat_area + other.splat_area,
         }
     }

@@ -473,3 +473,139 @@ fn kernels_and_results_have_the_same_bytes_with_any_number_of_threads() {
         assert_eq!(run(1), run(3), "{method:?}");
     }
 }
+
+/// A sun of 10⁹ cd/m² (a disc of 13 pixels) over a night sky of 10⁻² cd/m².
+fn sun_over_night_sky(w: usize, h: usize) -> Image {
+    let sky = pseudo_random(w * h, 11);
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.0);
+    for (c, plane) in image.planes.iter_mut().enumerate() {
+        for (i, v) in plane.iter_mut().enumerate() {
+            *v = 0.005 + 0.015 * sky[i] + 0.001 * c as f32;
+        }
+        for dy in -2i64..=2 {
+            for dx in -2i64..=2 {
+                if dx * dx + dy * dy <= 4 {
+                    let (x, y) = ((w / 4) as i64 + dx, (h / 3) as i64 + dy);
+                    plane[y as usize * w + x as usize] = 1e9;
+                }
+            }
+        }
+    }
+    image
+}
+
+/// The largest relative error over the dark pixels (input below 1 cd/m²).
+fn worst_dark_error(result: &[f32], reference: &[f64], input: &[f32]) -> f64 {
+    result
+        .iter()
+        .zip(reference)
+        .zip(input)
+        .filter(|(_, &i)| i < 1.0)
+        .map(|((&r, &d), _)| (f64::from(r) - d).abs() / d)
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_sun_beside_a_night_sky_keeps_its_dark_pixels_within_one_percent() {
+    let (w, h) = (64, 48);
+    let image = sun_over_night_sky(w, h);
+    // A tight bloom, so that far from the sun the sky stays dark and only
+    // round-off could lift it.
+    let plan = Plan::new(&bloom_config(0.05, 4.0, 1.0), w, h, None).unwrap();
+    let options = ApplyOptions {
+        method: Method::Fft,
+        ..ApplyOptions::default()
+    };
+    let applied = plan.apply(&image, &options, &mut |_| {}).unwrap();
+    assert!(applied.double, "the range check did not choose f64");
+    let mut worst = 0.0f64;
+    for (c, plane) in image.planes.iter().enumerate() {
+        let channel = c.min(plan.kernel().channels().len() - 1);
+        let single = Kernel::from_planes(
+            plan.kernel().width(),
+            plan.kernel().height(),
+            vec![plan.kernel().channels()[channel].clone()],
+        )
+        .unwrap();
+        let reference = direct(plane, w, h, &single);
+        worst = worst.max(worst_dark_error(
+            &applied.image.planes[c],
+            &reference,
+            plane,
+        ));
+
+        // The f32 route alone drowns them: the check above has work to do.
+        let centre = single.at(0, 0, 0);
+        let f32_route: Vec<f32> = Convolver::without_centre(&single, w, h)
+            .convolve(plane, 0)
+            .iter()
+            .zip(plane)
+            .map(|(s, v)| s + centre * v)
+            .collect();
+        let drowned = worst_dark_error(&f32_route, &reference, plane);
+        eprintln!(
+            "f32 alone: dark pixels off by up to {:.0} %",
+            100.0 * drowned
+        );
+        assert!(drowned > 0.01);
+    }
+    assert!(worst < 0.01, "dark pixels off by {:.3} %", 100.0 * worst);
+    // Splatting adds each bright pixel exactly too.
+    let options = ApplyOptions {
+        method: Method::Splat,
+        ..ApplyOptions::default()
+    };
+    let splatted = plan.apply(&image, &options, &mut |_| {}).unwrap();
+    for (a, b) in splatted.image.planes[0]
+        .iter()
+        .zip(&applied.image.planes[0])
+    {
+        assert!((a - b).abs() <= 1e-4 * b.abs().max(1e-2), "{a} {b}");
+    }
+}
+
+#[test]
+fn f32_round_off_stays_below_what_the_range_check_assumes() {
+    // Dense and sparse scenes: the worst f32 error over the dark pixels
+    // (below 1), against the direct sum, within the estimate that decides
+    // when f64 is needed.
+    let (w, h) = (64, 48);
+    let values = pseudo_random(w * h, 5);
+    let dense: Vec<f32> = values.iter().map(|v| 10f32.powf(6.0 * v - 1.0)).collect();
+    let sparse: Vec<f32> = values
+        .iter()
+        .map(|&v| if v > 0.99 { 1e5 * v } else { 0.05 })
+        .collect();
+    for (name, plane) in [("dense", dense), ("sparse", sparse)] {
+        for config in [bloom_config(0.05, 2.0, 4.0), paper_config()] {
+            let kernel = config
+                .kernel(&aureole::Extent::for_image(w, h).unwrap())
+                .unwrap();
+            let centre = kernel.at(0, 0, 0);
+            let convolver = Convolver::without_centre(&kernel, w, h);
+            let fast: Vec<f32> = convolver
+                .convolve(&plane, 0)
+                .iter()
+                .zip(&plane)
+                .map(|(s, v)| s + centre * v)
+                .collect();
+            let reference = direct(&plane, w, h, &kernel);
+            let error = fast
+                .iter()
+                .zip(&reference)
+                .zip(&plane)
+                .filter(|(_, &v)| v < 1.0)
+                .map(|((&f, &d), _)| (f64::from(f) - d).abs())
+                .fold(0.0, f64::max);
+            let l2 = plane
+                .iter()
+                .map(|&v| f64::from(v).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let moved = 1.0 - f64::from(centre);
+            let estimate = aureole::apply::f32_round_off(l2, moved, convolver.padded_size());
+            eprintln!("{name}: dark error {error:.2e}, estimate {estimate:.2e}");
+            assert!(error < estimate, "{name}: {error:e} > {estimate:e}");
+        }
+    }
+}

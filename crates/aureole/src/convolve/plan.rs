@@ -73,7 +73,7 @@ pub fn padded_size(
 }
 
 /// The shortest period along one axis that avoids wrap-around.
-fn needed(kernel: usize, image: usize) -> usize {
+pub(crate) fn needed(kernel: usize, image: usize) -> usize {
     let c = kernel / 2;
     (image + kernel - 1 - c).max(image + c).max(kernel)
 }
