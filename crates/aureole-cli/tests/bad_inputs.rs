@@ -164,6 +164,15 @@ fn make_inputs(dir: &Path) {
     file("absurd.exr", &window(2_000_000_000, 2_000_000_000, 0));
     file("wide.exr", &window(1 << 24, 15, 0));
     file("inverted.exr", &window(0, 15, 100));
+    let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n".to_vec();
+    hdr.extend_from_slice(&[2, 2, 0x80, 0, 1, 2, 3, 4]);
+    file("huge.hdr", &hdr);
+    // A PNG whose header declares 100000×100000 16-bit RGB (60 GB).
+    let png = std::fs::read(dir.join("scene.png")).unwrap();
+    let mut huge_png = png.clone();
+    huge_png[16..20].copy_from_slice(&100_000u32.to_be_bytes());
+    huge_png[20..24].copy_from_slice(&100_000u32.to_be_bytes());
+    file("huge.png", &huge_png);
     file("claims.pfm", b"PF\n100000 100000\n-1.0\n\0\0\0\0\0\0\0\0");
     file("zerowide.pfm", b"PF\n0 16\n-1.0\n");
     file("zerohigh.pfm", b"Pf\n16 0\n-1.0\n");
@@ -231,6 +240,8 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
         ),
         case("wide EXR", &[], 1, &["wide.exr", "OpenEXR"]),
         case("inverted EXR window", &[], 1, &["inverted.exr", "OpenEXR"]),
+        case("absurd HDR size", &[], 1, &["huge.hdr", "memory limit"]),
+        case("absurd PNG size", &[], 1, &["huge.png", "PNG"]),
         case("PFM claims more", &[], 1, &["claims.pfm", "holds"]),
         case("zero width", &[], 1, &["zerowide.pfm", "width"]),
         case("zero height", &[], 1, &["zerohigh.pfm", "height"]),
@@ -262,6 +273,8 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
         "absurd.exr",
         "wide.exr",
         "inverted.exr",
+        "huge.hdr",
+        "huge.png",
         "claims.pfm",
         "zerowide.pfm",
         "zerohigh.pfm",
@@ -413,7 +426,7 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
         check(dir, c, false);
     }
     eprintln!("{} bad inputs refused", cases.len());
-    assert!(cases.len() >= 40);
+    assert!(cases.len() >= 47);
 }
 
 #[test]
