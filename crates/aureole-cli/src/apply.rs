@@ -218,19 +218,19 @@ impl Session<'_> {
             );
         }
         let progress = Progress::new(quiet);
+        // A plan of another size goes before the new one is built.
         let reusable = self
             .plan
-            .as_ref()
-            .is_some_and(|p| p.size() == (image.width, image.height));
-        if !reusable {
-            // The old plan goes before the new one is built.
-            self.plan = None;
-            self.recycled = Vec::new();
-            progress.stage("building kernel");
-            self.plan = Some(self.build_plan(&job.input, image)?);
-        }
-        let Some(plan) = self.plan.as_ref() else {
-            return Ok(());
+            .take()
+            .filter(|p| p.size() == (image.width, image.height));
+        let plan = match reusable {
+            Some(plan) => self.plan.insert(plan),
+            None => {
+                self.recycled = Vec::new();
+                progress.stage("building kernel");
+                let built = self.build_plan(&job.input, image)?;
+                self.plan.insert(built)
+            }
         };
         progress.stage("convolving");
         let options = ApplyOptions {

@@ -27,12 +27,21 @@ pub fn install() {
     }
 }
 
-/// Runs `write` so that an interruption waits for it to finish.
-pub fn writing<T, E>(write: impl FnOnce() -> Result<T, E>) -> Result<T, E> {
+/// Runs `work` (which touches files) so that an interruption waits for it
+/// to finish.
+pub fn exclusive<T>(work: impl FnOnce() -> T) -> T {
     let _writing = WRITING.lock().unwrap_or_else(|p| p.into_inner());
-    let result = write();
-    if result.is_ok() {
-        WRITTEN.fetch_add(1, Ordering::SeqCst);
-    }
-    result
+    work()
+}
+
+/// Writes an output through `write`, exclusively; counts it when it is
+/// complete.
+pub fn writing<T, E>(write: impl FnOnce() -> Result<T, E>) -> Result<T, E> {
+    exclusive(|| {
+        let result = write();
+        if result.is_ok() {
+            WRITTEN.fetch_add(1, Ordering::SeqCst);
+        }
+        result
+    })
 }

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use anyhow::anyhow;
 use aureole::display::{render, write_picture};
+use aureole::io::atomic::folder_of;
 use aureole::io::write::{write_linear, LinearOptions};
 use aureole::io::{extension, is_display_format, IMAGE_EXTENSIONS};
 use aureole::Image;
@@ -34,10 +35,7 @@ pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
             )));
         }
     }
-    let folder = match output.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
+    let folder = folder_of(output);
     if !folder.is_dir() {
         return Err(Failure::Usage(anyhow!(
             "{}: the output folder {} does not exist; create it first",
@@ -55,11 +53,13 @@ pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
             )));
         }
     }
-    // A folder we cannot write in should fail now, not after the work.
-    crate::interrupt::writing(|| {
+    // A folder we cannot write in should fail now, not after the work. The
+    // probe is removed before an interruption may exit.
+    crate::interrupt::exclusive(|| {
         tempfile::Builder::new()
             .prefix(".aureole-probe-")
             .tempfile_in(folder)
+            .map(drop)
     })
     .map_err(|e| {
         Failure::Run(anyhow!(
@@ -73,14 +73,7 @@ pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
 }
 
 fn same_file(a: &Path, b: &Path) -> bool {
-    let canonical = |p: &Path| {
-        let file = p.file_name()?;
-        let parent = match p.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
-        Some(parent.canonicalize().ok()?.join(file))
-    };
+    let canonical = |p: &Path| Some(folder_of(p).canonicalize().ok()?.join(p.file_name()?));
     match (canonical(a), canonical(b)) {
         (Some(a), Some(b)) => a == b,
         _ => false,

@@ -16,7 +16,7 @@ struct Case {
     name: &'static str,
     args: Vec<String>,
     code: i32,
-    expected: Vec<&'static str>,
+    expected: Vec<String>,
 }
 
 fn small_scene() -> Image {
@@ -99,13 +99,24 @@ fn check(dir: &Path, case: &Case, unprivileged: bool) {
     assert_eq!(snapshot(dir), before, "{name}: files changed; {stderr}");
 }
 
-fn case(name: &'static str, args: &[&str], code: i32, expected: &[&'static str]) -> Case {
+fn case(name: &'static str, args: Vec<String>, code: i32, expected: &[&str]) -> Case {
     Case {
         name,
-        args: args.iter().map(|s| s.to_string()).collect(),
+        args,
         code,
-        expected: expected.to_vec(),
+        expected: expected.iter().map(|s| s.to_string()).collect(),
     }
+}
+
+/// `aureole apply -q INPUT -o OUTPUT --preset paper-fig4-bloom EXTRA…`.
+fn apply(input: &str, output: &str, extra: &[&str]) -> Vec<String> {
+    let camera = ["--preset", "paper-fig4-bloom"];
+    ["apply", "-q", input, "-o", output]
+        .iter()
+        .chain(&camera)
+        .chain(extra)
+        .map(|s| s.to_string())
+        .collect()
 }
 
 /// Writes the test inputs into `dir`.
@@ -212,43 +223,38 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let dir = dir.path();
     make_inputs(dir);
-    let apply = |input: &str| -> Vec<String> {
-        [
-            "apply",
-            "-q",
-            input,
-            "-o",
-            "out/result.exr",
-            "--preset",
-            "paper-fig4-bloom",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect()
-    };
+    fn input(name: &'static str, file: &str, expected: &[&str]) -> Case {
+        case(name, apply(file, "out/r.exr", &[]), 1, expected)
+    }
     let mut cases = vec![
-        case("missing file", &[], 1, &["nothing.exr", "no such file"]),
-        case("a folder", &[], 1, &["folder.exr", "folder"]),
-        case("empty file", &[], 1, &["empty.exr", "empty"]),
-        case("wrong magic", &[], 1, &["text.exr", "not an image"]),
-        case("absurd EXR size", &[], 1, &["huge.exr", "memory limit"]),
-        case(
+        input(
+            "missing file",
+            "nothing.exr",
+            &["nothing.exr", "no such file"],
+        ),
+        input("a folder", "folder.exr", &["folder.exr", "folder"]),
+        input("empty file", "empty.exr", &["empty.exr", "empty"]),
+        input("wrong magic", "text.exr", &["text.exr", "not an image"]),
+        input("absurd EXR size", "huge.exr", &["huge.exr", "memory limit"]),
+        input(
             "absurd EXR window",
-            &[],
-            1,
+            "absurd.exr",
             &["absurd.exr", "OpenEXR", "data window"],
         ),
-        case("wide EXR", &[], 1, &["wide.exr", "OpenEXR"]),
-        case("inverted EXR window", &[], 1, &["inverted.exr", "OpenEXR"]),
-        case("absurd HDR size", &[], 1, &["huge.hdr", "memory limit"]),
-        case("absurd PNG size", &[], 1, &["huge.png", "PNG"]),
-        case("PFM claims more", &[], 1, &["claims.pfm", "holds"]),
-        case("zero width", &[], 1, &["zerowide.pfm", "width"]),
-        case("zero height", &[], 1, &["zerohigh.pfm", "height"]),
-        case(
+        input("wide EXR", "wide.exr", &["wide.exr", "OpenEXR"]),
+        input(
+            "inverted EXR window",
+            "inverted.exr",
+            &["inverted.exr", "OpenEXR"],
+        ),
+        input("absurd HDR size", "huge.hdr", &["huge.hdr", "memory limit"]),
+        input("absurd PNG size", "huge.png", &["huge.png", "PNG"]),
+        input("PFM claims more", "claims.pfm", &["claims.pfm", "holds"]),
+        input("zero width", "zerowide.pfm", &["zerowide.pfm", "width"]),
+        input("zero height", "zerohigh.pfm", &["zerohigh.pfm", "height"]),
+        input(
             "NaN",
-            &[],
-            1,
+            "nan.pfm",
             &[
                 "nan.pfm",
                 "NaN",
@@ -256,172 +262,107 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
                 "--sanitize",
             ],
         ),
-        case("infinity", &[], 1, &["inf.pfm", "infinite", "--sanitize"]),
-        case(
+        input(
+            "infinity",
+            "inf.pfm",
+            &["inf.pfm", "infinite", "--sanitize"],
+        ),
+        input(
             "negative",
-            &[],
-            1,
+            "negative.pfm",
             &["negative.pfm", "negative", "--keep-negative"],
         ),
     ];
-    let inputs = [
-        "nothing.exr",
-        "folder.exr",
-        "empty.exr",
-        "text.exr",
-        "huge.exr",
-        "absurd.exr",
-        "wide.exr",
-        "inverted.exr",
-        "huge.hdr",
-        "huge.png",
-        "claims.pfm",
-        "zerowide.pfm",
-        "zerohigh.pfm",
-        "nan.pfm",
-        "inf.pfm",
-        "negative.pfm",
-    ];
-    for (case, input) in cases.iter_mut().zip(inputs) {
-        case.args = apply(input);
-    }
     for ext in ["exr", "hdr", "pfm", "png"] {
         for cut in [2, 30, 60, 95] {
-            let name: &'static str = Box::leak(format!("cut{cut}.{ext}").into_boxed_str());
-            let mut c = case("truncated", &[], 1, &[name]);
-            c.args = apply(name);
-            cases.push(c);
+            let name = format!("cut{cut}.{ext}");
+            cases.push(input("truncated", &name, &[&name]));
         }
     }
-    let with = |extra: &[&str]| -> Vec<String> {
-        let mut args: Vec<String> = ["apply", "-q", "scene.exr", "-o", "out/result.exr"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        args.extend(extra.iter().map(|s| s.to_string()));
-        args
+    let configured = |name, extra: &[&str], expected: &[&str]| {
+        case(name, apply("scene.exr", "out/r.exr", extra), 2, expected)
     };
-    let configured = [
-        (
+    cases.extend([
+        configured(
             "unknown preset",
-            vec!["--preset", "paper-fig5-corna"],
-            2,
-            vec![
+            &["--preset", "paper-fig5-corna"],
+            &[
                 "paper-fig5-corna",
                 "did you mean \"paper-fig5-corona\"",
                 "paper-fig4-bloom",
             ],
         ),
-        (
+        configured(
             "unknown key",
-            vec!["--config", "typo.toml"],
-            2,
-            vec!["typo.toml:6:1", "`radus`", "did you mean `radius`"],
+            &["--config", "typo.toml"],
+            &["typo.toml:6:1", "`radus`", "did you mean `radius`"],
         ),
-        (
+        configured(
             "unknown top key",
-            vec!["--config", "toptypo.toml"],
-            2,
-            vec!["toptypo.toml:1:1", "`treshold`", "did you mean `threshold`"],
+            &["--config", "toptypo.toml"],
+            &["toptypo.toml:1:1", "`treshold`", "did you mean `threshold`"],
         ),
-        (
+        configured(
             "wrong type",
-            vec!["--config", "type.toml"],
-            2,
-            vec!["type.toml", "\"two\"", "expected"],
+            &["--config", "type.toml"],
+            &["type.toml", "\"two\"", "expected"],
         ),
-        (
+        configured(
             "missing field",
-            vec!["--config", "missing.toml"],
-            2,
-            vec![
+            &["--config", "missing.toml"],
+            &[
                 "missing.toml:1:1",
                 "missing field `epsilon`",
                 "aureole presets paper-fig4-bloom",
             ],
         ),
-        (
+        configured(
             "out of range",
-            vec!["--config", "range.toml"],
-            2,
-            vec!["range.toml:5:1", "epsilon = 1.5", "from 0 to 1"],
+            &["--config", "range.toml"],
+            &["range.toml:5:1", "epsilon = 1.5", "from 0 to 1"],
         ),
-        (
+        configured(
             "unknown effect",
-            vec!["--config", "kind.toml"],
-            2,
-            vec!["kind.toml", "`blom`", "did you mean `bloom`"],
+            &["--config", "kind.toml"],
+            &["kind.toml", "`blom`", "did you mean `bloom`"],
         ),
-        (
+        configured(
             "syntax",
-            vec!["--config", "syntax.toml"],
-            2,
-            vec!["syntax.toml:1:", "expected"],
+            &["--config", "syntax.toml"],
+            &["syntax.toml:1:", "expected"],
         ),
-        (
+        configured(
             "missing config",
-            vec!["--config", "nothing.toml"],
-            2,
-            vec!["nothing.toml", "no such file"],
+            &["--config", "nothing.toml"],
+            &["nothing.toml", "no such file"],
         ),
-        (
+        configured(
             "um without camera",
-            vec!["--config", "um.toml"],
-            2,
-            vec!["60um", "sensor_width_mm"],
+            &["--config", "um.toml"],
+            &["60um", "sensor_width_mm"],
         ),
-    ];
-    for (name, extra, code, expected) in configured {
-        let mut c = case(name, &[], code, &[]);
-        c.args = with(&extra);
-        c.expected = expected;
-        cases.push(c);
-    }
-    let outputs = [
-        (
+    ]);
+    let output =
+        |name, path, expected: &[&str]| case(name, apply("scene.exr", path, &[]), 2, expected);
+    cases.extend([
+        output(
             "output folder missing",
-            vec!["-o", "nowhere/r.exr"],
-            2,
-            vec!["nowhere/r.exr", "does not exist"],
+            "nowhere/r.exr",
+            &["nowhere/r.exr", "does not exist"],
         ),
-        (
+        output(
             "output is the input",
-            vec!["-o", "./scene.exr"],
-            2,
-            vec!["scene.exr", "overwrite the input"],
+            "./scene.exr",
+            &["scene.exr", "overwrite the input"],
         ),
-        (
+        output(
             "output extension",
-            vec!["-o", "out/r.gif"],
-            2,
-            vec!["out/r.gif", "\"gif\"", ".exr"],
+            "out/r.gif",
+            &["out/r.gif", "\"gif\"", ".exr"],
         ),
-        (
-            "no extension",
-            vec!["-o", "out/r"],
-            2,
-            vec!["out/r", "extension"],
-        ),
-        (
-            "output is a device",
-            vec!["-o", "/dev/null"],
-            2,
-            vec!["/dev/null"],
-        ),
-    ];
-    for (name, extra, code, expected) in outputs {
-        let mut args: Vec<String> = ["apply", "-q", "scene.exr", "--preset", "paper-fig4-bloom"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        args.extend(extra.iter().map(|s| s.to_string()));
-        cases.push(Case {
-            name,
-            args,
-            code,
-            expected,
-        });
-    }
+        output("no extension", "out/r", &["out/r", "extension"]),
+        output("output is a device", "/dev/null", &["/dev/null"]),
+    ]);
     for c in &cases {
         check(dir, c, false);
     }
@@ -450,33 +391,19 @@ fn files_it_may_not_read_or_write_are_refused() {
         let mode = if path.is_dir() { 0o777 } else { 0o644 };
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode)).unwrap();
     }
-    let args = |input: &str, output: &str| -> Vec<String> {
-        [
-            "apply",
-            "-q",
-            input,
-            "-o",
-            output,
-            "--preset",
-            "paper-fig4-bloom",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect()
-    };
     let cases = [
-        Case {
-            name: "unreadable input",
-            args: args("locked.exr", "out/r.exr"),
-            code: 1,
-            expected: vec!["locked.exr", "permission denied"],
-        },
-        Case {
-            name: "unwritable folder",
-            args: args("scene.exr", "closed/r.exr"),
-            code: 1,
-            expected: vec!["closed/r.exr", "cannot write", "permission denied"],
-        },
+        case(
+            "unreadable input",
+            apply("locked.exr", "out/r.exr", &[]),
+            1,
+            &["locked.exr", "permission denied"],
+        ),
+        case(
+            "unwritable folder",
+            apply("scene.exr", "closed/r.exr", &[]),
+            1,
+            &["closed/r.exr", "cannot write", "permission denied"],
+        ),
     ];
     for c in &cases {
         check(dir, c, true);

@@ -26,11 +26,15 @@ fn frame(n: usize, size: (usize, usize)) -> Image {
     image
 }
 
-fn write_frames(dir: &Path, count: usize, size: (usize, usize)) {
+/// A fresh folder holding frames shot.0001.exr … and an empty out/.
+fn sequence(count: usize, size: (usize, usize)) -> tempfile::TempDir {
+    let temp = tempfile::tempdir().unwrap();
     for n in 1..=count {
-        let path = dir.join(format!("shot.{n:04}.exr"));
+        let path = temp.path().join(format!("shot.{n:04}.exr"));
         write_linear(&path, &frame(n, size), LinearOptions::default()).unwrap();
     }
+    std::fs::create_dir(temp.path().join("out")).unwrap();
+    temp
 }
 
 fn leftovers(dir: &Path) -> Vec<String> {
@@ -44,12 +48,10 @@ fn leftovers(dir: &Path) -> Vec<String> {
 
 #[test]
 fn one_bad_frame_is_reported_and_the_others_are_written_then_resumed() {
-    let temp = tempfile::tempdir().unwrap();
+    let temp = sequence(4, (40, 30));
     let dir = temp.path();
-    write_frames(dir, 4, (40, 30));
     let good = std::fs::read(dir.join("shot.0003.exr")).unwrap();
     std::fs::write(dir.join("shot.0003.exr"), &good[..good.len() / 2]).unwrap();
-    std::fs::create_dir(dir.join("out")).unwrap();
     let args = [
         "apply",
         "shot.%04d.exr",
@@ -97,10 +99,8 @@ fn one_bad_frame_is_reported_and_the_others_are_written_then_resumed() {
 
 #[test]
 fn several_inputs_into_a_folder_give_the_bytes_of_single_runs() {
-    let temp = tempfile::tempdir().unwrap();
+    let temp = sequence(3, (36, 28));
     let dir = temp.path();
-    write_frames(dir, 3, (36, 28));
-    std::fs::create_dir(dir.join("out")).unwrap();
     aureole()
         .current_dir(dir)
         .args([
@@ -140,10 +140,8 @@ fn several_inputs_into_a_folder_give_the_bytes_of_single_runs() {
 
 #[test]
 fn ctrl_c_stops_the_batch_leaving_only_whole_files() {
-    let temp = tempfile::tempdir().unwrap();
+    let temp = sequence(40, (200, 150));
     let dir = temp.path();
-    write_frames(dir, 40, (200, 150));
-    std::fs::create_dir(dir.join("out")).unwrap();
     let child = Process::new(assert_cmd::cargo::cargo_bin("aureole"))
         .current_dir(dir)
         .args([
@@ -189,9 +187,8 @@ fn ctrl_c_stops_the_batch_leaving_only_whole_files() {
 
 #[test]
 fn thread_counts_give_the_same_bytes() {
-    let temp = tempfile::tempdir().unwrap();
+    let temp = sequence(1, (90, 60));
     let dir = temp.path();
-    write_frames(dir, 1, (90, 60));
     let run = |name: &str, threads: Option<&str>, env: Option<&str>| {
         let mut command = aureole();
         command.current_dir(dir);
@@ -216,9 +213,8 @@ fn thread_counts_give_the_same_bytes() {
 
 #[test]
 fn a_run_over_the_memory_limit_stops_before_allocating_and_says_how_to_fit() {
-    let temp = tempfile::tempdir().unwrap();
+    let temp = sequence(1, (400, 300));
     let dir = temp.path();
-    write_frames(dir, 1, (400, 300));
     let run = aureole()
         .current_dir(dir)
         .args([

@@ -99,10 +99,7 @@ impl Plan {
         height: usize,
         max_extent: Option<(usize, usize)>,
     ) -> Result<Plan> {
-        let mut extent = Extent::for_image(width, height)?;
-        if let Some((w, h)) = max_extent {
-            extent = extent.capped(w, h);
-        }
+        let extent = Extent::for_image_within(width, height, max_extent)?;
         Ok(Plan::from_kernel(config.kernel(&extent)?, width, height))
     }
 
@@ -173,9 +170,10 @@ impl Plan {
             .map(|y| {
                 let mut row = Counts::default();
                 for x in 0..w {
-                    let f = spread_fraction(f64::from(luminance.at(y * w + x)), threshold, knee);
+                    let y_lum = f64::from(luminance.at(y * w + x));
+                    let f = spread_fraction(y_lum, threshold, knee);
                     if f > 0.0 {
-                        let b = f64::from(luminance.at(y * w + x)) * f64::from(f);
+                        let b = y_lum * f64::from(f);
                         row.squares += b * b;
                         row.spread += 1;
                         row.full += usize::from(f == 1.0);
@@ -292,22 +290,14 @@ impl Plan {
                     .zip(&fractions)
                     .map(|(&v, f)| f64::from(v) * f)
                     .collect();
-                let terms: Vec<(usize, f64)> = match (image.layout, kernels) {
-                    (Layout::Luminance, k) if k > 1 => REC709_LUMINANCE
-                        .iter()
-                        .enumerate()
-                        .map(|(k, &w)| (k, f64::from(w)))
-                        .collect(),
-                    (_, k) => vec![(c.min(k - 1), 1.0)],
-                };
                 let mut out: Vec<f64> = plane
                     .par_iter()
                     .zip(&bright)
                     .map(|(&v, b)| f64::from(v) - b)
                     .collect();
-                for (k, weight) in terms {
+                for (k, weight) in terms(image.layout, kernels, c) {
                     let spread = double.convolve(&bright, k);
-                    let centre = f64::from(self.centres[k]);
+                    let (weight, centre) = (f64::from(weight), f64::from(self.centres[k]));
                     out.par_iter_mut()
                         .zip(&spread)
                         .zip(&bright)
@@ -383,16 +373,8 @@ impl Plan {
             })
             .collect();
         let bright: Vec<(usize, usize, f32)> = rows.iter().flatten().copied().collect();
-        // Each output plane as Σ weight · kernel channel.
         let terms: Vec<Vec<(usize, f32)>> = (0..image.planes.len())
-            .map(|c| match (image.layout, kernels.len()) {
-                (Layout::Luminance, k) if k > 1 => REC709_LUMINANCE
-                    .iter()
-                    .enumerate()
-                    .map(|(k, &wk)| (k, wk))
-                    .collect(),
-                (_, k) => vec![(c.min(k - 1), 1.0)],
-            })
+            .map(|c| terms(image.layout, kernels.len(), c))
             .collect();
         let mut outputs = copies(&image.planes, recycled);
         for ((out, plane), terms) in outputs.iter_mut().zip(&image.planes).zip(&terms) {
@@ -532,6 +514,17 @@ impl Counts {
             squares: self.squares + other.squares,
             splat_area: self.splat_area + other.splat_area,
         }
+    }
+}
+
+/// Output plane `c` of an image of `layout` as Σ weight · (kernel channel
+/// k ⊛ plane c), over `kernels` channels: a coloured kernel spreads a
+/// luminance plane as Y = Σ w_k K_k ⊛ Y, otherwise each plane goes through
+/// its own channel (or the one channel).
+fn terms(layout: Layout, kernels: usize, c: usize) -> Vec<(usize, f32)> {
+    match (layout, kernels) {
+        (Layout::Luminance, k) if k > 1 => REC709_LUMINANCE.iter().copied().enumerate().collect(),
+        (_, k) => vec![(c.min(k - 1), 1.0)],
     }
 }
 

@@ -45,21 +45,19 @@ impl Workload {
         alpha: bool,
         max_extent: Option<(usize, usize)>,
     ) -> Result<Workload> {
-        let mut extent = Extent::for_image(width, height)?;
-        if let Some((w, h)) = max_extent {
-            extent = extent.capped(w, h);
-        }
-        let coloured = config
-            .effects
-            .iter()
-            .any(|e| matches!(e, Effect::Aperture(a) if a.spectral));
+        let extent = Extent::for_image_within(width, height, max_extent)?;
         Ok(Workload {
             width,
             height,
             channels,
             alpha,
             kernel: (extent.width, extent.height),
-            kernel_channels: if coloured { 3 } else { 1 },
+            kernel_channels: config
+                .effects
+                .iter()
+                .map(Effect::channels)
+                .max()
+                .unwrap_or(1),
         })
     }
 
@@ -88,10 +86,7 @@ impl Workload {
         let mut building = 0u64;
         let mut chain = 0u64;
         for (index, effect) in effects.iter().enumerate() {
-            let layers = match effect {
-                Effect::Aperture(a) if a.spectral => 3,
-                _ => 1,
-            };
+            let layers = effect.channels() as u64;
             let pattern = match effect {
                 Effect::Aperture(_) => 4 * layer * layers,
                 _ => layer * layers + layer / 2,

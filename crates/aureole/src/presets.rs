@@ -74,13 +74,13 @@ pub fn find(name: &str) -> Result<&'static Preset> {
 /// A built-in preset with a complete effect of type `kind` (`bloom`,
 /// `corona`, `vos`, `aperture`), to point a user at.
 pub fn example_of(kind: &str) -> Option<&'static str> {
-    match kind {
-        "bloom" => Some("paper-fig4-bloom"),
-        "corona" => Some("paper-fig5-corona"),
-        "vos" => Some("human-eye-vos"),
-        "aperture" => Some("camera-f8-7blade"),
-        _ => None,
-    }
+    PRESETS
+        .iter()
+        .find(|p| {
+            p.config()
+                .is_ok_and(|c| c.effects.iter().any(|e| e.kind() == kind))
+        })
+        .map(|p| p.name)
 }
 
 #[cfg(test)]

@@ -8,16 +8,21 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
+/// The folder a file `path` is in: its parent, or `.` for a bare name.
+pub fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
 /// Writes `path` through `fill`, which gets a buffered writer on a temporary
 /// file; the file takes the name `path` only when `fill` succeeded.
 pub fn write_atomic<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut BufWriter<&mut File>) -> Result<()>,
 {
-    let folder = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
+    let folder = folder_of(path);
     let mut builder = tempfile::Builder::new();
     builder.prefix(".aureole-").suffix(".part");
     // Temporary files are private by default; the result is an ordinary

@@ -74,12 +74,6 @@ pub fn read_image(path: &Path) -> Result<Loaded> {
 /// `limits` allows.
 pub fn read_image_limited(path: &Path, limits: Limits) -> Result<Loaded> {
     let metadata = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if metadata.is_dir() {
-        return Err(Error::Decode {
-            path: path.to_path_buf(),
-            message: "is a folder, not an image file".into(),
-        });
-    }
     // Every format we read stores at least a byte per pixel's worth of
     // data for its planes, so a file larger than the bound cannot fit.
     if metadata.len() > limits.max_bytes {
@@ -162,24 +156,21 @@ fn decode_exr(bytes: &[u8], limits: Limits) -> std::result::Result<Loaded, Strin
     let meta = x::MetaData::read_from_buffered(Cursor::new(bytes), false)
         .map_err(|e| explain("OpenEXR", e.to_string()))?;
     // Every layer is decoded, then ours are copied out as f32 planes.
-    let mut needed: u64 = 0;
+    let (mut pixels, mut needed) = (0u64, 0u64);
     for header in &meta.headers {
-        let pixels = header.layer_size.0 as u64 * header.layer_size.1 as u64;
+        let layer = header.layer_size.0 as u64 * header.layer_size.1 as u64;
         let stored: u64 = header
             .channels
             .list
             .iter()
             .map(|c| c.sample_type.bytes_per_sample() as u64)
             .sum();
-        needed = needed.saturating_add(pixels.saturating_mul(stored + 4 * 4));
+        pixels = pixels.saturating_add(layer);
+        needed = needed.saturating_add(layer.saturating_mul(stored + 4 * 4));
     }
     if needed > limits.max_bytes {
         return Err(format!(
-            "OpenEXR declares {} pixels ({}x{} in its first part), which need {} to decode but the memory limit is {}",
-            meta.headers
-                .iter()
-                .map(|h| h.layer_size.0 as u64 * h.layer_size.1 as u64)
-                .sum::<u64>(),
+            "OpenEXR declares {pixels} pixels ({}x{} in its first part), which need {} to decode but the memory limit is {}",
             meta.headers.first().map_or(0, |h| h.layer_size.0),
             meta.headers.first().map_or(0, |h| h.layer_size.1),
             crate::memory::format_bytes(needed),

@@ -64,6 +64,20 @@ impl Extent {
         Ok(extent.with_image_width(image_width))
     }
 
+    /// [`Extent::for_image`], at most `max` (width, height) when given: the
+    /// extent a plan builds for an image.
+    pub fn for_image_within(
+        image_width: usize,
+        image_height: usize,
+        max: Option<(usize, usize)>,
+    ) -> Result<Extent> {
+        let extent = Extent::for_image(image_width, image_height)?;
+        Ok(match max {
+            Some((w, h)) => extent.capped(w, h),
+            None => extent,
+        })
+    }
+
     /// The same kernel size for an image `image_width` pixels wide.
     pub fn with_image_width(self, image_width: usize) -> Extent {
         Extent {

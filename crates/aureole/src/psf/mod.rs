@@ -52,6 +52,15 @@ impl Effect {
         }
     }
 
+    /// How many channels its PSF has: three (R, G, B) for diffraction
+    /// computed over the spectrum, one otherwise.
+    pub fn channels(&self) -> usize {
+        match self {
+            Effect::Aperture(a) if a.spectral => 3,
+            _ => 1,
+        }
+    }
+
     /// Checks every parameter against its allowed range.
     pub fn validate(&self) -> Result<()> {
         match self {
