@@ -221,7 +221,7 @@ impl Aperture {
                     vertices.push([r * theta.cos(), r * theta.sin()]);
                 }
             }
-            pupil.add_polygon(&vertices, true);
+            pupil.add_sampled_polygon(&vertices, true, segments);
             (1.0 - self.roundness) * apothem + self.roundness * radius
         };
         let obstruction = self.obstruction * radius;

@@ -11,9 +11,21 @@ use std::f64::consts::{PI, TAU};
 /// A complex amplitude (re, im).
 pub type Amplitude = [f64; 2];
 
-/// A polygon edge for the far field: length (mm), outward normal, unit
-/// direction along the edge.
-pub(crate) type EdgeTerm = (f64, [f64; 2], [f64; 2]);
+/// A polygon edge for the far field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct EdgeTerm {
+    /// Length, mm.
+    pub length: f64,
+    /// Outward unit normal.
+    pub normal: [f64; 2],
+    /// Unit direction along the edge.
+    pub along: [f64; 2],
+    /// For a piece of a curved side: the angles (rad) by which the curve's
+    /// normal turns before and after this piece, counter-clockwise, half of
+    /// each turn to its neighbours. Its light fans over that range of
+    /// directions instead of forming a straight edge's ray.
+    pub fan: Option<[f64; 2]>,
+}
 
 #[derive(Debug, Clone)]
 struct Edge {
@@ -21,6 +33,7 @@ struct Edge {
     normal: [f64; 2],
     middle: [f64; 2],
     delta: [f64; 2],
+    fan: Option<[f64; 2]>,
 }
 
 #[derive(Debug, Clone)]
@@ -67,10 +80,27 @@ impl Pupil {
     /// Adds a polygon (vertices in mm, either orientation) that transmits,
     /// or, with `transmits = false`, blocks what lies beneath it.
     pub fn add_polygon(&mut self, vertices: &[[f64; 2]], transmits: bool) {
+        self.add_sampled_polygon(vertices, transmits, 1);
+    }
+
+    /// Adds a polygon whose sides are smooth curves sampled by
+    /// `pieces_per_side` straight pieces each: vertex 0 and every
+    /// `pieces_per_side`-th one after it are corners, the others lie on a
+    /// curve. The transform is the polygon's, exact; the far field treats
+    /// the pieces as the curve they sample (see [`EdgeTerm::fan`]).
+    pub fn add_sampled_polygon(
+        &mut self,
+        vertices: &[[f64; 2]],
+        transmits: bool,
+        pieces_per_side: usize,
+    ) {
         let n = vertices.len();
         if n < 3 {
             return;
         }
+        let mut corner: Vec<bool> = (0..n)
+            .map(|k| pieces_per_side <= 1 || k % pieces_per_side == 0)
+            .collect();
         let signed: f64 = (0..n)
             .map(|k| {
                 let (a, b) = (vertices[k], vertices[(k + 1) % n]);
@@ -81,6 +111,7 @@ impl Pupil {
         let mut points = vertices.to_vec();
         if signed < 0.0 {
             points.reverse();
+            corner.reverse();
         }
         let area = signed.abs();
         let (mut cx, mut cy) = (0.0, 0.0);
@@ -92,7 +123,7 @@ impl Pupil {
             .iter()
             .map(|p| ((p[0] - cx).powi(2) + (p[1] - cy).powi(2)).sqrt())
             .fold(0.0, f64::max);
-        let edges = (0..n)
+        let mut edges: Vec<Edge> = (0..n)
             .map(|k| {
                 let (a, b) = (points[k], points[(k + 1) % n]);
                 let delta = [b[0] - a[0], b[1] - a[1]];
@@ -104,10 +135,35 @@ impl Pupil {
                     normal: [delta[1] / length, -delta[0] / length],
                     middle: [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0],
                     delta,
+                    fan: None,
                 }
             })
-            .filter(|e| e.length > 0.0)
             .collect();
+        if pieces_per_side > 1 {
+            // The normal's turn at vertex k, from edge k − 1 to edge k.
+            let turn = |k: usize| {
+                let (p, q) = (edges[(k + n - 1) % n].normal, edges[k].normal);
+                (p[0] * q[1] - p[1] * q[0]).atan2(p[0] * q[0] + p[1] * q[1])
+            };
+            let fans: Vec<Option<[f64; 2]>> = (0..n)
+                .map(|k| {
+                    let end = (k + 1) % n;
+                    // At a corner the curve stops: the piece next to it
+                    // fans as far on that side as on its other one.
+                    match (corner[k], corner[end]) {
+                        (true, true) => None,
+                        (false, false) => Some([turn(k) / 2.0, turn(end) / 2.0]),
+                        (true, false) => Some([turn(end) / 2.0, turn(end) / 2.0]),
+                        (false, true) => Some([turn(k) / 2.0, turn(k) / 2.0]),
+                    }
+                })
+                .collect();
+            for (edge, fan) in edges.iter_mut().zip(fans) {
+                // A degenerate neighbour has no direction to turn from.
+                edge.fan = fan.filter(|f| f.iter().all(|v| v.is_finite()));
+            }
+        }
+        edges.retain(|e| e.length > 0.0);
         self.elements.push(Element {
             shape: Shape::Polygon {
                 edges,
@@ -188,8 +244,12 @@ impl Pupil {
             match &element.shape {
                 Shape::Polygon { edges: list, .. } => {
                     for e in list {
-                        let along = [e.delta[0] / e.length, e.delta[1] / e.length];
-                        edges.push((e.length, e.normal, along));
+                        edges.push(EdgeTerm {
+                            length: e.length,
+                            normal: e.normal,
+                            along: [e.delta[0] / e.length, e.delta[1] / e.length],
+                            fan: e.fan,
+                        });
                     }
                 }
                 Shape::Disc { radius, .. } => discs.push(*radius),
