@@ -1,44 +1,206 @@
 #!/usr/bin/env bash
-# Regenerates docs/gallery/ from the committed presets, the built-in demo
-# scene and the photographs in ../shared/data (when present):
+# Regenerates docs/gallery/ from the committed presets and configs/, the
+# built-in demo scene and the photographs in ../shared/data:
 #   bash scripts/gallery.sh
-# Every picture is made by the release binary; nothing is edited by hand.
+# Every picture is made by the release binary (and the `montage` and
+# `star_rays` examples, which lay pictures side by side and count a star's
+# rays); nothing is edited by hand. Without ../shared/data the pictures made
+# from photographs are left as they are.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-cargo build --release --locked -q
+cargo build --release --locked -q -p aureole-cli
+cargo build --release --locked -q -p aureole --example montage --example star_rays
 aureole=target/release/aureole
+montage=target/release/examples/montage
+star_rays=$PWD/target/release/examples/star_rays
 out=docs/gallery
 data=../shared/data
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
 mkdir -p "$out"
 
-# The paper's filters as kernels (log-scaled pictures) with their radial and
-# angular profiles: Fig. 4 left (bloom), Fig. 5 left (corona, 14 rays) and
-# the four coronas of Fig. 6 (s = -1, 0, 0.5, 1).
-for preset in paper-fig4-bloom paper-fig5-corona paper-fig6a paper-fig6b paper-fig6c paper-fig6d; do
+# A kernel as a log-scaled picture (6 decades), from presets or configs.
+kernel() { # kernel OUT.png SIZE IMAGE_WIDTH CAMERA-ARGS...
+  local png=$1 size=$2 width=$3
+  shift 3
+  "$aureole" psf -q "$@" --size "$size" --image-width "$width" -o "$png"
+}
+
+# A config for one aperture or bloom variant, written into $work.
+stop() { # stop NAME F_NUMBER BLADES ROUNDNESS
+  cat >"$work/$1.toml" <<EOF
+[camera]
+sensor_width_mm = 36.0
+focal_length_mm = 50.0
+f_number = $2
+
+[[effect]]
+type = "aperture"
+blades = $3
+roundness = $4
+EOF
+}
+bloom() { # bloom NAME EPSILON
+  cat >"$work/$1.toml" <<EOF
+[[effect]]
+type = "bloom"
+epsilon = $2
+beta = 2.0
+radius = "10.4px"
+EOF
+}
+
+# --- README's opening picture: the demo street without and with a lens.
+"$aureole" demo -q --size 1280x720 -o "$work/demo.png" --hdr "$work/demo.exr"
+"$aureole" apply -q "$work/demo.exr" --threshold 1e12 --white 6 -o "$work/demo-none.png"
+"$aureole" apply -q "$work/demo.exr" --preset camera-f8-7blade --white 6 -o "$work/demo-f8.png"
+"$montage" "$out/hero.jpg" --width 640 \
+  "$work/demo-none.png=the scene (cd/m2), no camera" \
+  "$work/demo-f8.png=aureole apply --preset camera-f8-7blade"
+
+# --- The paper's figures.
+# Fig. 4 left (bloom) and Fig. 5 left (corona, 14 rays): kernel and profiles.
+for preset in paper-fig4-bloom paper-fig5-corona; do
   "$aureole" psf -q --preset "$preset" --size 301 -o "$out/$preset-kernel.png" \
     --profile "$out/$preset-profile.png"
 done
-
-# Fig. 4/5 right: bloom, corona and both, on the demo night street...
-"$aureole" demo -q --size 960x540 -o "$out/demo-before.png" --hdr "$out/.demo.exr" --preset paper-fig4-bloom
-for preset in paper-fig4-bloom paper-fig5-corona paper-fig5-both; do
-  "$aureole" apply -q "$out/.demo.exr" --preset "$preset" -o "$out/demo-$preset.jpg"
+# Fig. 6: the four coronas side by side.
+for panel in a b c d; do
+  "$aureole" psf -q --preset "paper-fig6$panel" --size 301 -o "$work/fig6$panel.png"
 done
-# ... without any camera, at the same exposure as the demo's result.
-"$aureole" apply -q "$out/.demo.exr" --preset paper-fig4-bloom --threshold 1e12 -o "$out/demo-none.jpg"
-rm -f "$out/.demo.exr" "$out/demo-before.png"
+"$montage" "$out/paper-fig6.png" \
+  "$work/fig6a.png=(a) s = -1, w = 10 px" "$work/fig6b.png=(b) s = 0, w = 3 px" \
+  "$work/fig6c.png=(c) s = 0.5, w = 3 px" "$work/fig6d.png=(d) s = 1, w = 3 px"
+# Fig. 4/5 right: bloom, corona and both on the demo street...
+"$aureole" demo -q --size 960x540 -o "$work/street.png" --hdr "$work/street.exr"
+"$aureole" apply -q "$work/street.exr" --threshold 1e12 --white 6 -o "$work/street-none.png"
+for preset in paper-fig4-bloom paper-fig5-corona paper-fig5-both; do
+  "$aureole" apply -q "$work/street.exr" --preset "$preset" --white 6 -o "$work/street-$preset.png"
+done
+"$montage" "$out/paper-fig45-demo.jpg" --columns 2 --width 640 \
+  "$work/street-none.png=no camera" "$work/street-paper-fig4-bloom.png=bloom (Fig. 4)" \
+  "$work/street-paper-fig5-corona.png=corona (Fig. 5)" "$work/street-paper-fig5-both.png=both (Fig. 5)"
 
-# ... and on a real night photograph (GoldenGate.exr, BSD-3-Clause, ILM:
-# see docs/gallery/LICENSES.md).
-if [ -f "$data/GoldenGate.exr" ]; then
-  "$aureole" apply -q "$data/GoldenGate.exr" --preset paper-fig4-bloom --threshold 1e12 \
-    -o "$out/goldengate-none.jpg"
-  for preset in paper-fig4-bloom paper-fig5-corona paper-fig5-both; do
-    "$aureole" apply -q "$data/GoldenGate.exr" --preset "$preset" --threshold 10 \
-      -o "$out/goldengate-$preset.jpg"
+# --- Photographs (licences: docs/gallery/LICENSES.md).
+presets=(paper-fig4-bloom paper-fig5-corona camera-f8-7blade star-filter-6pt human-eye-vos)
+photo() { # photo NAME FILE THRESHOLD CROP|- APPLY-ARGS...
+  local name=$1 file=$2 threshold=$3 crop=$4
+  shift 4
+  local framing=()
+  [ "$crop" != - ] && framing=(--crop "$crop")
+  "$aureole" apply -q "$data/$file" "$@" --threshold 1e12 -o "$work/$name-none.png"
+  local panels=("$work/$name-none.png=$file, no camera")
+  for preset in "${presets[@]}"; do
+    "$aureole" apply -q "$data/$file" "$@" --preset "$preset" --threshold "$threshold" \
+      -o "$work/$name-$preset.png"
+    panels+=("$work/$name-$preset.png=$preset")
   done
+  "$montage" "$out/photo-$name.jpg" --columns 3 --width 420 --quality 85 "${framing[@]}" "${panels[@]}"
+}
+if [ -d "$data" ]; then
+  # Night: the bridge's lamps at 1.5x, the sky's stars, a lamp in fog, a candle.
+  photo goldengate GoldenGate.exr 10 830,380,280,140 --white 1
+  photo dikhololo dikhololo_night_1k.hdr 5 - --white 1
+  photo fog Fog.exr 5 -
+  photo candleglass CandleGlass.exr 10 - --keep-negative
+  # Day: a sky of 10^3-10^4 cd/m² behind a tree (calibrated: whiteLuminance).
+  photo tree Tree.exr 3000 -
+
+  # Fig. 4/5 right on a real night photograph: the same crop of the bridge.
+  for preset in paper-fig4-bloom paper-fig5-corona paper-fig5-both; do
+    "$aureole" apply -q "$data/GoldenGate.exr" --preset "$preset" --threshold 10 --white 1 \
+      -o "$work/gg-$preset.png"
+  done
+  "$montage" "$out/paper-fig45-goldengate.jpg" --columns 2 --width 560 --crop 830,380,280,140 \
+    "$work/goldengate-none.png=no camera" "$work/gg-paper-fig4-bloom.png=bloom (Fig. 4)" \
+    "$work/gg-paper-fig5-corona.png=corona (Fig. 5)" "$work/gg-paper-fig5-both.png=both (Fig. 5)"
+
+  # A real star: CandleGlass.exr, f/32. Its rays, measured above the candle
+  # (the candle hides 200-340°, the glass lies beyond 110 px to the right).
+  "$star_rays" "$data/CandleGlass.exr" --radii 60,110 --exclude 200,340 --min-ratio 1.05 \
+    | tee "$out/candleglass-rays.txt"
+  flame=$(awk '/total luminance/ { print $(NF-3) }' "$out/candleglass-rays.txt")
+  # The 401-px square centred on the light.
+  square=$(awk -F'[(), ]+' '/light at/ { for (i = 1; i < NF; i++) if ($i == "at") \
+    printf "%d,%d,401,401", $(i+1) - 200 + 0.5, $(i+2) - 200 + 0.5 }' "$out/candleglass-rays.txt")
+  "$aureole" apply -q "$data/CandleGlass.exr" --keep-negative --threshold 1e12 --white 0.05 \
+    -o "$work/candle-photo.png"
+  "$montage" "$work/candle-crop.png" --gap 0 --crop "$square" "$work/candle-photo.png"
+  # A point light of the flame's luminance × area through the lens we read
+  # from the photo, shown at the same white; and with straight blades.
+  sed 's/^roundness = .*/roundness = 0.0/' configs/candleglass-f32-8blade.toml >"$work/straight.toml"
+  for lens in configs/candleglass-f32-8blade.toml "$work/straight.toml"; do
+    name=$(basename "$lens" .toml)
+    "$aureole" psf -q --config "$lens" --size 401 --image-width 1000 -o "$work/$name.exr"
+    (cd "$work" && "$star_rays" "$name.exr" --radii 60,110 --min-ratio 1.05) |
+      tee -a "$out/candleglass-rays.txt"
+    "$aureole" apply -q "$work/$name.exr" --input-scale "$flame" --threshold 1e12 --white 0.05 \
+      -o "$work/$name.png"
+  done
+  "$montage" "$out/candleglass-star.jpg" --quality 85 \
+    "$work/candle-crop.png=CandleGlass.exr, f/32" \
+    "$work/candleglass-f32-8blade.png=8 blades, f/32, roundness 0.1" \
+    "$work/straight.png=8 straight blades, f/32"
+
+  # Recipes of the guide (configs/) on scenes that suit them.
+  "$aureole" apply -q "$work/demo.exr" --config configs/night-street.toml --white 6 -o "$work/r1.png"
+  "$aureole" apply -q "$data/CandleGlass.exr" --keep-negative --config configs/candle-interior.toml \
+    -o "$work/r2.png"
+  "$aureole" apply -q "$data/dikhololo_night_1k.hdr" --config configs/astro-spikes.toml --white 1 \
+    -o "$work/r3.png"
+  "$aureole" apply -q "$data/GoldenGate.exr" --config configs/star-filter.toml --threshold 10 --white 1 \
+    -o "$work/r4.png"
+  "$montage" "$work/r1c.png" --gap 0 --width 480 "$work/r1.png"
+  "$montage" "$work/r2c.png" --gap 0 --width 480 --crop 100,100,800,450 "$work/r2.png"
+  "$montage" "$work/r3c.png" --gap 0 --width 480 --crop 112,31,800,450 "$work/r3.png"
+  "$montage" "$work/r4c.png" --gap 0 --width 480 --crop 690,300,480,270 "$work/r4.png"
+  "$montage" "$out/guide-recipes-applied.jpg" --columns 2 --quality 85 \
+    "$work/r1c.png=night-street.toml (demo)" "$work/r2c.png=candle-interior.toml" \
+    "$work/r3c.png=astro-spikes.toml" "$work/r4c.png=star-filter.toml"
 else
-  echo "gallery: $data/GoldenGate.exr not found: the photograph rows are left as they are" >&2
+  echo "gallery: $data not found: the pictures of photographs are left as they are" >&2
 fi
+
+# --- The guide's pictures of each parameter.
+for blades in 5 6 7 8 9 0; do stop "blades$blades" 11 "$blades" 0.0; done
+for b in 5 6 7 8 9 0; do kernel "$work/blades$b.png" 201 1500 --config "$work/blades$b.toml"; done
+"$montage" "$out/guide-blades.png" --columns 6 \
+  "$work/blades5.png=5: 10 rays" "$work/blades6.png=6: 6 rays" "$work/blades7.png=7: 14 rays" \
+  "$work/blades8.png=8: 8 rays" "$work/blades9.png=9: 18 rays" "$work/blades0.png=round: none"
+for n in 4 8 16 32; do
+  stop "f$n" "$n" 7 0.0
+  kernel "$work/f$n.png" 201 1500 --config "$work/f$n.toml"
+done
+"$montage" "$out/guide-fnumber.png" \
+  "$work/f4.png=f/4" "$work/f8.png=f/8" "$work/f16.png=f/16" "$work/f32.png=f/32"
+for r in 0.0 0.1 0.4 1.0; do
+  stop "round$r" 16 8 "$r"
+  kernel "$work/round$r.png" 201 1500 --config "$work/round$r.toml"
+done
+"$montage" "$out/guide-roundness.png" \
+  "$work/round0.0.png=roundness 0" "$work/round0.1.png=0.1" "$work/round0.4.png=0.4" \
+  "$work/round1.0.png=1 (a circle)"
+for e in 0.002 0.01 0.05; do
+  bloom "bloom$e" "$e"
+  "$aureole" apply -q "$work/street.exr" --config "$work/bloom$e.toml" --white 6 -o "$work/bloom$e.png"
+done
+"$montage" "$out/guide-bloom.jpg" --crop 0,120,480,270 --width 400 \
+  "$work/street-none.png=no camera" "$work/bloom0.002.png=epsilon 0.002" \
+  "$work/bloom0.01.png=epsilon 0.01" "$work/bloom0.05.png=epsilon 0.05"
+for t in 0 100 5000; do
+  "$aureole" apply -q "$work/street.exr" --preset paper-fig5-corona --config "$work/bloom0.05.toml" \
+    --threshold "$t" --white 6 -o "$work/threshold$t.png"
+done
+"$montage" "$out/guide-threshold.jpg" --width 420 \
+  "$work/threshold0.png=threshold 0" "$work/threshold100.png=threshold 100 cd/m2" \
+  "$work/threshold5000.png=threshold 5000 cd/m2"
+for recipe in configs/*.toml; do
+  kernel "$work/recipe-$(basename "$recipe" .toml).png" 257 1000 --config "$recipe"
+done
+"$montage" "$out/guide-recipes.png" --columns 3 \
+  "$work/recipe-night-street.png=night-street" "$work/recipe-candle-interior.png=candle-interior" \
+  "$work/recipe-sun-through-trees.png=sun-through-trees" "$work/recipe-astro-spikes.png=astro-spikes" \
+  "$work/recipe-star-filter.png=star-filter" "$work/recipe-candleglass-f32-8blade.png=candleglass-f32-8blade"
+
 ls -la "$out"
