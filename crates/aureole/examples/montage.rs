@@ -15,14 +15,12 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use aureole::io::atomic::write_atomic;
+use aureole::plot::font_family;
 use image::codecs::jpeg::JpegEncoder;
 use image::imageops::{self, FilterType};
 use image::{ImageFormat, RgbImage};
 use plotters::prelude::*;
-use plotters::style::FontStyle;
-
-const FONT: &[u8] = include_bytes!("../assets/DejaVuSansMono.ttf");
-const FAMILY: &str = "montage-mono";
 const BACKGROUND: [u8; 3] = [17, 17, 17];
 
 struct Panel {
@@ -168,12 +166,10 @@ fn run(layout: &Layout) -> Result<(), String> {
         imageops::replace(&mut canvas, picture, i64::from(x), i64::from(y));
     }
     if captioned {
-        // The font is embedded and valid; a failure would only leave text out.
-        let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT);
         let mut pixels = canvas.into_raw();
         {
             let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
-            let style = (FAMILY, font_size)
+            let style = (font_family(), font_size)
                 .into_font()
                 .color(&RGBColor(230, 230, 230));
             for (index, panel) in layout.panels.iter().enumerate() {
@@ -190,21 +186,21 @@ fn run(layout: &Layout) -> Result<(), String> {
 }
 
 fn save(canvas: &RgbImage, path: &Path, quality: u8) -> Result<(), String> {
-    let describe = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
     let jpeg = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("jpg") || e.eq_ignore_ascii_case("jpeg"));
-    let part = path.with_extension("part");
-    let mut file = std::io::BufWriter::new(std::fs::File::create(&part).map_err(|e| describe(&e))?);
-    if jpeg {
-        canvas
-            .write_with_encoder(JpegEncoder::new_with_quality(&mut file, quality))
-            .map_err(|e| describe(&e))?;
-    } else {
-        canvas
-            .write_to(&mut file, ImageFormat::Png)
-            .map_err(|e| describe(&e))?;
-    }
-    file.into_inner().map_err(|e| describe(e.error()))?;
-    std::fs::rename(&part, path).map_err(|e| describe(&e))
+    let encode_error = |e: image::ImageError| aureole::Error::Encode {
+        path: path.to_path_buf(),
+        format: if jpeg { "JPEG" } else { "PNG" },
+        message: e.to_string(),
+    };
+    write_atomic(path, |out| {
+        if jpeg {
+            canvas.write_with_encoder(JpegEncoder::new_with_quality(out, quality))
+        } else {
+            canvas.write_to(out, ImageFormat::Png)
+        }
+        .map_err(encode_error)
+    })
+    .map_err(|e| e.to_string())
 }

@@ -76,8 +76,7 @@ fn parse(mut args: impl Iterator<Item = String>) -> Result<Options, String> {
 
 /// The centroid of the pixels within 10 % of the peak luminance: the hottest
 /// core of the light, where its rays start.
-fn centre(luminance: &[f32], width: usize) -> (f64, f64) {
-    let peak = luminance.iter().copied().fold(0.0f32, f32::max);
+fn centre(luminance: &[f32], width: usize, peak: f32) -> (f64, f64) {
     let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
     for (i, &y) in luminance.iter().enumerate() {
         if y >= 0.9 * peak {
@@ -110,7 +109,8 @@ fn median(values: &mut [f64]) -> f64 {
 fn run(options: &Options) -> Result<(), String> {
     let image = read_image(&options.path).map_err(|e| e.to_string())?.image;
     let luminance = image.luminance();
-    let (cx, cy) = centre(&luminance, image.width);
+    let peak = luminance.iter().copied().fold(0.0f32, f32::max);
+    let (cx, cy) = centre(&luminance, image.width, peak);
     let angle = |step: usize| step as f64 * 360.0 / STEPS as f64;
     let kept = |degrees: f64| {
         !options
@@ -169,7 +169,6 @@ fn run(options: &Options) -> Result<(), String> {
         })
         .map(|i| (angle(i), profile[i]))
         .collect();
-    let peak = luminance.iter().copied().fold(0.0f32, f32::max);
     let core: Vec<f64> = luminance
         .iter()
         .filter(|&&y| y >= 0.01 * peak)

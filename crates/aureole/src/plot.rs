@@ -18,14 +18,20 @@ const FONT: &[u8] = include_bytes!("../assets/DejaVuSansMono.ttf");
 const FAMILY: &str = "aureole-mono";
 const SIZE: (u32, u32) = (1400, 560);
 
-/// Draws the radial profile and the angular profile at `radius` px into a
-/// PNG at `path`.
-pub fn write_profile_plot(path: &Path, kernel: &Kernel, radius: f64) -> Result<()> {
+/// The family name of the embedded DejaVu Sans Mono, registered with
+/// plotters on first use: for text in any picture drawn with plotters.
+pub fn font_family() -> &'static str {
     static REGISTER: Once = Once::new();
     REGISTER.call_once(|| {
         // The font is ours and valid; a failure would only leave text out.
         let _ = plotters::style::register_font(FAMILY, FontStyle::Normal, FONT);
     });
+    FAMILY
+}
+
+/// Draws the radial profile and the angular profile at `radius` px into a
+/// PNG at `path`.
+pub fn write_profile_plot(path: &Path, kernel: &Kernel, radius: f64) -> Result<()> {
     let encode_error = |message: String| Error::Encode {
         path: path.to_path_buf(),
         format: "plot PNG",
@@ -60,7 +66,7 @@ fn draw(pixels: &mut [u8], kernel: &Kernel, radius: f64) -> DrawResult {
     let root = BitMapBackend::with_buffer(pixels, SIZE).into_drawing_area();
     root.fill(&WHITE)?;
     let (left, right) = root.split_horizontally(SIZE.0 / 2);
-    let font = (FAMILY, 18).into_font();
+    let font = (font_family(), 18).into_font();
     let colours = channel_colours(kernel);
 
     // Radial profile, from the first ring out, log scale.

@@ -504,14 +504,8 @@ mod tests {
 
     const SIDE: usize = 141;
 
-    /// The green plane of a stop's PSF on a 141-px square of pixels
-    /// `pitch` mm, with the far field from 48 px out and exact throughout.
-    fn fast_and_exact(
-        blades: u32,
-        roundness: f64,
-        f_number: f64,
-        pitch: f64,
-    ) -> (Vec<f64>, Vec<f64>) {
+    /// A stop of `blades` (0: round) at f/`f_number` on a 50 mm lens.
+    fn stop(blades: u32, roundness: f64, f_number: f64) -> Optics {
         let aperture = Aperture {
             blades,
             rotation_deg: 5.0,
@@ -528,11 +522,26 @@ mod tests {
             focal_length_mm: Some(50.0),
             f_number: Some(f_number),
         };
-        let optics = aperture.optics(&camera, 1.0).unwrap();
-        let light: Spectrum = spectrum::samples()
+        aperture.optics(&camera, 1.0).unwrap()
+    }
+
+    /// The 17 wavelengths and their R, G, B weights.
+    fn light() -> Spectrum {
+        spectrum::samples()
             .into_iter()
             .map(|(l, w)| (l, w.to_vec()))
-            .collect();
+            .collect()
+    }
+
+    /// The green plane of a stop's PSF on a 141-px square of pixels
+    /// `pitch` mm, with the far field from 48 px out and exact throughout.
+    fn fast_and_exact(
+        blades: u32,
+        roundness: f64,
+        f_number: f64,
+        pitch: f64,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let (optics, light) = (stop(blades, roundness, f_number), light());
         let extent = Extent::new(SIDE, SIDE).unwrap();
         let mut fast = rasterise_with(&optics, &light, &extent, pitch, 48.0 * pitch);
         let mut exact = rasterise_with(&optics, &light, &extent, pitch, f64::INFINITY);
@@ -561,29 +570,9 @@ mod tests {
         // density λN/(π³r³), so a share λN·4√2/(π³a) of the light lies
         // outside the centre pixel: the core must be integrated well enough
         // for the rest to get its share, at every wavelength.
-        let light: Spectrum = spectrum::samples()
-            .into_iter()
-            .map(|(l, w)| (l, w.to_vec()))
-            .collect();
-        let f_number = 8.0;
+        let (light, f_number) = (light(), 8.0);
+        let optics = stop(0, 0.0, f_number);
         for pitch in [0.036, 0.027] {
-            let aperture = Aperture {
-                blades: 0,
-                rotation_deg: 0.0,
-                roundness: 0.0,
-                spectral: true,
-                wavelength_nm: 550.0,
-                obstruction: 0.0,
-                vanes: 0,
-                vane_width: 0.02,
-                filters: Vec::new(),
-            };
-            let camera = crate::Camera {
-                sensor_width_mm: Some(36.0),
-                focal_length_mm: Some(50.0),
-                f_number: Some(f_number),
-            };
-            let optics = aperture.optics(&camera, 1.0).unwrap();
             let extent = Extent::new(SIDE, SIDE).unwrap();
             let planes = rasterise(&optics, &light, &extent, pitch);
             let a = pitch / 2.0;
