@@ -151,13 +151,23 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         plan: None,
         recycled: Vec::new(),
     };
-    if jobs.len() == 1 {
-        return session.frame(&jobs[0]).map(|_| ());
+    let done = |job: &batch::Job| args.skip_existing && job.output.is_file();
+    if let [job] = jobs.as_slice() {
+        if done(job) {
+            if !quiet {
+                eprintln!(
+                    "aureole: note: {} exists: skipped (--skip-existing)",
+                    job.output.display()
+                );
+            }
+            return Ok(());
+        }
+        return session.frame(job);
     }
     let mut failed = 0;
     let mut skipped = 0;
     for job in &jobs {
-        if args.skip_existing && job.output.is_file() {
+        if done(job) {
             skipped += 1;
             continue;
         }

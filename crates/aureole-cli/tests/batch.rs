@@ -98,6 +98,30 @@ fn one_bad_frame_is_reported_and_the_others_are_written_then_resumed() {
 }
 
 #[test]
+fn skip_existing_leaves_the_output_of_a_single_input_alone() {
+    let temp = sequence(1, (24, 16));
+    let dir = temp.path();
+    std::fs::write(dir.join("out/r.exr"), b"an earlier result").unwrap();
+    let run = aureole()
+        .current_dir(dir)
+        .args([
+            "apply",
+            "shot.0001.exr",
+            "-o",
+            "out/r.exr",
+            "--skip-existing",
+        ])
+        .assert()
+        .success();
+    let stderr = String::from_utf8_lossy(&run.get_output().stderr).into_owned();
+    assert!(stderr.contains("skipped (--skip-existing)"), "{stderr}");
+    assert_eq!(
+        std::fs::read(dir.join("out/r.exr")).unwrap(),
+        b"an earlier result"
+    );
+}
+
+#[test]
 fn several_inputs_into_a_folder_give_the_bytes_of_single_runs() {
     let temp = sequence(3, (36, 28));
     let dir = temp.path();
