@@ -5,5 +5,5 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    aureole::fuzzing::load(data);
+    aureole_io::fuzzing::load(data);
 });

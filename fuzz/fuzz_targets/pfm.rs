@@ -4,5 +4,5 @@
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    aureole::fuzzing::pfm(data);
+    aureole_io::fuzzing::pfm(data);
 });

@@ -3,10 +3,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::anyhow;
-use aureole::io::read::{read_image_limited, Limits};
-use aureole::memory::{format_bytes, Workload};
-use aureole::{ApplyOptions, Config, Image, Kernel, Method, Plan};
+use aureole::{ApplyOptions, FrameOptions, Method, Session};
+use aureole_io::kernel::read_kernel;
+use aureole_io::limits::{default_memory_limit, Limits};
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
@@ -117,8 +116,31 @@ fn parse_non_negative(text: &str) -> Result<f64, String> {
         .ok_or_else(|| format!("{text:?} is not a finite number of at least 0"))
 }
 
-fn parse_memory(text: &str) -> Result<u64, String> {
-    aureole::memory::parse_bytes(text).map_err(|e| e.to_string())
+/// Parses a memory size: a number with an optional unit, K, M, G or T
+/// (powers of 1024, with or without `iB`/`B`), e.g. `512M`, `1.5G`, `2GiB`.
+pub fn parse_memory(text: &str) -> Result<u64, String> {
+    let refuse = |allowed: &str| format!("--max-memory {text:?} is not allowed: {allowed}");
+    let trimmed = text.trim();
+    let split = trimmed
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(trimmed.len());
+    let (number, unit) = trimmed.split_at(split);
+    let value: f64 = number
+        .parse()
+        .map_err(|_| refuse("a number of bytes with an optional unit K, M, G or T, e.g. 4G"))?;
+    let shift = match unit.trim().to_ascii_uppercase().as_str() {
+        "" | "B" => 0,
+        "K" | "KB" | "KIB" => 10,
+        "M" | "MB" | "MIB" => 20,
+        "G" | "GB" | "GIB" => 30,
+        "T" | "TB" | "TIB" => 40,
+        _ => return Err(refuse("a unit among K, M, G, T (powers of 1024), e.g. 4G")),
+    };
+    let bytes = value * (1u64 << shift) as f64;
+    if !(bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(refuse("at least 1 byte, e.g. 512M or 4G"));
+    }
+    Ok(bytes as u64)
 }
 
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
@@ -130,26 +152,25 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     for job in &jobs {
         output::check(&job.output, Some(&job.input))?;
     }
-    let (config, defaulted) = match &args.kernel {
-        Some(_) => (Config::default(), false),
-        None => args.chain.compose_or_default(matches)?,
+    let limit = args.max_memory.unwrap_or_else(default_memory_limit);
+    let session = match &args.kernel {
+        Some(path) => Session::with_kernel(read_kernel(path, Limits { max_bytes: limit })?),
+        None => {
+            let (config, defaulted) = args.chain.compose_or_default(matches)?;
+            if defaulted && !quiet {
+                eprintln!(
+                    "aureole: note: no --preset or --config: using the default camera, preset {}",
+                    aureole::presets::DEFAULT_PRESET
+                );
+            }
+            Session::new(config).with_max_extent(args.max_kernel)
+        }
     };
-    if defaulted && !quiet {
-        eprintln!(
-            "aureole: note: no --preset or --config: using the default camera, preset {}",
-            aureole::presets::DEFAULT_PRESET
-        );
-    }
-    let limit = args
-        .max_memory
-        .unwrap_or_else(aureole::memory::default_limit);
-    let mut session = Session {
+    let mut run = Run {
         args,
-        config,
+        session: session.with_memory_limit(limit),
         limit,
         quiet,
-        plan: None,
-        recycled: Vec::new(),
     };
     let done = |job: &batch::Job| args.skip_existing && job.output.is_file();
     if let [job] = jobs.as_slice() {
@@ -162,7 +183,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             }
             return Ok(());
         }
-        return session.frame(job);
+        return run.frame(job);
     }
     let mut failed = 0;
     let mut skipped = 0;
@@ -171,7 +192,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             skipped += 1;
             continue;
         }
-        if let Err(failure) = session.frame(job) {
+        if let Err(failure) = run.frame(job) {
             failed += 1;
             let (Failure::Usage(e) | Failure::Run(e)) = failure;
             eprintln!("aureole: error: {}", crate::one_line(&e));
@@ -193,60 +214,37 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     Ok(())
 }
 
-/// What stays from frame to frame: the plan (rebuilt only when the size
-/// changes) and the previous result's planes.
-struct Session<'a> {
+/// A batch: the session that keeps the plan and the spare planes from
+/// frame to frame, and what every frame is read and written with.
+struct Run<'a> {
     args: &'a Args,
-    config: Config,
+    session: Session,
     limit: u64,
     quiet: bool,
-    plan: Option<Plan>,
-    recycled: Vec<Vec<f32>>,
 }
 
-impl Session<'_> {
+impl Run<'_> {
     fn frame(&mut self, job: &batch::Job) -> Result<(), Failure> {
         let (args, quiet) = (self.args, self.quiet);
         let start = Instant::now();
-        let options = input::Options {
+        let options = FrameOptions {
             input_scale: args.input_scale,
             sanitize: args.sanitize,
             keep_negative: args.keep_negative,
-            limits: Limits {
+        };
+        let frame = input::read(
+            &job.input,
+            &options,
+            Limits {
                 max_bytes: self.limit,
             },
             quiet,
-        };
-        let input = input::read(&job.input, &options)?;
-        let image = &input.loaded.image;
-        if !quiet {
-            eprintln!(
-                "aureole: note: {}: luminance scale {} cd/m² per unit ({})",
-                job.input.display(),
-                input.scale,
-                input.scale_source
-            );
-        }
+        )?;
+        let image = frame.image();
         let progress = Progress::new(quiet);
-        // A plan of another size goes before the new one is built.
-        let reusable = self
-            .plan
-            .take()
-            .filter(|p| p.size() == (image.width, image.height));
-        let plan = match reusable {
-            Some(plan) => self.plan.insert(plan),
-            None => {
-                self.recycled = Vec::new();
-                progress.stage("building kernel");
-                let built = self.build_plan(&job.input, image)?;
-                self.plan.insert(built)
-            }
-        };
-        progress.stage("convolving");
         let options = ApplyOptions {
-            threshold: args.threshold.unwrap_or(self.config.threshold),
+            threshold: args.threshold,
             knee: args.knee,
-            scale: input.scale,
             glare_only: args.glare_only,
             method: match args.method {
                 MethodArg::Auto => Method::Auto,
@@ -254,20 +252,27 @@ impl Session<'_> {
                 MethodArg::Splat => Method::Splat,
             },
         };
-        let recycled = std::mem::take(&mut self.recycled);
-        let applied = plan.apply_recycling(image, &options, recycled, &mut |f| progress.set(f))?;
+        let applied = self
+            .session
+            .apply(&frame, &options, &mut |stage, done| {
+                progress.update(stage, done)
+            })
+            .map_err(|e| input::about(&job.input, e))?;
         progress.stage("writing");
         let shown = output::write(
             &job.output,
             &applied.image,
-            input.scale,
+            frame.scale(),
             &args.display,
             args.half,
             quiet,
         )?;
         progress.finish();
         if !quiet {
-            let kernel = plan.kernel();
+            let kernel = self
+                .session
+                .plan()
+                .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));
             let ratio = if applied.energy_in != 0.0 {
                 format!("{:.4} %", 100.0 * applied.energy_out / applied.energy_in)
             } else {
@@ -279,10 +284,10 @@ impl Session<'_> {
                 image.width,
                 image.height,
                 image.layout,
-                kernel.width(),
-                kernel.height(),
+                kernel.0,
+                kernel.1,
                 applied.spread_pixels,
-                options.threshold,
+                applied.threshold,
                 match (applied.method, applied.double) {
                     (Method::Splat, _) => "splatted",
                     (_, true) => "FFT in f64: the scene's range is beyond f32",
@@ -294,104 +299,8 @@ impl Session<'_> {
                 start.elapsed().as_secs_f64()
             );
         }
-        self.recycled = applied.image.planes;
+        self.session.recycle(applied.image);
         Ok(())
-    }
-
-    /// The plan for `image`, once its memory is known to fit.
-    fn build_plan(&self, path: &std::path::Path, image: &Image) -> Result<Plan, Failure> {
-        let args = self.args;
-        let channels = image.planes.len();
-        let alpha = image.alpha.is_some();
-        match &args.kernel {
-            Some(kernel_path) => {
-                let file = read_image_limited(
-                    kernel_path,
-                    Limits {
-                        max_bytes: self.limit,
-                    },
-                )?
-                .image;
-                let workload = Workload {
-                    width: image.width,
-                    height: image.height,
-                    channels,
-                    alpha,
-                    kernel: (file.width, file.height),
-                    kernel_channels: file.planes.len(),
-                };
-                self.check_memory(path, &workload, &[], None)?;
-                let kernel = Kernel::from_planes(file.width, file.height, file.planes)
-                    .map_err(|e| Failure::Usage(anyhow!("{}: {e}", kernel_path.display())))?;
-                Ok(Plan::from_kernel(kernel, image.width, image.height))
-            }
-            None => {
-                let workload = Workload::of_config(
-                    &self.config,
-                    image.width,
-                    image.height,
-                    channels,
-                    alpha,
-                    args.max_kernel,
-                )?;
-                self.check_memory(path, &workload, &self.config.effects, args.max_kernel)?;
-                Ok(Plan::new(
-                    &self.config,
-                    image.width,
-                    image.height,
-                    args.max_kernel,
-                )?)
-            }
-        }
-    }
-
-    /// Refuses a run that would need more than the limit, saying how much it
-    /// needs and what would fit.
-    fn check_memory(
-        &self,
-        path: &std::path::Path,
-        workload: &Workload,
-        effects: &[aureole::Effect],
-        max_kernel: Option<(usize, usize)>,
-    ) -> Result<(), Failure> {
-        let estimate = workload.estimate(effects);
-        if estimate.bytes <= self.limit {
-            return Ok(());
-        }
-        // The largest kernel extent, halving, that would fit.
-        let (mut w, mut h) = max_kernel.unwrap_or(workload.kernel);
-        let mut fits = None;
-        while w > 16 && h > 16 {
-            w /= 2;
-            h /= 2;
-            let smaller = Workload {
-                kernel: (w.min(workload.kernel.0), h.min(workload.kernel.1)),
-                ..*workload
-            };
-            let bytes = smaller.estimate(effects).bytes;
-            if bytes <= self.limit {
-                fits = Some((w, h, bytes));
-                break;
-            }
-        }
-        let hint = match (fits, effects.is_empty()) {
-            (Some((w, h, bytes)), false) => format!(
-                "--max-kernel {w}x{h} would need about {} (light then reaches {} px around a source)",
-                format_bytes(bytes),
-                w / 2
-            ),
-            (Some((w, h, _)), true) => {
-                format!("a kernel of at most {w}x{h} (aureole psf --size {w}x{h}) would fit")
-            }
-            (None, _) => "the image alone is too large for it".to_string(),
-        };
-        Err(Failure::Run(anyhow!(
-            "{}: needs about {} (peak while {}) but --max-memory is {}; {hint}, or raise --max-memory",
-            path.display(),
-            format_bytes(estimate.bytes),
-            estimate.stage,
-            format_bytes(self.limit)
-        )))
     }
 }
 
@@ -400,4 +309,20 @@ enum MethodArg {
     Auto,
     Fft,
     Splat,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_in_binary_units() {
+        assert_eq!(parse_memory("512M").unwrap(), 512 << 20);
+        assert_eq!(parse_memory("1.5G").unwrap(), 3 << 29);
+        assert_eq!(parse_memory("2GiB").unwrap(), 2 << 30);
+        assert_eq!(parse_memory("1000").unwrap(), 1000);
+        for bad in ["", "G", "-1G", "4X", "0"] {
+            assert!(parse_memory(bad).is_err(), "{bad}");
+        }
+    }
 }

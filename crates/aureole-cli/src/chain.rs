@@ -46,7 +46,8 @@ impl ChainArgs {
         }
         for (path, index) in self.config.iter().zip(indices("config")) {
             // Any failure to read the config is the user's to fix: exit 2.
-            let file = ConfigFile::load(path).map_err(|e| Failure::Usage(e.into()))?;
+            let file = ConfigFile::load(path)
+                .map_err(|e| Failure::Usage(anyhow::anyhow!(crate::words::library(&e))))?;
             sources.push((index, file));
         }
         sources.sort_by_key(|(index, _)| *index);

@@ -3,8 +3,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aureole::io::write::{write_linear, LinearOptions};
-use aureole::{ApplyOptions, Plan};
+use aureole::{ApplyOptions, Frame, FrameOptions, Session};
+use aureole_io::limits::default_memory_limit;
+use aureole_io::write::{write_linear, LinearOptions};
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
@@ -40,19 +41,22 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     }
     let (config, _) = args.chain.compose_or_default(matches)?;
     let start = Instant::now();
-    let scene = aureole::demo::night_street(args.size.0, args.size.1);
+    let scene = aureole_io::demo::night_street(args.size.0, args.size.1);
     if let Some(hdr) = &args.hdr {
         crate::interrupt::writing(|| write_linear(hdr, &scene, LinearOptions::default()))?;
     }
     let progress = Progress::new(quiet);
-    progress.stage("building kernel");
-    let plan = Plan::new(&config, scene.width, scene.height, None)?;
-    progress.stage("convolving");
-    let options = ApplyOptions {
-        threshold: config.threshold,
-        ..ApplyOptions::default()
-    };
-    let applied = plan.apply(&scene, &options, &mut |f| progress.set(f))?;
+    let frame = Frame::new(scene, &FrameOptions::default())?;
+    let mut session = Session::new(config).with_memory_limit(default_memory_limit());
+    let applied = session
+        .apply(&frame, &ApplyOptions::default(), &mut |stage, done| {
+            progress.update(stage, done)
+        })
+        .map_err(|e| crate::input::about(std::path::Path::new("the demo scene"), e))?;
+    let (width, height) = (frame.image().width, frame.image().height);
+    let kernel = session
+        .plan()
+        .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));
     let shown = output::write(
         &args.output,
         &applied.image,
@@ -66,10 +70,10 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         eprintln!(
             "wrote {}: night street {}x{}, lamps of 2e4-1e5 cd/m², kernel {}x{}{}, {:.2} s",
             args.output.display(),
-            scene.width,
-            scene.height,
-            plan.kernel().width(),
-            plan.kernel().height(),
+            width,
+            height,
+            kernel.0,
+            kernel.1,
             shown.map(|s| format!(", {s}")).unwrap_or_default(),
             start.elapsed().as_secs_f64()
         );

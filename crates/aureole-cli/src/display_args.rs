@@ -1,6 +1,6 @@
 //! Display options: how a linear result becomes a picture.
 
-use aureole::display::{Depth, DisplayOptions, Exposure, ToneCurve};
+use aureole_io::display::{Depth, DisplayOptions, Exposure, ToneCurve};
 
 #[derive(clap::Args)]
 pub struct DisplayArgs {
@@ -70,15 +70,12 @@ impl DisplayArgs {
         DisplayOptions { exposure, tone }
     }
 
-    /// The sample depth for a picture at `path`.
-    pub fn depth(&self, path: &std::path::Path) -> Depth {
+    /// The sample depth asked for; by default the format's own.
+    pub fn depth(&self) -> Option<Depth> {
         match self.bits.as_deref() {
-            Some("16") => Depth::Sixteen,
-            Some(_) => Depth::Eight,
-            None if matches!(aureole::io::extension(path).as_str(), "tif" | "tiff") => {
-                Depth::Sixteen
-            }
-            None => Depth::Eight,
+            Some("16") => Some(Depth::Sixteen),
+            Some(_) => Some(Depth::Eight),
+            None => None,
         }
     }
 }

@@ -2,6 +2,9 @@
 
 use std::path::PathBuf;
 
+use aureole::FrameOptions;
+use aureole_io::limits::{default_memory_limit, Limits};
+
 use crate::display_args::parse_positive;
 use crate::{input, Failure};
 
@@ -22,21 +25,22 @@ pub struct Args {
 
 pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     // info describes bad pixels instead of refusing them.
-    let options = input::Options {
+    let options = FrameOptions {
         input_scale: args.input_scale,
         sanitize: true,
         keep_negative: true,
-        limits: aureole::io::read::Limits {
-            max_bytes: aureole::memory::default_limit(),
-        },
-        quiet,
     };
-    let input = input::read(&args.input, &options)?;
-    let image = &input.loaded.image;
+    let limits = Limits {
+        max_bytes: default_memory_limit(),
+    };
+    let loaded = aureole_io::read::read_image(&args.input, limits)?;
+    let format = loaded.format;
+    let frame = input::read_loaded(&args.input, loaded, &options, quiet)?;
+    let image = frame.image();
     let mut luminance: Vec<f64> = image
         .luminance()
         .iter()
-        .map(|&y| f64::from(y) * input.scale)
+        .map(|&y| f64::from(y) * frame.scale())
         .collect();
     let above = |t: f64| luminance.iter().filter(|&&y| y > t).count();
     let thresholds: Vec<f64> = match args.threshold {
@@ -52,7 +56,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     let mut text = format!(
         "{}: {} {}x{}, {:?}{}\n",
         args.input.display(),
-        input.loaded.format,
+        format,
         image.width,
         image.height,
         image.layout,
@@ -64,7 +68,8 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     );
     text += &format!(
         "scale: {} cd/m² per unit ({})\n",
-        input.scale, input.scale_source
+        frame.scale(),
+        input::scale_source(frame.scale_source())
     );
     if image.layout == aureole::Layout::Rgb {
         let [wr, wg, wb] = image.luminance_weights();

@@ -1,36 +1,43 @@
-//! Reading an input image the way every command does: notes and warnings on
-//! stderr, non-finite pixels refused or zeroed, the luminance scale chosen.
+//! Reading an input image the way every command does: the file's notes on
+//! stderr, the frame made by the library (bad samples refused or zeroed,
+//! the luminance scale chosen), and what it decided said.
 
 use std::path::Path;
 
 use anyhow::anyhow;
-use aureole::io::read::{read_image_limited, Limits, Loaded};
+use aureole::{Frame, FrameOptions, ScaleSource};
+use aureole_io::limits::Limits;
+use aureole_io::read::{read_image, Loaded};
 
-use crate::Failure;
+use crate::{words, Failure};
 
-/// The image and its luminance scale (cd/m² per file unit).
-pub struct Input {
-    pub loaded: Loaded,
-    pub scale: f64,
-    /// Where the scale came from, for the summary.
-    pub scale_source: &'static str,
+/// Reads `path` as a frame, saying what the user should know about it and
+/// the luminance scale it takes.
+pub fn read(
+    path: &Path,
+    options: &FrameOptions,
+    limits: Limits,
+    quiet: bool,
+) -> Result<Frame, Failure> {
+    let frame = read_loaded(path, read_image(path, limits)?, options, quiet)?;
+    if !quiet {
+        eprintln!(
+            "aureole: note: {}: luminance scale {} cd/m² per unit ({})",
+            path.display(),
+            frame.scale(),
+            scale_source(frame.scale_source())
+        );
+    }
+    Ok(frame)
 }
 
-/// How to read: the scale, what to do with samples that are not luminance,
-/// the decoder's memory bound.
-pub struct Options {
-    pub input_scale: Option<f64>,
-    /// Replace NaN, infinite and negative samples by 0.
-    pub sanitize: bool,
-    /// Let negative samples through (they never pass a threshold).
-    pub keep_negative: bool,
-    pub limits: Limits,
-    pub quiet: bool,
-}
-
-pub fn read(path: &Path, options: &Options) -> Result<Input, Failure> {
-    let (input_scale, sanitize, quiet) = (options.input_scale, options.sanitize, options.quiet);
-    let mut loaded = read_image_limited(path, options.limits)?;
+/// A file read from `path` as a frame, with its notes and warnings.
+pub fn read_loaded(
+    path: &Path,
+    loaded: Loaded,
+    options: &FrameOptions,
+    quiet: bool,
+) -> Result<Frame, Failure> {
     let note = |text: &str| {
         if !quiet {
             eprintln!("aureole: note: {}: {text}", path.display());
@@ -46,43 +53,33 @@ pub fn read(path: &Path, options: &Options) -> Result<Input, Failure> {
             loaded.format
         );
     }
-    let negatives = if options.keep_negative {
-        None
-    } else {
-        loaded.image.negatives()
-    };
-    let refused = [
-        (loaded.image.non_finite(), "NaN or infinite", ""),
-        (negatives, "negative", ", --keep-negative keeps them"),
-    ];
-    for (found, what, keep) in refused {
-        if let (Some(bad), false) = (found, sanitize) {
-            return Err(Failure::Run(anyhow!(
-                "{}: {} {what} samples (luminance must be a finite number of at least 0), the first at column {} row {} (from the top); --sanitize replaces them by 0{keep}",
-                path.display(),
-                bad.count,
-                bad.first.0,
-                bad.first.1
-            )));
-        }
+    let frame = Frame::new(loaded.image, options).map_err(|e| about(path, e))?;
+    if frame.replaced() > 0 {
+        eprintln!(
+            "aureole: warning: {}: {} NaN, infinite or negative samples replaced by 0 (--sanitize)",
+            path.display(),
+            frame.replaced()
+        );
     }
-    if sanitize {
-        let count = loaded.image.sanitize(!options.keep_negative);
-        if count > 0 {
-            eprintln!(
-                "aureole: warning: {}: {count} NaN, infinite or negative samples replaced by 0 (--sanitize)",
-                path.display()
-            );
-        }
+    Ok(frame)
+}
+
+/// Where the scale came from, in the command line's words.
+pub fn scale_source(source: ScaleSource) -> &'static str {
+    match source {
+        ScaleSource::Given => "--input-scale",
+        ScaleSource::WhiteLuminance => "the file's whiteLuminance",
+        ScaleSource::Default => "default: file units are cd/m²",
     }
-    let (scale, scale_source) = match (input_scale, loaded.image.white_luminance) {
-        (Some(scale), _) => (scale, "--input-scale"),
-        (None, Some(white)) => (f64::from(white), "the file's whiteLuminance"),
-        (None, None) => (1.0, "default: file units are cd/m²"),
-    };
-    Ok(Input {
-        loaded,
-        scale,
-        scale_source,
-    })
+}
+
+/// A library error about the image at `path`: what its samples hold or
+/// what it would need is said with the file's name.
+pub fn about(path: &Path, error: aureole::Error) -> Failure {
+    match error {
+        aureole::Error::BadSamples { .. } | aureole::Error::Memory { .. } => {
+            Failure::Run(anyhow!("{}: {}", path.display(), words::library(&error)))
+        }
+        other => other.into(),
+    }
 }

@@ -12,6 +12,7 @@ mod output;
 mod presets;
 mod progress;
 mod psf;
+mod words;
 
 use std::process::ExitCode;
 
@@ -56,21 +57,27 @@ pub enum Failure {
     Run(anyhow::Error),
 }
 
-impl Failure {
-    /// Sorts a library error: what the user wrote is wrong (2), or the work
-    /// itself failed (1).
-    fn from_library(error: aureole::Error) -> Failure {
+/// Sorts a library error: what the user wrote is wrong (2), or the work
+/// itself failed (1); the words are the command line's (flags, commands).
+impl From<aureole::Error> for Failure {
+    fn from(error: aureole::Error) -> Self {
         use aureole::Error as E;
         match error {
-            E::Io { .. } | E::Encode { .. } | E::Decode { .. } => Failure::Run(error.into()),
-            _ => Failure::Usage(error.into()),
+            E::Io { .. } | E::BadSamples { .. } | E::Memory { .. } | E::Cancelled => {
+                Failure::Run(anyhow::anyhow!(words::library(&error)))
+            }
+            _ => Failure::Usage(anyhow::anyhow!(words::library(&error))),
         }
     }
 }
 
-impl From<aureole::Error> for Failure {
-    fn from(error: aureole::Error) -> Self {
-        Failure::from_library(error)
+impl From<aureole_io::Error> for Failure {
+    fn from(error: aureole_io::Error) -> Self {
+        use aureole_io::Error as E;
+        match error {
+            E::Io { .. } | E::Encode { .. } | E::Decode { .. } => Failure::Run(error.into()),
+            E::Content { .. } | E::OutputFormat { .. } => Failure::Usage(error.into()),
+        }
     }
 }
 

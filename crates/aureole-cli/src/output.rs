@@ -1,14 +1,13 @@
-//! Writing a result: linear formats as they are, display formats through the
-//! exposure and tone curve.
+//! Writing a result: linear formats as they are, pictures through the
+//! exposure and tone curve; the output path checked before any work.
 
 use std::path::Path;
 
 use anyhow::anyhow;
-use aureole::display::{render, write_picture};
-use aureole::io::atomic::folder_of;
-use aureole::io::write::{write_linear, LinearOptions};
-use aureole::io::{extension, is_display_format, IMAGE_EXTENSIONS};
 use aureole::Image;
+use aureole_io::atomic::folder_of;
+use aureole_io::formats::Note;
+use aureole_io::write::{output_format, write_image, LinearOptions, WriteOptions, Written};
 
 use crate::display_args::DisplayArgs;
 use crate::Failure;
@@ -17,16 +16,7 @@ use crate::Failure;
 /// that would overwrite the input, that is not a plain file, or whose
 /// folder is missing or cannot be written.
 pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
-    let known =
-        matches!(extension(output).as_str(), "exr" | "hdr" | "pfm") || is_display_format(output);
-    if !known {
-        return Err(aureole::Error::OutputFormat {
-            path: output.to_path_buf(),
-            extension: extension(output),
-            allowed: IMAGE_EXTENSIONS,
-        }
-        .into());
-    }
+    output_format(output)?;
     if let Some(input) = input {
         if same_file(input, output) {
             return Err(Failure::Usage(anyhow!(
@@ -80,8 +70,8 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// Writes `image` to `path`; returns a description of the display exposure
-/// when it made a picture.
+/// Writes `image` (`scale` cd/m² per unit) to `path`; returns a
+/// description of the display exposure when it made a picture.
 pub fn write(
     path: &Path,
     image: &Image,
@@ -90,22 +80,26 @@ pub fn write(
     half: bool,
     quiet: bool,
 ) -> Result<Option<String>, Failure> {
-    if is_display_format(path) {
-        let picture = render(image, scale, &display.options());
-        crate::interrupt::writing(|| write_picture(path, &picture, display.depth(path)))?;
-        Ok(Some(format!(
-            "white {:.4} cd/m² (EV100 {:.1})",
-            picture.white,
-            picture.ev100()
-        )))
-    } else {
-        let notes =
-            crate::interrupt::writing(|| write_linear(path, image, LinearOptions { half }))?;
-        for note in notes {
-            if !quiet {
-                eprintln!("aureole: note: {}: {note}", path.display());
-            }
+    let options = WriteOptions {
+        linear: LinearOptions { half },
+        display: display.options(),
+        depth: display.depth(),
+    };
+    match crate::interrupt::writing(|| write_image(path, image, scale, &options))? {
+        Written::Picture { white, ev100 } => {
+            Ok(Some(format!("white {white:.4} cd/m² (EV100 {ev100:.1})")))
         }
-        Ok(None)
+        Written::Linear(notes) => {
+            for note in notes {
+                if !quiet {
+                    let hint = match note {
+                        Note::ClampedToHalf { .. } => "; drop --half to keep them",
+                        _ => "",
+                    };
+                    eprintln!("aureole: note: {}: {note}{hint}", path.display());
+                }
+            }
+            Ok(None)
+        }
     }
 }

@@ -33,6 +33,14 @@ impl Progress {
         self.bar.set_position(0);
     }
 
+    /// The library's progress: a new stage starts from 0.
+    pub fn update(&self, stage: aureole::Stage, fraction: f64) {
+        if self.bar.message() != stage.describe() {
+            self.bar.set_message(stage.describe());
+        }
+        self.set(fraction);
+    }
+
     /// Sets the stage's fraction done.
     pub fn set(&self, fraction: f64) {
         self.bar

@@ -3,11 +3,13 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use aureole::io::{extension, write_kernel, KERNEL_EXTENSIONS};
-use aureole::Extent;
+use aureole::{Cancel, Control, Extent};
+use aureole_io::formats::{by_extension, extension, kernel_outputs, KernelStorage};
+use aureole_io::kernel::write_kernel;
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
+use crate::progress::Progress;
 use crate::Failure;
 
 #[derive(clap::Args)]
@@ -70,9 +72,11 @@ pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
 }
 
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
-    check_output(&args.output, &["pfm", "exr", "png"], KERNEL_EXTENSIONS)?;
+    let holds_kernels =
+        by_extension(&args.output).is_some_and(|f| f.kernels != KernelStorage::Unsupported);
+    check_output(&args.output, holds_kernels, kernel_outputs())?;
     if let Some(plot) = &args.profile {
-        check_output(plot, &["png"], ".png")?;
+        check_output(plot, extension(plot) == "png", ".png".into())?;
     }
     let config = args.chain.compose(matches)?;
     if config.effects.is_empty() {
@@ -85,17 +89,23 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     }
 
     let start = Instant::now();
-    let kernel = config.kernel(&extent)?;
+    let progress = Progress::new(quiet);
+    progress.stage("building kernel");
+    let cancel = Cancel::new();
+    let mut report = |fraction| progress.set(fraction);
+    let kernel = config.kernel_with(&extent, &mut Control::new(&cancel, &mut report))?;
+    progress.stage("writing");
     crate::interrupt::writing(|| write_kernel(&args.output, &kernel))?;
     if let Some(plot) = &args.profile {
         let (cx, cy) = kernel.centre();
         let radius = args
             .profile_radius
             .unwrap_or_else(|| (cx.min(cy) as f64 / 4.0).max(1.0));
-        crate::interrupt::writing(|| aureole::plot::write_profile_plot(plot, &kernel, radius))?;
+        crate::interrupt::writing(|| aureole_io::plot::write_profile_plot(plot, &kernel, radius))?;
     }
+    progress.finish();
     if !quiet {
-        let sums: Vec<String> = (0..kernel.channels().len())
+        let sums: Vec<String> = (0..kernel.planes().len())
             .map(|c| format!("{:.6}", kernel.sum(c)))
             .collect();
         eprintln!(
@@ -103,7 +113,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             args.output.display(),
             kernel.width(),
             kernel.height(),
-            kernel.channels().len(),
+            kernel.planes().len(),
             if kernel.is_coloured() { "s" } else { "" },
             sums.join(" "),
             kernel.centre().0,
@@ -114,15 +124,15 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     Ok(())
 }
 
-/// Refuses an output whose extension we do not write before any work is done.
-fn check_output(path: &Path, allowed: &[&str], listed: &'static str) -> Result<(), Failure> {
-    let found = extension(path);
-    if allowed.contains(&found.as_str()) {
+/// Refuses an output whose extension we do not write before any work is
+/// done; `listed` names those we do.
+fn check_output(path: &Path, known: bool, listed: String) -> Result<(), Failure> {
+    if known {
         Ok(())
     } else {
-        Err(aureole::Error::OutputFormat {
+        Err(aureole_io::Error::OutputFormat {
             path: path.to_path_buf(),
-            extension: found,
+            extension: extension(path),
             allowed: listed,
         }
         .into())

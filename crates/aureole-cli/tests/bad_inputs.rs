@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command as Process;
 
 use assert_cmd::Command;
-use aureole::io::write::{write_linear, LinearOptions};
 use aureole::{Image, Layout};
+use aureole_io::write::{write_linear, LinearOptions};
 
 /// A case: the files it starts from, the arguments, what must come back.
 struct Case {
@@ -129,17 +129,17 @@ fn make_inputs(dir: &Path) {
     write("scene.hdr", &scene);
     write("scene.pfm", &scene);
     let png = dir.join("scene.png");
-    aureole::display::write_picture(
+    aureole_io::write::write_picture(
         &png,
-        &aureole::display::render(
+        &aureole_io::display::render(
             &scene,
             1.0,
-            &aureole::display::DisplayOptions {
-                exposure: aureole::display::Exposure::Auto,
-                tone: aureole::display::ToneCurve::Filmic,
+            &aureole_io::display::DisplayOptions {
+                exposure: aureole_io::display::Exposure::Auto,
+                tone: aureole_io::display::ToneCurve::Filmic,
             },
         ),
-        aureole::display::Depth::Eight,
+        aureole_io::display::Depth::Eight,
     )
     .unwrap();
     let file = |name: &str, bytes: &[u8]| std::fs::write(dir.join(name), bytes).unwrap();

@@ -7,8 +7,8 @@ use std::process::{Command as Process, Stdio};
 use std::time::Duration;
 
 use assert_cmd::Command;
-use aureole::io::write::{write_linear, LinearOptions};
 use aureole::{Image, Layout};
+use aureole_io::write::{write_linear, LinearOptions};
 
 fn aureole() -> Command {
     Command::cargo_bin("aureole").unwrap()
@@ -204,7 +204,7 @@ fn ctrl_c_stops_the_batch_leaving_only_whole_files() {
         .collect();
     assert!(written.len() < 40, "the batch was not interrupted");
     for path in written {
-        let loaded = aureole::io::read::read_image(&path).unwrap();
+        let loaded = aureole_io::read::read_image(&path, aureole_io::limits::Limits::NONE).unwrap();
         assert_eq!((loaded.image.width, loaded.image.height), (200, 150));
     }
 }

@@ -3,8 +3,9 @@
 use std::path::Path;
 
 use assert_cmd::Command;
-use aureole::io::pfm;
 use aureole::{presets, Config, Extent};
+use aureole_io::limits::Limits;
+use aureole_io::read::read_image;
 use predicates::prelude::*;
 
 fn aureole() -> Command {
@@ -22,6 +23,11 @@ fn library_kernel(sources: &[&str], size: usize) -> aureole::Kernel {
         config.apply(file);
     }
     config.kernel(&Extent::new(size, size).unwrap()).unwrap()
+}
+
+/// A PFM (or any image) the command wrote.
+fn read_pfm(path: &Path) -> aureole::Image {
+    read_image(path, Limits::NONE).unwrap().image
 }
 
 fn one_line(stderr: &[u8]) -> String {
@@ -49,12 +55,12 @@ fn psf_writes_a_normalised_pfm_centred_at_half_the_size() {
         .stderr(predicate::str::contains("64x48 kernel"));
     let bytes = std::fs::read(&out).unwrap();
     assert!(bytes.starts_with(b"Pf\n64 48\n-1.0\n"));
-    let kernel = pfm::read(&out).unwrap();
+    let kernel = read_pfm(&out);
     assert_eq!(
-        (kernel.width, kernel.height, kernel.channels.len()),
+        (kernel.width, kernel.height, kernel.planes.len()),
         (64, 48, 1)
     );
-    let plane = &kernel.channels[0];
+    let plane = &kernel.planes[0];
     let sum: f64 = plane.iter().map(|&v| f64::from(v)).sum();
     assert!((sum - 1.0).abs() < 1e-5, "sum {sum}");
     let peak = plane.iter().cloned().fold(0f32, f32::max);
@@ -83,7 +89,7 @@ fn psf_output_matches_the_library_and_is_deterministic() {
     }
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
     let expected = library_kernel(&["paper-fig5-corona"], 65);
-    assert_eq!(pfm::read(&a).unwrap().channels[0], expected.channels()[0]);
+    assert_eq!(read_pfm(&a).planes[0], expected.planes()[0]);
 }
 
 #[test]
@@ -137,7 +143,7 @@ fn presets_and_configs_compose_in_command_line_order() {
             .arg(&out)
             .assert()
             .success();
-        pfm::read(&out).unwrap().channels.remove(0)
+        read_pfm(&out).planes.remove(0)
     };
     let cfg = lens85.to_str().unwrap();
     let later_config = build(&["--preset", "human-eye-vos", "--config", cfg]);
@@ -145,11 +151,11 @@ fn presets_and_configs_compose_in_command_line_order() {
     let text85 = "[camera]\nfocal_length_mm = 85.0\n";
     assert_eq!(
         later_config,
-        library_kernel(&["human-eye-vos", text85], 41).channels()[0]
+        library_kernel(&["human-eye-vos", text85], 41).planes()[0]
     );
     assert_eq!(
         later_preset,
-        library_kernel(&[text85, "human-eye-vos"], 41).channels()[0]
+        library_kernel(&[text85, "human-eye-vos"], 41).planes()[0]
     );
     assert_ne!(later_config, later_preset);
 }
@@ -174,10 +180,7 @@ fn seed_option_overrides_the_config() {
             .assert()
             .success();
     }
-    let (a, b) = (
-        pfm::read(&out("1.pfm")).unwrap(),
-        pfm::read(&out("2.pfm")).unwrap(),
-    );
+    let (a, b) = (read_pfm(&out("1.pfm")), read_pfm(&out("2.pfm")));
     assert_ne!(a, b);
 }
 
@@ -206,7 +209,7 @@ fn physical_units_use_the_image_width() {
             .arg(&out)
             .assert()
             .success();
-        pfm::read(&out).unwrap().channels.remove(0)
+        read_pfm(&out).planes.remove(0)
     };
     // 36 mm over 3600 px: 10 µm pitch, R = 6 px; over 1800 px, R = 3 px.
     let (wide, narrow) = (run("3600"), run("1800"));
@@ -217,7 +220,7 @@ fn physical_units_use_the_image_width() {
             )],
             101,
         )
-        .channels()[0]
+        .planes()[0]
             .clone()
     };
     for (got, want) in [(wide, px("6px")), (narrow, px("3px"))] {
@@ -487,8 +490,8 @@ fn aperture_presets_write_coloured_kernels() {
     assert!(std::fs::read(&pfm_path)
         .unwrap()
         .starts_with(b"PF\n61 61\n"));
-    let kernel = pfm::read(&pfm_path).unwrap();
-    for plane in &kernel.channels {
+    let kernel = read_pfm(&pfm_path);
+    for plane in &kernel.planes {
         let sum: f64 = plane.iter().map(|&v| f64::from(v)).sum();
         assert!((sum - 1.0).abs() < 1e-5);
     }

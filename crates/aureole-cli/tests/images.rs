@@ -3,9 +3,10 @@
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
-use aureole::io::read::read_image;
-use aureole::io::write::{write_linear, LinearOptions};
 use aureole::{ApplyOptions, Config, Image, Layout, Plan};
+use aureole_io::limits::Limits;
+use aureole_io::read::read_image;
+use aureole_io::write::{write_linear, LinearOptions};
 use predicates::prelude::*;
 
 fn aureole() -> Command {
@@ -30,12 +31,12 @@ fn scene(dir: &Path, name: &str) -> (PathBuf, Image) {
 fn library_result(image: &Image, preset: &str, threshold: f64) -> Image {
     let mut config = Config::default();
     config.apply(aureole::presets::find(preset).unwrap().config().unwrap());
-    let plan = Plan::new(&config, image.width, image.height, None).unwrap();
+    let plan = Plan::for_image(&config, image.width, image.height, None).unwrap();
     let options = ApplyOptions {
-        threshold,
+        threshold: Some(threshold),
         ..ApplyOptions::default()
     };
-    plan.apply(image, &options, &mut |_| {}).unwrap().image
+    plan.apply(image, 1.0, &options, &mut |_| {}).unwrap().image
 }
 
 #[test]
@@ -53,10 +54,10 @@ fn apply_writes_what_the_library_computes() {
         .stderr(
             predicate::str::contains("48x32").and(predicate::str::contains("2 px above 1 cd/m²")),
         );
-    let written = read_image(&out).unwrap().image;
+    let written = read_image(&out, Limits::NONE).unwrap().image;
     assert_eq!(written, library_result(&image, "paper-fig5-both", 1.0));
     // The input is untouched.
-    assert_eq!(read_image(&input).unwrap().image, image);
+    assert_eq!(read_image(&input, Limits::NONE).unwrap().image, image);
 }
 
 #[test]
@@ -73,7 +74,7 @@ fn apply_without_a_camera_uses_the_default_and_says_so() {
         .success()
         .stderr(predicate::str::contains("default camera"));
     assert_eq!(
-        read_image(&out).unwrap().image,
+        read_image(&out, Limits::NONE).unwrap().image,
         library_result(&image, aureole::presets::DEFAULT_PRESET, 0.0)
     );
 }
@@ -118,7 +119,7 @@ fn apply_writes_pictures_and_glare_only_layers() {
         .assert()
         .success()
         .stderr("");
-    let glare = read_image(&glare).unwrap().image;
+    let glare = read_image(&glare, Limits::NONE).unwrap().image;
     let full = library_result(&image, aureole::presets::DEFAULT_PRESET, 0.0);
     for c in 0..3 {
         for i in 0..image.width * image.height {
@@ -147,7 +148,7 @@ fn apply_keeps_luminance_only_files_luminance_only_and_whiteluminance() {
         .assert()
         .success()
         .stderr(predicate::str::contains("621").and(predicate::str::contains("1 px above 1000")));
-    let written = read_image(&out).unwrap().image;
+    let written = read_image(&out, Limits::NONE).unwrap().image;
     assert_eq!(written.layout, Layout::Luminance);
     assert_eq!(written.white_luminance, Some(621.0));
 }
@@ -187,7 +188,11 @@ fn apply_refuses_nan_unless_sanitized() {
         .stderr(predicate::str::contains(
             "2 NaN, infinite or negative samples replaced by 0",
         ));
-    assert!(read_image(&out).unwrap().image.non_finite().is_none());
+    assert!(read_image(&out, Limits::NONE)
+        .unwrap()
+        .image
+        .non_finite()
+        .is_none());
 }
 
 #[test]
@@ -204,7 +209,7 @@ fn demo_writes_a_picture_and_its_linear_scene() {
         .stderr(predicate::str::contains("night street 320x180"));
     let picture = image::open(&png).unwrap();
     assert_eq!((picture.width(), picture.height()), (320, 180));
-    let scene = read_image(&exr).unwrap().image;
+    let scene = read_image(&exr, Limits::NONE).unwrap().image;
     let max = scene.planes.iter().flatten().fold(0f32, |m, &v| m.max(v));
     let min = scene
         .planes
@@ -261,7 +266,7 @@ fn apply_reuses_a_kernel_written_by_psf() {
         .arg(&out)
         .assert()
         .success();
-    let written = read_image(&out).unwrap().image;
+    let written = read_image(&out, Limits::NONE).unwrap().image;
     let expected = library_result(&image, "paper-fig5-both", 0.0);
     for (a, b) in written
         .planes
@@ -301,7 +306,7 @@ fn apply_spreads_by_fft_or_splatting_as_asked_and_says_which() {
             .assert()
             .success()
             .stderr(predicate::str::contains(said));
-        results.push(read_image(&out).unwrap().image);
+        results.push(read_image(&out, Limits::NONE).unwrap().image);
     }
     let scale = 5e4;
     for (a, b) in results[0].planes.iter().zip(&results[1].planes) {

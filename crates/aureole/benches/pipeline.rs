@@ -8,8 +8,8 @@ mod workload;
 use std::hint::black_box;
 use std::time::Duration;
 
-use aureole::convolve::plan::padded_size;
-use aureole::{ApplyOptions, Extent, Plan};
+use aureole::convolve::padded_size;
+use aureole::{ApplyOptions, Cancel, Control, Extent, Plan};
 use criterion::{criterion_group, criterion_main, Criterion};
 use rayon::prelude::*;
 use realfft::num_complex::Complex;
@@ -25,19 +25,20 @@ fn apply(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(20));
     for (name, w, h) in SIZES {
         let image = workload::image(w, h);
-        let plan = Plan::new(&workload::config(), w, h, None).expect("workload plan");
+        let plan = Plan::for_image(&workload::config(), w, h, None).expect("workload plan");
         group.bench_function(name, |b| {
-            b.iter(|| black_box(plan.apply(&image, &ApplyOptions::default(), &mut |_| {})))
+            b.iter(|| black_box(plan.apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})))
         });
         let mut planes = Vec::new();
         group.bench_function(format!("{name}-recycled"), |b| {
             b.iter(|| {
                 let applied = plan
-                    .apply_recycling(
+                    .apply_with(
                         &image,
+                        1.0,
                         &ApplyOptions::default(),
                         std::mem::take(&mut planes),
-                        &mut |_| {},
+                        &mut Control::quiet(&Cancel::new()),
                     )
                     .expect("same size");
                 planes = applied.image.planes;
@@ -176,7 +177,7 @@ fn kernel_build(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(30));
     let (name, w, h) = SIZES[0];
     group.bench_function(name, |b| {
-        b.iter(|| black_box(Plan::new(&workload::config(), w, h, None).expect("plan")))
+        b.iter(|| black_box(Plan::for_image(&workload::config(), w, h, None).expect("plan")))
     });
     group.finish();
 }

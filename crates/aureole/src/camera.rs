@@ -3,8 +3,8 @@
 
 use serde::Deserialize;
 
+use crate::check;
 use crate::error::{Error, Result};
-use crate::psf::check_range;
 
 /// The camera that recorded (or renders) the image. Every field is optional
 /// in a config file; each is needed only by what uses it.
@@ -25,13 +25,13 @@ impl Camera {
     pub fn validate(&self) -> Result<()> {
         let positive = "a finite number above 0";
         if let Some(v) = self.sensor_width_mm {
-            check_range("camera", "sensor_width_mm", v, v > 0.0, positive)?;
+            check::range("camera", "sensor_width_mm", v, v > 0.0, positive)?;
         }
         if let Some(v) = self.focal_length_mm {
-            check_range("camera", "focal_length_mm", v, v > 0.0, positive)?;
+            check::range("camera", "focal_length_mm", v, v > 0.0, positive)?;
         }
         if let Some(v) = self.f_number {
-            check_range(
+            check::range(
                 "camera",
                 "f_number",
                 v,

@@ -10,9 +10,11 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::camera::Camera;
+use crate::check;
+use crate::control::{Cancel, Control};
 use crate::error::{Error, Result};
 use crate::kernel::{self, Extent, Kernel};
-use crate::psf::{check_range, Effect};
+use crate::optics::Effect;
 
 /// What one config file or preset says; unset keys stay `None` so that
 /// files compose.
@@ -45,7 +47,7 @@ impl ConfigFile {
     /// Parses and checks a config text; `source_name` (a file name, or
     /// `preset NAME`) starts every error message, with the line and column.
     pub fn parse(text: &str, source_name: &str) -> Result<ConfigFile> {
-        let located = |span: std::ops::Range<usize>, message: String| {
+        let place = |span: std::ops::Range<usize>, message: String, incomplete: Option<String>| {
             let before = &text[..span.start.min(text.len())];
             let line = before.matches('\n').count() + 1;
             let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
@@ -54,13 +56,15 @@ impl ConfigFile {
                 line,
                 column,
                 message: printable(&message),
+                incomplete_effect: incomplete,
             }
         };
+        let located = |span, message| place(span, message, None);
         let raw: RawFile = toml::from_str(text)
             .map_err(|e| located(e.span().unwrap_or(0..0), with_suggestion(e.message())))?;
 
         if let Some(threshold) = &raw.threshold {
-            check_range(
+            check::range(
                 "config",
                 "threshold",
                 *threshold.get_ref(),
@@ -88,21 +92,15 @@ impl ConfigFile {
                     // Whatever the file holds there is echoed: keep it short.
                     |kind| kind.chars().take(40).collect(),
                 );
-            let effect =
-                Effect::deserialize(toml::Value::Table(table.into_inner())).map_err(|e| {
-                    let mut message = with_suggestion(e.message());
-                    if message.starts_with("missing field") {
-                        if let Some(preset) = crate::presets::example_of(&kind) {
-                            message.push_str(&format!(
-                                "; `aureole presets {preset}` prints a complete {kind} effect"
-                            ));
-                        }
-                    }
-                    located(
-                        key_span(text, &span, &message),
-                        format!("{}: {message}", context(&kind)),
-                    )
-                })?;
+            let effect = Effect::from_table(table.into_inner()).map_err(|e| {
+                let message = with_suggestion(e.message());
+                let incomplete = message.starts_with("missing field").then(|| kind.clone());
+                place(
+                    key_span(text, &span, &message),
+                    format!("{}: {message}", context(&kind)),
+                    incomplete,
+                )
+            })?;
             effect.validate().map_err(|e| {
                 let at = match &e {
                     Error::Parameter { name, .. } => key_span(text, &span, &format!("`{name}`")),
@@ -219,7 +217,13 @@ impl Config {
 
     /// The kernel of the whole optical chain at `extent`.
     pub fn kernel(&self, extent: &Extent) -> Result<Kernel> {
-        kernel::build(&self.camera, &self.effects, self.seed, extent)
+        self.kernel_with(extent, &mut Control::quiet(&Cancel::new()))
+    }
+
+    /// [`Config::kernel`], reporting to `control` and stopping when it is
+    /// cancelled.
+    pub fn kernel_with(&self, extent: &Extent, control: &mut Control) -> Result<Kernel> {
+        kernel::build(&self.camera, &self.effects, self.seed, extent, control)
     }
 }
 
@@ -293,7 +297,7 @@ exponent = 2.0
     fn unknown_effect_types_list_the_types() {
         let e = error("[[effect]]\ntype = \"blom\"\nepsilon = 0.1\n");
         assert!(e.starts_with("my.toml:"), "{e}");
-        for kind in crate::psf::EFFECT_TYPES {
+        for kind in crate::optics::EFFECT_TYPES {
             assert!(e.contains(kind), "{e}");
         }
     }

@@ -3,6 +3,9 @@
 
 use std::path::PathBuf;
 
+use crate::image::BadSamples;
+use crate::memory::{format_bytes, Estimate, Fit};
+
 /// Everything the library can refuse or fail at.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -51,6 +54,9 @@ pub enum Error {
         column: usize,
         /// What is wrong and what is allowed.
         message: String,
+        /// The type of an `[[effect]]` that lacks a required field, so that
+        /// a front end can point at a complete example of it.
+        incomplete_effect: Option<String>,
     },
 
     /// A preset name that is not built in.
@@ -90,19 +96,8 @@ pub enum Error {
         found: (usize, usize),
     },
 
-    /// An output path whose extension names no format we write.
-    #[error("{path}: unknown output extension {extension:?}; allowed: {allowed}")]
-    OutputFormat {
-        /// The output path.
-        path: PathBuf,
-        /// The extension found (empty if none).
-        extension: String,
-        /// The allowed extensions.
-        allowed: &'static str,
-    },
-
-    /// Reading or writing a file failed.
-    #[error("{path}: {}", describe(error))]
+    /// Reading a file (a config) failed.
+    #[error("{path}: {}", describe_io(error))]
     Io {
         /// The file concerned.
         path: PathBuf,
@@ -111,25 +106,35 @@ pub enum Error {
         error: std::io::Error,
     },
 
-    /// A file whose content is not what its format requires.
-    #[error("{path}: {message}")]
-    Decode {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong, and where.
-        message: String,
+    /// A frame holds samples that are not luminance: NaN or infinite, or
+    /// negative.
+    #[error("{} {} samples (luminance must be a finite number of at least 0), the first at column {} row {} (from the top)", found.count, if *negative { "negative" } else { "NaN or infinite" }, found.first.0, found.first.1)]
+    BadSamples {
+        /// How many, and where the first is.
+        found: BadSamples,
+        /// Whether they are negative (which a caller may choose to keep)
+        /// rather than NaN or infinite.
+        negative: bool,
     },
 
-    /// An encoder (PNG, EXR, plot) failed while writing `path`.
-    #[error("{path}: cannot encode {format}: {message}")]
-    Encode {
-        /// The output file.
-        path: PathBuf,
-        /// The format being written.
-        format: &'static str,
-        /// The encoder's message.
-        message: String,
+    /// A run would need more memory than its limit.
+    #[error("needs about {} (peak while {}) but the memory limit is {}{}", format_bytes(needed.bytes), needed.stage, format_bytes(*limit), fits.map(|f| format!("; a kernel of at most {}x{} would need about {}", f.kernel.0, f.kernel.1, format_bytes(f.bytes))).unwrap_or_default())]
+    Memory {
+        /// The estimate, and the stage where it peaks.
+        needed: Estimate,
+        /// The limit, bytes.
+        limit: u64,
+        /// The largest kernel, halving the extent, that would fit; `None`
+        /// when the image alone is too large.
+        fits: Option<Fit>,
+        /// Whether the kernel is built here (and could be capped) rather
+        /// than given ready-made.
+        built: bool,
     },
+
+    /// The caller cancelled the run.
+    #[error("cancelled")]
+    Cancelled,
 }
 
 /// Result with the library's [`Error`].
@@ -168,8 +173,9 @@ pub(crate) fn closest<'a>(
         .map(|(_, c)| c)
 }
 
-/// An I/O failure in a user's words, without the OS error number.
-fn describe(error: &std::io::Error) -> String {
+/// An I/O failure in a user's words, without the OS error number: for
+/// every front end's messages about files.
+pub fn describe_io(error: &std::io::Error) -> String {
     use std::io::ErrorKind as K;
     let words = match error.kind() {
         _ if error.raw_os_error().is_none() => return error.to_string(),

@@ -128,16 +128,12 @@ impl Image {
 
     /// The luminance of every pixel, in file units.
     pub fn luminance(&self) -> Vec<f32> {
-        match self.layout {
-            Layout::Luminance => self.planes[0].clone(),
-            Layout::Rgb => {
-                let [wr, wg, wb] = self.luminance_weights();
-                let (r, g, b) = (&self.planes[0], &self.planes[1], &self.planes[2]);
-                (0..self.width * self.height)
-                    .into_par_iter()
-                    .map(|i| wr * r[i] + wg * g[i] + wb * b[i])
-                    .collect()
-            }
+        match PixelLuminance::of(self) {
+            PixelLuminance::Plane(y) => y.to_vec(),
+            rgb => (0..self.width * self.height)
+                .into_par_iter()
+                .map(|i| rgb.at(i))
+                .collect(),
         }
     }
 
@@ -205,6 +201,31 @@ impl Image {
             }
         }
         count
+    }
+}
+
+/// The luminance of an image's pixels, computed where it is needed rather
+/// than kept as a plane.
+pub(crate) enum PixelLuminance<'a> {
+    Rgb([f32; 3], [&'a [f32]; 3]),
+    Plane(&'a [f32]),
+}
+
+impl<'a> PixelLuminance<'a> {
+    pub fn of(image: &'a Image) -> PixelLuminance<'a> {
+        match (image.layout, image.planes.as_slice()) {
+            (Layout::Rgb, [r, g, b]) => PixelLuminance::Rgb(image.luminance_weights(), [r, g, b]),
+            _ => PixelLuminance::Plane(&image.planes[0]),
+        }
+    }
+
+    /// Y of pixel `i`, in file units: Y = w·RGB for the image's primaries.
+    #[inline]
+    pub fn at(&self, i: usize) -> f32 {
+        match self {
+            PixelLuminance::Rgb([wr, wg, wb], [r, g, b]) => wr * r[i] + wg * g[i] + wb * b[i],
+            PixelLuminance::Plane(y) => y[i],
+        }
     }
 }
 

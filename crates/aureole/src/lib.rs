@@ -5,38 +5,50 @@
 //! scattered in the lens and the emulsion), **corona** (star rays from
 //! diffraction on the stop and on filters) and human-eye **glare** after Vos.
 //! The model is Ďurikovič and Kolchin's, "Physically-Based Model of
-//! Photographic Effects for Night and Day Scenes", read through MODEL.md.
+//! Photographic Effects for Night and Day Scenes", as `docs/physics.md` in
+//! the repository writes it down.
 //!
-//! A PSF is P(r, φ) = (1 − ε) δ(r) + ε f(r, φ); each effect gives ε and f,
-//! and a [`Kernel`] is the PSF averaged over pixel areas with ΣK = 1. A
-//! [`Plan`] holds a kernel and its spectrum for one image size and applies
-//! the camera to any number of images: the light of pixels brighter than the
-//! threshold is spread, the rest stays (MODEL.md §7).
+//! The pipeline, stage by stage:
 //!
-//! Load, plan, apply, save:
+//! - [`optics`]: the physical models of the optical chain (bloom, corona,
+//!   Vos, the aperture with its pupil and spectrum), one module each;
+//! - [`kernel`]: their PSFs as discrete kernels, ΣK = 1 (rasterising,
+//!   composing, diffraction's near field, far field and filter orders);
+//! - [`convolve`]: the engine that spreads planes of light through a
+//!   kernel, behind one trait, in f32 and f64;
+//! - [`pipeline`]: the threshold, the choice between FFT and splatting and
+//!   of the precision, the [`Plan`] of one image size, and the [`Session`]
+//!   that every front end calls.
+//!
+//! This crate reads no image files, draws no plots and writes nothing to a
+//! terminal: `aureole-io` has the files and pictures, `aureole-cli` the
+//! command line.
+//!
+//! A frame sequence through one camera:
 //!
 //! ```
-//! use aureole::io::{read::read_image, write::{write_linear, LinearOptions}};
-//! use aureole::{presets, ApplyOptions, Config, Plan};
-//!
-//! # let dir = tempfile::tempdir().unwrap();
-//! # let night = dir.path().join("night.exr");
-//! # write_linear(&night, &aureole::demo::night_street(320, 180), LinearOptions::default())?;
-//! // An HDR image whose pixels are cd/m² (or whose whiteLuminance says how many).
-//! let image = read_image(&night)?.image;
-//! let scale = image.white_luminance.map_or(1.0, f64::from);
+//! use aureole::{presets, ApplyOptions, Config, Frame, FrameOptions, Image, Layout, Session};
 //!
 //! // The camera: presets and config files compose like on the command line.
 //! let mut config = Config::default();
 //! config.apply(presets::find("paper-fig5-both")?.config()?);
 //!
-//! // Built once per image size; light from any pixel can reach the whole frame.
-//! let plan = Plan::new(&config, image.width, image.height, None)?;
-//! let options = ApplyOptions { threshold: 100.0, scale, ..ApplyOptions::default() };
-//! let result = plan.apply(&image, &options, &mut |done| eprintln!("{:.0} %", done * 100.0))?;
-//! assert!(result.energy_out <= result.energy_in * (1.0 + 1e-6));
-//!
-//! write_linear(&dir.path().join("camera.exr"), &result.image, LinearOptions::default())?;
+//! // A session builds the kernel once per image size and reuses it.
+//! let mut session = Session::new(config).with_memory_limit(2 << 30);
+//! for x in [40, 50, 60] {
+//!     // An HDR image in cd/m²: a lamp moving over a dim street.
+//!     let mut image = Image::filled(160, 90, Layout::Rgb, 0.05);
+//!     for plane in &mut image.planes {
+//!         plane[45 * 160 + x] = 5e4;
+//!     }
+//!     let frame = Frame::new(image, &FrameOptions::default())?;
+//!     let options = ApplyOptions { threshold: Some(100.0), ..ApplyOptions::default() };
+//!     let applied = session.apply(&frame, &options, &mut |stage, done| {
+//!         eprintln!("{} {:.0} %", stage.describe(), done * 100.0);
+//!     })?;
+//!     assert!(applied.energy_out <= applied.energy_in * (1.0 + 1e-6));
+//!     session.recycle(applied.image);
+//! }
 //! # Ok::<(), aureole::Error>(())
 //! ```
 //!
@@ -52,39 +64,31 @@
 //! # Ok::<(), aureole::Error>(())
 //! ```
 
-pub mod apply;
+#![deny(unsafe_code)]
+#![warn(missing_docs)]
+
 pub mod camera;
+mod check;
 pub mod config;
+pub mod control;
 pub mod convolve;
-pub mod demo;
-pub mod display;
 pub mod error;
-#[doc(hidden)]
-pub mod fuzzing;
 pub mod image;
-pub mod io;
 pub mod kernel;
 pub mod memory;
-pub mod plot;
+pub mod optics;
+pub mod pipeline;
 pub mod presets;
-pub mod psf;
 pub mod units;
 
-pub use apply::{Applied, ApplyOptions, Method, Plan};
 pub use camera::Camera;
 pub use config::{Config, ConfigFile};
+pub use control::{Cancel, Control};
 pub use error::{Error, Result};
 pub use image::{Image, Layout};
 pub use kernel::{Extent, Kernel};
-pub use psf::{Aperture, Bloom, Corona, Effect, Filter, Vos};
+pub use optics::{Aperture, Bloom, Corona, Effect, Filter, Vos};
+pub use pipeline::{
+    Applied, ApplyOptions, Frame, FrameOptions, Method, Plan, ScaleSource, Session, Stage,
+};
 pub use units::{Length, Unit};
-
-/// The README's Rust examples, run as doctests so that they stay true.
-#[doc = include_str!("../../../README.md")]
-#[cfg(doctest)]
-pub struct ReadmeDoctests;
-
-/// The guide's Rust example, run as a doctest for the same reason.
-#[doc = include_str!("../../../docs/guide.md")]
-#[cfg(doctest)]
-pub struct GuideDoctests;

@@ -1,11 +1,11 @@
 //! How much memory a run will take, known before anything large is
-//! allocated, and how much the machine can give.
+//! allocated. How much a front end may use is the front end's to say.
 
 use crate::config::Config;
-use crate::convolve::plan::padded_size;
-use crate::error::{Error, Result};
+use crate::convolve::padded_size;
+use crate::error::Result;
 use crate::kernel::Extent;
-use crate::psf::Effect;
+use crate::optics::Effect;
 
 /// The peak memory of applying a camera to one image, in bytes, and the
 /// stage where it peaks.
@@ -17,6 +17,15 @@ pub struct Estimate {
     pub stage: &'static str,
 }
 
+/// A smaller kernel that would fit a memory limit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fit {
+    /// Its extent, width × height.
+    pub kernel: (usize, usize),
+    /// The bytes the run would then need.
+    pub bytes: u64,
+}
+
 /// What a run works on: the image and the kernel it will build (or load).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Workload {
@@ -25,23 +34,24 @@ pub struct Workload {
     /// Image height in pixels.
     pub height: usize,
     /// Colour planes of the image (1 or 3), alpha not counted.
-    pub channels: usize,
+    pub planes: usize,
     /// Whether the image has an alpha plane.
     pub alpha: bool,
     /// Kernel extent in pixels.
     pub kernel: (usize, usize),
-    /// Kernel channels (1, or 3 for a coloured kernel).
-    pub kernel_channels: usize,
+    /// Kernel planes (1, or 3 for a coloured kernel).
+    pub kernel_planes: usize,
 }
 
 impl Workload {
-    /// The workload of `config` on a `width`×`height` image of `channels`
-    /// planes, with the kernel extent [`crate::Plan::new`] would choose.
+    /// The workload of `config` on a `width`×`height` image of `planes`
+    /// colour planes, with the kernel extent [`crate::Plan::for_image`]
+    /// would choose.
     pub fn of_config(
         config: &Config,
         width: usize,
         height: usize,
-        channels: usize,
+        planes: usize,
         alpha: bool,
         max_extent: Option<(usize, usize)>,
     ) -> Result<Workload> {
@@ -49,15 +59,10 @@ impl Workload {
         Ok(Workload {
             width,
             height,
-            channels,
+            planes,
             alpha,
             kernel: (extent.width, extent.height),
-            kernel_channels: config
-                .effects
-                .iter()
-                .map(Effect::channels)
-                .max()
-                .unwrap_or(1),
+            kernel_planes: config.effects.iter().map(Effect::planes).max().unwrap_or(1),
         })
     }
 
@@ -71,11 +76,11 @@ impl Workload {
         const COMPLEX: u64 = 8;
         const BASELINE: u64 = 16 << 20;
         let pixels = self.width as u64 * self.height as u64;
-        let planes = self.channels as u64 + u64::from(self.alpha);
+        let planes = self.planes as u64 + u64::from(self.alpha);
         let image = pixels * planes * 4;
         let (kw, kh) = (self.kernel.0 as u64, self.kernel.1 as u64);
         let layer = kw * kh * 4;
-        let kernel = layer * self.kernel_channels as u64;
+        let kernel = layer * self.kernel_planes as u64;
 
         // Building: the chain so far and the next effect's layers; to
         // compose them, the zero-padded transform of one, the row spectra
@@ -86,11 +91,8 @@ impl Workload {
         let mut building = 0u64;
         let mut chain = 0u64;
         for (index, effect) in effects.iter().enumerate() {
-            let layers = effect.channels() as u64;
-            let pattern = match effect {
-                Effect::Aperture(_) => 4 * layer * layers,
-                _ => layer * layers + layer / 2,
-            };
+            let layers = effect.planes() as u64;
+            let pattern = effect.building_bytes(layer);
             let composing = if index > 0 {
                 compose + layer * chain.max(layers)
             } else {
@@ -105,8 +107,8 @@ impl Workload {
         // stay until the result is written.
         let (px, py) = padded_size(self.kernel.0, self.kernel.1, self.width, self.height);
         let half = px as u64 / 2 + 1;
-        let spectrum = half * py as u64 * COMPLEX * self.kernel_channels as u64;
-        let rows = half * self.height as u64 * COMPLEX * self.channels as u64;
+        let spectrum = half * py as u64 * COMPLEX * self.kernel_planes as u64;
+        let rows = half * self.height as u64 * COMPLEX * self.planes as u64;
         let plan = kernel + spectrum + rows + image;
         let stages = [
             ("reading", 2 * image),
@@ -129,54 +131,34 @@ impl Workload {
             stage,
         }
     }
-}
 
-/// The memory the system can give now (Linux: `MemAvailable` of
-/// /proc/meminfo), if known.
-pub fn available() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
-}
-
-/// The default memory limit: three quarters of what the system can give
-/// now (leaving room for the rest of the machine), or 8 GiB where that is
-/// unknown.
-pub fn default_limit() -> u64 {
-    available().map_or(8 << 30, |bytes| bytes / 4 * 3)
-}
-
-/// Parses a memory size: a number with an optional unit, K, M, G or T
-/// (powers of 1024, with or without `iB`/`B`), e.g. `512M`, `1.5G`, `2GiB`.
-pub fn parse_bytes(text: &str) -> Result<u64> {
-    let refuse = |reason: &'static str| Error::Parameter {
-        effect: "--max-memory".into(),
-        name: "size",
-        value: text.to_string(),
-        allowed: reason,
-    };
-    let trimmed = text.trim();
-    let split = trimmed
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .unwrap_or(trimmed.len());
-    let (number, unit) = trimmed.split_at(split);
-    let value: f64 = number
-        .parse()
-        .map_err(|_| refuse("a number of bytes with an optional unit K, M, G or T, e.g. 4G"))?;
-    let shift = match unit.trim().to_ascii_uppercase().as_str() {
-        "" | "B" => 0,
-        "K" | "KB" | "KIB" => 10,
-        "M" | "MB" | "MIB" => 20,
-        "G" | "GB" | "GIB" => 30,
-        "T" | "TB" | "TIB" => 40,
-        _ => return Err(refuse("a unit among K, M, G, T (powers of 1024), e.g. 4G")),
-    };
-    let bytes = value * (1u64 << shift) as f64;
-    if !(bytes >= 1.0 && bytes < u64::MAX as f64) {
-        return Err(refuse("at least 1 byte, e.g. 512M or 4G"));
+    /// The largest kernel, halving the extent from `start` (width, height),
+    /// with which the run would fit in `limit` bytes; `None` when even a
+    /// small one would not.
+    pub fn largest_fitting(
+        &self,
+        effects: &[Effect],
+        start: (usize, usize),
+        limit: u64,
+    ) -> Option<Fit> {
+        let (mut w, mut h) = start;
+        while w > 16 && h > 16 {
+            w /= 2;
+            h /= 2;
+            let smaller = Workload {
+                kernel: (w.min(self.kernel.0), h.min(self.kernel.1)),
+                ..*self
+            };
+            let bytes = smaller.estimate(effects).bytes;
+            if bytes <= limit {
+                return Some(Fit {
+                    kernel: (w, h),
+                    bytes,
+                });
+            }
+        }
+        None
     }
-    Ok(bytes as u64)
 }
 
 /// Bytes in binary units for people, e.g. `1.2 GiB`.
@@ -200,14 +182,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn sizes_parse_in_binary_units() {
-        assert_eq!(parse_bytes("512M").unwrap(), 512 << 20);
-        assert_eq!(parse_bytes("1.5G").unwrap(), 3 << 29);
-        assert_eq!(parse_bytes("2GiB").unwrap(), 2 << 30);
-        assert_eq!(parse_bytes("1000").unwrap(), 1000);
-        for bad in ["", "G", "-1G", "4X", "0"] {
-            assert!(parse_bytes(bad).is_err(), "{bad}");
-        }
+    fn bytes_are_shown_in_binary_units() {
         assert_eq!(format_bytes(3 << 29), "1.5 GiB");
         assert_eq!(format_bytes(12), "12 B");
     }

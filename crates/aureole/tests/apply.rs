@@ -1,9 +1,13 @@
 //! The pipeline against its definition: linear convolution with zero outside
 //! the frame, the threshold split O = I·[Y ≤ T] + K ⊛ (I·[Y > T]), energy.
 
-use aureole::apply::spread_fraction;
-use aureole::convolve::plan::{Convolver, Input};
-use aureole::{ApplyOptions, Bloom, Config, Effect, Image, Kernel, Layout, Length, Method, Plan};
+use aureole::convolve::single::Convolver;
+use aureole::convolve::{Centre, Engine, Spread, Term};
+use aureole::pipeline::spread_fraction;
+use aureole::{
+    ApplyOptions, Bloom, Cancel, Config, Control, Effect, Image, Kernel, Layout, Length, Method,
+    Plan,
+};
 
 fn pseudo_random(n: usize, seed: u64) -> Vec<f32> {
     let mut state = seed
@@ -17,6 +21,20 @@ fn pseudo_random(n: usize, seed: u64) -> Vec<f32> {
             ((state >> 40) as f32) / (1u64 << 24) as f32
         })
         .collect()
+}
+
+/// The f32 engine for `kernel` on `w`×`h` planes.
+fn convolver(kernel: &Kernel, w: usize, h: usize, centre: Centre) -> Convolver {
+    let planes: Vec<&[f32]> = kernel.planes().iter().map(Vec::as_slice).collect();
+    let size = (kernel.width(), kernel.height());
+    let mut control = Control::quiet(&Cancel::new());
+    Convolver::new(&planes, size, w, h, centre, &mut control).unwrap()
+}
+
+/// `plane` through kernel plane `k` of `convolver`.
+fn convolve(convolver: &Convolver, plane: &[f32], k: usize) -> Vec<f32> {
+    let mut control = Control::quiet(&Cancel::new());
+    convolver.convolve(plane, k, &mut control).unwrap()
 }
 
 /// out(x, y) = Σ I(p) K(x − p): the definition, zero outside the frame.
@@ -50,7 +68,7 @@ fn fft_convolution_equals_direct_convolution() {
     ] {
         let kernel = Kernel::from_planes(kw, kh, vec![pseudo_random(kw * kh, 7)]).unwrap();
         let image = pseudo_random(w * h, 3);
-        let fast = Convolver::new(&kernel, w, h).convolve(&image, 0);
+        let fast = convolve(&convolver(&kernel, w, h, Centre::Include), &image, 0);
         assert_direct(&fast, &image, w, h, &kernel);
     }
 }
@@ -77,10 +95,10 @@ fn full_frame_kernels_convolve_exactly_with_pruned_columns() {
         let (kw, kh) = (2 * w - 1, 2 * h - 1);
         let kernel = Kernel::from_planes(kw, kh, vec![pseudo_random(kw * kh, 11)]).unwrap();
         let image = pseudo_random(w * h, 5);
-        let convolver = Convolver::new(&kernel, w, h);
-        let (_, py) = convolver.padded_size();
+        let engine = convolver(&kernel, w, h, Centre::Include);
+        let (_, py) = engine.padded_size();
         assert!(py >= kh, "{w}x{h}: period {py}");
-        assert_direct(&convolver.convolve(&image, 0), &image, w, h, &kernel);
+        assert_direct(&convolve(&engine, &image, 0), &image, w, h, &kernel);
     }
 }
 
@@ -90,26 +108,35 @@ fn planes_convolved_together_match_planes_convolved_alone() {
     let planes: Vec<Vec<f32>> = (0..3).map(|c| pseudo_random(w * h, 20 + c)).collect();
     let kernels: Vec<Vec<f32>> = (0..3).map(|c| pseudo_random(41 * 25, 30 + c)).collect();
     let kernel = Kernel::from_planes(41, 25, kernels).unwrap();
-    let convolver = Convolver::new(&kernel, w, h);
-    let inputs: Vec<Input> = planes
+    let engine = convolver(&kernel, w, h, Centre::Leave);
+    let fractions = pseudo_random(w * h, 50);
+    let spreads: Vec<Spread> = planes
         .iter()
         .enumerate()
-        .map(|(c, plane)| Input {
+        .map(|(c, plane)| Spread {
             plane,
-            channel: 2 - c,
-            fractions: None,
-            centre: 0.25 * c as f32,
+            fractions: (c == 1).then_some(fractions.as_slice()),
+            terms: vec![Term {
+                kernel_plane: 2 - c,
+                weight: 1.0,
+            }],
         })
         .collect();
+    let mut control = Control::quiet(&Cancel::new());
     // Recycled planes of the wrong size and number are resized.
     let recycled = vec![vec![7.0; 5]; 4];
-    let together = convolver.convolve_all(&inputs, recycled, &mut |_| {});
+    let together = engine.spread(&spreads, recycled, &mut control).unwrap();
     assert_eq!(together.len(), 3);
-    for (input, out) in inputs.iter().zip(&together) {
-        let alone = convolver.convolve(input.plane, input.channel);
-        for ((t, a), v) in out.iter().zip(&alone).zip(input.plane) {
-            assert_eq!(*t, a + input.centre * v);
-        }
+    for (spread, out) in spreads.iter().zip(&together) {
+        let alone = engine
+            .spread(std::slice::from_ref(spread), Vec::new(), &mut control)
+            .unwrap();
+        assert_eq!(out, &alone[0]);
+    }
+    // The centre weight the engine left out is applied exactly.
+    let whole = convolve(&convolver(&kernel, w, h, Centre::Include), &planes[0], 2);
+    for (a, b) in together[0].iter().zip(&whole) {
+        assert!((a - b).abs() <= 1e-5 * b.abs().max(1.0), "{a} vs {b}");
     }
 }
 
@@ -121,16 +148,17 @@ fn a_recycled_result_gives_the_same_bytes_as_a_fresh_one() {
         plane[300 + 7 * i] = 5e4;
         plane[611] = 2e3;
     }
-    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+    let plan = Plan::for_image(&paper_config(), w, h, None).unwrap();
     for threshold in [0.0, 1.0, 1e9] {
         let options = ApplyOptions {
-            threshold,
+            threshold: Some(threshold),
             ..ApplyOptions::default()
         };
-        let fresh = plan.apply(&image, &options, &mut |_| {}).unwrap();
+        let fresh = plan.apply(&image, 1.0, &options, &mut |_| {}).unwrap();
         let previous = vec![vec![f32::NAN; w * h]; 3];
+        let mut control = Control::quiet(&Cancel::new());
         let recycled = plan
-            .apply_recycling(&image, &options, previous, &mut |_| {})
+            .apply_with(&image, 1.0, &options, previous, &mut control)
             .unwrap();
         assert_eq!(fresh.image.planes, recycled.image.planes, "T = {threshold}");
     }
@@ -161,12 +189,12 @@ fn paper_config() -> Config {
 #[test]
 fn a_single_bright_pixel_reproduces_the_kernel() {
     let (w, h) = (48, 33);
-    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+    let plan = Plan::for_image(&paper_config(), w, h, None).unwrap();
     let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
     let (sx, sy) = (20, 13);
     image.planes[0][sy * w + sx] = 1000.0;
     let out = plan
-        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})
         .unwrap()
         .image;
     let kernel = plan.kernel();
@@ -190,7 +218,7 @@ fn energy_is_conserved_when_the_glare_stays_in_the_frame() {
     // β = 4, R = 2 px, capped at 21×21: every source 10 px from the edges keeps
     // all its light in the frame.
     let (w, h) = (64, 50);
-    let plan = Plan::new(&bloom_config(0.4, 4.0, 2.0), w, h, Some((21, 21))).unwrap();
+    let plan = Plan::for_image(&bloom_config(0.4, 4.0, 2.0), w, h, Some((21, 21))).unwrap();
     let mut image = Image::filled(w, h, Layout::Rgb, 0.0);
     let values = pseudo_random(w * h, 11);
     for plane in &mut image.planes {
@@ -201,7 +229,7 @@ fn energy_is_conserved_when_the_glare_stays_in_the_frame() {
         }
     }
     let applied = plan
-        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})
         .unwrap();
     assert!((applied.energy_out / applied.energy_in - 1.0).abs() < 1e-5);
     for (out, input) in applied.image.planes.iter().zip(&image.planes) {
@@ -216,11 +244,11 @@ fn energy_is_conserved_when_the_glare_stays_in_the_frame() {
 #[test]
 fn light_that_leaves_the_frame_is_lost_and_only_that() {
     let (w, h) = (40, 30);
-    let plan = Plan::new(&bloom_config(0.5, 2.0, 6.0), w, h, None).unwrap();
+    let plan = Plan::for_image(&bloom_config(0.5, 2.0, 6.0), w, h, None).unwrap();
     let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
     image.planes[0][0] = 100.0; // a corner: much of its glare leaves the frame
     let applied = plan
-        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})
         .unwrap();
     let kernel = plan.kernel();
     let inside: f64 = (0..h)
@@ -234,7 +262,7 @@ fn light_that_leaves_the_frame_is_lost_and_only_that() {
 #[test]
 fn pixels_at_or_below_the_threshold_pass_bit_identical() {
     let (w, h) = (31, 23);
-    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+    let plan = Plan::for_image(&paper_config(), w, h, None).unwrap();
     let mut image = Image::filled(w, h, Layout::Rgb, 0.0);
     let values = pseudo_random(w * h * 3, 5);
     for (c, plane) in image.planes.iter_mut().enumerate() {
@@ -243,10 +271,10 @@ fn pixels_at_or_below_the_threshold_pass_bit_identical() {
         }
     }
     let options = ApplyOptions {
-        threshold: 60.0,
+        threshold: Some(60.0),
         ..ApplyOptions::default()
     };
-    let applied = plan.apply(&image, &options, &mut |_| {}).unwrap();
+    let applied = plan.apply(&image, 1.0, &options, &mut |_| {}).unwrap();
     assert_eq!(applied.spread_pixels, 0);
     assert_eq!(applied.image, image);
 }
@@ -254,14 +282,17 @@ fn pixels_at_or_below_the_threshold_pass_bit_identical() {
 #[test]
 fn dim_pixels_keep_their_light_and_only_receive_glare() {
     let (w, h) = (40, 40);
-    let plan = Plan::new(&bloom_config(0.2, 3.0, 2.0), w, h, Some((9, 9))).unwrap();
+    let plan = Plan::for_image(&bloom_config(0.2, 3.0, 2.0), w, h, Some((9, 9))).unwrap();
     let mut image = Image::filled(w, h, Layout::Luminance, 1.0);
     image.planes[0][20 * w + 20] = 1e4;
     let options = ApplyOptions {
-        threshold: 10.0,
+        threshold: Some(10.0),
         ..ApplyOptions::default()
     };
-    let out = plan.apply(&image, &options, &mut |_| {}).unwrap().image;
+    let out = plan
+        .apply(&image, 1.0, &options, &mut |_| {})
+        .unwrap()
+        .image;
     // Beyond the 9×9 kernel's reach the dim pixels keep their light: all
     // they get is f32 round-off, under 10⁻⁸ of the source.
     for y in 0..h {
@@ -278,13 +309,13 @@ fn dim_pixels_keep_their_light_and_only_receive_glare() {
 #[test]
 fn no_wrap_around_a_source_at_the_left_edge_never_lights_the_right_edge() {
     let (w, h) = (128, 40);
-    let plan = Plan::new(&bloom_config(0.5, 2.0, 3.0), w, h, Some((41, 41))).unwrap();
+    let plan = Plan::for_image(&bloom_config(0.5, 2.0, 3.0), w, h, Some((41, 41))).unwrap();
     let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
     for y in 0..h {
         image.planes[0][y * w] = 1e5;
     }
     let out = plan
-        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})
         .unwrap()
         .image;
     for y in 0..h {
@@ -304,11 +335,11 @@ fn no_wrap_around_a_source_at_the_left_edge_never_lights_the_right_edge() {
 #[test]
 fn glare_only_is_what_the_camera_adds() {
     let (w, h) = (30, 20);
-    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
+    let plan = Plan::for_image(&paper_config(), w, h, None).unwrap();
     let mut image = Image::filled(w, h, Layout::Rgb, 0.5);
     image.planes[1][10 * w + 12] = 5e4;
     let full = plan
-        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})
         .unwrap()
         .image;
     let glare_options = ApplyOptions {
@@ -316,7 +347,7 @@ fn glare_only_is_what_the_camera_adds() {
         ..ApplyOptions::default()
     };
     let glare = plan
-        .apply(&image, &glare_options, &mut |_| {})
+        .apply(&image, 1.0, &glare_options, &mut |_| {})
         .unwrap()
         .image;
     for c in 0..3 {
@@ -344,10 +375,10 @@ fn the_soft_knee_rises_smoothly_from_the_threshold() {
 
 #[test]
 fn a_plan_refuses_an_image_of_another_size() {
-    let plan = Plan::new(&paper_config(), 10, 10, None).unwrap();
+    let plan = Plan::for_image(&paper_config(), 10, 10, None).unwrap();
     let image = Image::filled(11, 10, Layout::Luminance, 1.0);
     let e = plan
-        .apply(&image, &ApplyOptions::default(), &mut |_| {})
+        .apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})
         .unwrap_err()
         .to_string();
     assert!(e.contains("11x10") && e.contains("10x10"), "{e}");
@@ -356,16 +387,15 @@ fn a_plan_refuses_an_image_of_another_size() {
 #[test]
 fn input_scale_sets_what_the_threshold_means() {
     let (w, h) = (16, 16);
-    let plan = Plan::new(&bloom_config(0.3, 2.0, 2.0), w, h, None).unwrap();
+    let plan = Plan::for_image(&bloom_config(0.3, 2.0, 2.0), w, h, None).unwrap();
     let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
     image.planes[0][8 * w + 8] = 2.0; // 2 units = 1242 cd/m² at 621 cd/m² per unit
     let spread = |scale: f64| {
         let options = ApplyOptions {
-            threshold: 1000.0,
-            scale,
+            threshold: Some(1000.0),
             ..ApplyOptions::default()
         };
-        plan.apply(&image, &options, &mut |_| {})
+        plan.apply(&image, scale, &options, &mut |_| {})
             .unwrap()
             .spread_pixels
     };
@@ -397,18 +427,18 @@ fn splatting_gives_the_fft_result() {
     for layout in [Layout::Rgb, Layout::Luminance] {
         let image = night(w, h, layout);
         for plan in [
-            Plan::new(&paper_config(), w, h, None).unwrap(),
-            Plan::from_kernel(coloured.clone(), w, h),
+            Plan::for_image(&paper_config(), w, h, None).unwrap(),
+            Plan::with_kernel(coloured.clone(), w, h).unwrap(),
         ] {
             for (threshold, knee) in [(0.0, 0.0), (100.0, 0.0), (100.0, 2.0)] {
                 let run = |method| {
                     let options = ApplyOptions {
-                        threshold,
+                        threshold: Some(threshold),
                         knee,
                         method,
                         ..ApplyOptions::default()
                     };
-                    plan.apply(&image, &options, &mut |_| {}).unwrap()
+                    plan.apply(&image, 1.0, &options, &mut |_| {}).unwrap()
                 };
                 let (fft, splat) = (run(Method::Fft), run(Method::Splat));
                 assert_eq!((fft.method, splat.method), (Method::Fft, Method::Splat));
@@ -431,16 +461,20 @@ fn splatting_gives_the_fft_result() {
 #[test]
 fn auto_splats_a_few_lights_and_transforms_a_bright_frame() {
     let (w, h) = (64, 40);
-    let capped = Plan::new(&paper_config(), w, h, Some((9, 9))).unwrap();
+    let capped = Plan::for_image(&paper_config(), w, h, Some((9, 9))).unwrap();
     let options = |threshold| ApplyOptions {
-        threshold,
+        threshold: Some(threshold),
         ..ApplyOptions::default()
     };
     let lights = night(w, h, Layout::Rgb);
-    let few = capped.apply(&lights, &options(100.0), &mut |_| {}).unwrap();
+    let few = capped
+        .apply(&lights, 1.0, &options(100.0), &mut |_| {})
+        .unwrap();
     assert_eq!((few.spread_pixels, few.method), (3, Method::Splat));
-    let full = Plan::new(&paper_config(), w, h, None).unwrap();
-    let all = full.apply(&lights, &options(0.0), &mut |_| {}).unwrap();
+    let full = Plan::for_image(&paper_config(), w, h, None).unwrap();
+    let all = full
+        .apply(&lights, 1.0, &options(0.0), &mut |_| {})
+        .unwrap();
     assert_eq!((all.spread_pixels, all.method), (w * h, Method::Fft));
 }
 
@@ -450,7 +484,7 @@ fn kernels_and_results_have_the_same_bytes_with_any_number_of_threads() {
     let image = night(w, h, Layout::Rgb);
     for method in [Method::Fft, Method::Splat] {
         let options = ApplyOptions {
-            threshold: 100.0,
+            threshold: Some(100.0),
             knee: 0.5,
             method,
             ..ApplyOptions::default()
@@ -461,8 +495,8 @@ fn kernels_and_results_have_the_same_bytes_with_any_number_of_threads() {
                 .build()
                 .unwrap()
                 .install(|| {
-                    let plan = Plan::new(&paper_config(), w, h, None).unwrap();
-                    let applied = plan.apply(&image, &options, &mut |_| {}).unwrap();
+                    let plan = Plan::for_image(&paper_config(), w, h, None).unwrap();
+                    let applied = plan.apply(&image, 1.0, &options, &mut |_| {}).unwrap();
                     (
                         plan.kernel().clone(),
                         applied.image.planes,
@@ -511,20 +545,20 @@ fn a_sun_beside_a_night_sky_keeps_its_dark_pixels_within_one_percent() {
     let image = sun_over_night_sky(w, h);
     // A tight bloom, so that far from the sun the sky stays dark and only
     // round-off could lift it.
-    let plan = Plan::new(&bloom_config(0.05, 4.0, 1.0), w, h, None).unwrap();
+    let plan = Plan::for_image(&bloom_config(0.05, 4.0, 1.0), w, h, None).unwrap();
     let options = ApplyOptions {
         method: Method::Fft,
         ..ApplyOptions::default()
     };
-    let applied = plan.apply(&image, &options, &mut |_| {}).unwrap();
+    let applied = plan.apply(&image, 1.0, &options, &mut |_| {}).unwrap();
     assert!(applied.double, "the range check did not choose f64");
     let mut worst = 0.0f64;
     for (c, plane) in image.planes.iter().enumerate() {
-        let channel = c.min(plan.kernel().channels().len() - 1);
+        let channel = c.min(plan.kernel().planes().len() - 1);
         let single = Kernel::from_planes(
             plan.kernel().width(),
             plan.kernel().height(),
-            vec![plan.kernel().channels()[channel].clone()],
+            vec![plan.kernel().planes()[channel].clone()],
         )
         .unwrap();
         let reference = direct(plane, w, h, &single);
@@ -535,13 +569,7 @@ fn a_sun_beside_a_night_sky_keeps_its_dark_pixels_within_one_percent() {
         ));
 
         // The f32 route alone drowns them: the check above has work to do.
-        let centre = single.at(0, 0, 0);
-        let f32_route: Vec<f32> = Convolver::without_centre(&single, w, h)
-            .convolve(plane, 0)
-            .iter()
-            .zip(plane)
-            .map(|(s, v)| s + centre * v)
-            .collect();
+        let f32_route = convolve(&convolver(&single, w, h, Centre::Leave), plane, 0);
         let drowned = worst_dark_error(&f32_route, &reference, plane);
         eprintln!(
             "f32 alone: dark pixels off by up to {:.0} %",
@@ -555,7 +583,7 @@ fn a_sun_beside_a_night_sky_keeps_its_dark_pixels_within_one_percent() {
         method: Method::Splat,
         ..ApplyOptions::default()
     };
-    let splatted = plan.apply(&image, &options, &mut |_| {}).unwrap();
+    let splatted = plan.apply(&image, 1.0, &options, &mut |_| {}).unwrap();
     for (a, b) in splatted.image.planes[0]
         .iter()
         .zip(&applied.image.planes[0])
@@ -582,13 +610,8 @@ fn f32_round_off_stays_below_what_the_range_check_assumes() {
                 .kernel(&aureole::Extent::for_image(w, h).unwrap())
                 .unwrap();
             let centre = kernel.at(0, 0, 0);
-            let convolver = Convolver::without_centre(&kernel, w, h);
-            let fast: Vec<f32> = convolver
-                .convolve(&plane, 0)
-                .iter()
-                .zip(&plane)
-                .map(|(s, v)| s + centre * v)
-                .collect();
+            let engine = convolver(&kernel, w, h, Centre::Leave);
+            let fast = convolve(&engine, &plane, 0);
             let reference = direct(&plane, w, h, &kernel);
             let error = fast
                 .iter()
@@ -603,7 +626,7 @@ fn f32_round_off_stays_below_what_the_range_check_assumes() {
                 .sum::<f64>()
                 .sqrt();
             let moved = 1.0 - f64::from(centre);
-            let estimate = aureole::apply::f32_round_off(l2, moved, convolver.padded_size());
+            let estimate = aureole::pipeline::f32_round_off(l2, moved, engine.padded_size());
             eprintln!("{name}: dark error {error:.2e}, estimate {estimate:.2e}");
             assert!(error < estimate, "{name}: {error:e} > {estimate:e}");
         }

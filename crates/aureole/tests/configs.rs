@@ -36,7 +36,7 @@ fn every_recipe_builds_a_kernel_that_sums_to_one() {
         let kernel = config
             .kernel(&Extent::new(65, 65).unwrap().with_image_width(1000))
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        for channel in 0..kernel.channels().len() {
+        for channel in 0..kernel.planes().len() {
             let sum = kernel.sum(channel);
             assert!((sum - 1.0).abs() < 1e-5, "{}: ΣK = {sum}", path.display());
         }

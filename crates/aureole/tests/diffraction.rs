@@ -1,13 +1,13 @@
 //! Diffraction kernels against the closed-form results of optics
-//! (paper §2, MODEL.md §6).
+//! (paper §2, docs/physics.md §6).
 
 use std::f64::consts::TAU;
 
+use aureole::kernel::diffraction_kernel;
 use aureole::kernel::profile::{bilinear, radial_profile};
-use aureole::kernel::{diffraction_kernel, Light};
-use aureole::psf::aperture::Optics;
-use aureole::psf::pupil::Pupil;
-use aureole::psf::spectrum::mean_wavelengths;
+use aureole::optics::aperture::pupil::Pupil;
+use aureole::optics::aperture::spectrum::{mean_wavelengths, Light};
+use aureole::optics::aperture::Optics;
 use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel};
 
 const F: f64 = 50.0; // focal length, mm
@@ -88,7 +88,8 @@ fn circular_stop_has_its_first_dark_ring_at_1_22_lambda_n() {
         Light::Monochrome(GREEN),
         &Extent::new(81, 81).unwrap(),
         pitch,
-    );
+    )
+    .unwrap();
     let profile = radial_profile(&kernel, 0);
     let i = local_minima(&profile)[0];
     // Sub-pixel minimum by a parabola through the three rings around it.
@@ -112,7 +113,8 @@ fn single_slit_has_sinc_squared_zeros_at_m_lambda_f_over_e() {
         Light::Monochrome(GREEN),
         &Extent::new(101, 9).unwrap(),
         pitch,
-    );
+    )
+    .unwrap();
     let values = row(&kernel, 0);
     assert_eq!(local_minima(&values), vec![10, 20, 30, 40]);
     // Averaged over a pixel (a tenth of the period), a zero of sinc² keeps
@@ -136,7 +138,8 @@ fn n_slits_have_principal_maxima_at_m_lambda_f_over_d_and_n_minus_2_between() {
         Light::Monochrome(GREEN),
         &Extent::new(451, 5).unwrap(),
         pitch,
-    );
+    )
+    .unwrap();
     let values = row(&kernel, 0);
     let maxima = local_maxima(&values);
     let principal: Vec<usize> = maxima
@@ -169,11 +172,11 @@ fn many_random_equal_holes_give_the_single_hole_pattern() {
     // The Airy zero of one hole: 1.22 λ f / 2a = 0.335 mm, 16.8 px.
     let (pitch, extent) = (0.02, Extent::new(81, 81).unwrap());
     let single = radial_profile(
-        &diffraction_kernel(&optics(one, 2.0 * radius), Light::Spectral, &extent, pitch),
+        &diffraction_kernel(&optics(one, 2.0 * radius), Light::Spectral, &extent, pitch).unwrap(),
         1,
     );
     let sum = radial_profile(
-        &diffraction_kernel(&optics(many, 2.0), Light::Spectral, &extent, pitch),
+        &diffraction_kernel(&optics(many, 2.0), Light::Spectral, &extent, pitch).unwrap(),
         1,
     );
     // At ν = 0 the holes add coherently (N² instead of N) within a speckle of
@@ -291,7 +294,8 @@ fn a_slit_network_follows_the_same_rule_babinet() {
             Light::Monochrome(GREEN),
             &Extent::new(121, 121).unwrap(),
             2e-3,
-        );
+        )
+        .unwrap();
         let expected = if sides % 2 == 0 { sides } else { 2 * sides };
         assert_eq!(ray_count(&kernel, 15.0, 58.0), expected, "{sides} slits");
     }
@@ -307,12 +311,13 @@ fn red_spreads_wider_than_blue_by_the_ratio_of_their_wavelengths() {
         Light::Spectral,
         &Extent::new(161, 161).unwrap(),
         0.25e-3,
-    );
+    )
+    .unwrap();
     // The radius holding half the energy, per channel.
     let half_energy_radius = |c: usize| {
         let (cx, cy) = kernel.centre();
         let mut rings = vec![0.0; 200];
-        for (i, &v) in kernel.channels()[c].iter().enumerate() {
+        for (i, &v) in kernel.planes()[c].iter().enumerate() {
             let (dx, dy) = (
                 (i % kernel.width()) as f64 - cx as f64,
                 (i / kernel.width()) as f64 - cy as f64,
@@ -350,7 +355,7 @@ fn rays_reach_far_and_fade_as_the_inverse_square_of_the_distance() {
         .unwrap();
     let mut rings = vec![0.0; 801];
     let (cx, cy) = kernel.centre();
-    for (i, &v) in kernel.channels()[1].iter().enumerate() {
+    for (i, &v) in kernel.planes()[1].iter().enumerate() {
         let (dx, dy) = ((i % 1601) as f64 - cx as f64, (i / 1601) as f64 - cy as f64);
         let r = (dx * dx + dy * dy).sqrt().round() as usize;
         if r <= 800 {

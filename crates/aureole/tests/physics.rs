@@ -1,4 +1,4 @@
-//! The kernels against the physics of MODEL.md §2–5: each test computes a
+//! The kernels against the physics of docs/physics.md §2–5: each test computes a
 //! property of a kernel and compares it with the closed-form result.
 
 use std::f64::consts::PI;
@@ -88,7 +88,7 @@ proptest! {
         };
         let k = kernel(effects, camera(36.0, 50.0), 1, size);
         prop_assert!((k.sum(0) - 1.0).abs() < 1e-5, "sum {}", k.sum(0));
-        prop_assert!(k.channels()[0].iter().all(|&v| v >= 0.0 && v.is_finite()));
+        prop_assert!(k.planes()[0].iter().all(|&v| v >= 0.0 && v.is_finite()));
         // The unspread part, (1 − ε) per effect of the chain, stays at the centre.
         let unspread = (1.0 - epsilon).powi(if which == 3 { 3 } else { 1 });
         prop_assert!(f64::from(k.at(0, 0, 0)) >= unspread - 1e-6);
@@ -156,7 +156,7 @@ fn bloom_radius_on_the_film_goes_through_the_pixel_pitch() {
     let extent = Extent::new(257, 257).unwrap().with_image_width(3600);
     let from_um = config.kernel(&extent).unwrap();
     let from_px = kernel(vec![bloom(0.005, 3.5, 6.0)], Camera::default(), 1, 257);
-    for (a, b) in from_um.channels()[0].iter().zip(&from_px.channels()[0]) {
+    for (a, b) in from_um.planes()[0].iter().zip(&from_px.planes()[0]) {
         assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-12), "{a} vs {b}");
     }
 }
@@ -406,7 +406,7 @@ fn vos_glare_falls_as_theta_to_the_minus_n_per_solid_angle() {
 
 fn second_moment(k: &Kernel) -> f64 {
     let (cx, cy) = k.centre();
-    k.channels()[0]
+    k.planes()[0]
         .iter()
         .enumerate()
         .map(|(i, &v)| {
@@ -446,7 +446,7 @@ fn an_effect_with_epsilon_zero_leaves_the_chain_unchanged() {
 fn even_sizes_put_the_centre_at_half_the_size() {
     let k = kernel(vec![bloom(0.2, 2.0, 3.0)], Camera::default(), 1, 64);
     assert_eq!(k.centre(), (32, 32));
-    let peak = k.channels()[0].iter().cloned().fold(0f32, f32::max);
+    let peak = k.planes()[0].iter().cloned().fold(0f32, f32::max);
     assert_eq!(k.at(0, 0, 0), peak);
     for d in 1..30 {
         assert_eq!(k.at(0, d, 0), k.at(0, -d, 0));

@@ -1,9 +1,9 @@
-//! Linear ("same"-size) convolution in f64, for scenes whose range f32
-//! cannot hold: FFT round-off is about the unit round-off times the largest
-//! value, so a sun of 10⁹ cd/m² leaves ~100 cd/m² of noise in f32 over a
-//! night sky of 10⁻² cd/m², and ~10⁻⁷ cd/m² in f64. Slower and twice the
-//! memory of [`super::plan::Convolver`], so it is used only when the range
-//! asks for it.
+//! The f64 engine, for scenes whose range f32 cannot hold: FFT round-off is
+//! about the unit round-off times the largest value, so a sun of 10⁹ cd/m²
+//! leaves ~100 cd/m² of noise in f32 over a night sky of 10⁻² cd/m², and
+//! ~10⁻⁷ cd/m² in f64. Slower and twice the memory of the f32 engine
+//! ([`super::single`]), so the pipeline uses it only when the range asks
+//! for it (docs/physics.md §8).
 
 use std::sync::Arc;
 
@@ -12,95 +12,126 @@ use realfft::num_complex::Complex;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 
-use super::plan::{fast_size, needed};
-use crate::kernel::Kernel;
+use super::grid::Grid;
+use super::placement::Placement;
+use super::pool::Pool;
+use super::{Centre, Engine, Spread};
+use crate::control::{Cancel, Control};
+use crate::error::Result;
 
-/// The kernel's spectra (its centre weight left out) and the transforms
-/// for one image size.
-pub struct DoubleConvolver {
+/// The kernel's spectra and the transforms for one image size, in f64.
+pub struct Convolver {
     width: usize,
     height: usize,
     px: usize,
     py: usize,
-    /// Per kernel channel, column-major: column u holds its `py` values.
+    /// Per kernel plane, column-major: column u holds its `py` values.
     spectra: Vec<Vec<Complex<f64>>>,
+    /// The weight each kernel plane left out of its spectrum, applied
+    /// exactly.
+    centres: Vec<f32>,
     row_fft: Arc<dyn RealToComplex<f64>>,
     row_ifft: Arc<dyn ComplexToReal<f64>>,
     column_fft: Arc<dyn Fft<f64>>,
     column_ifft: Arc<dyn Fft<f64>>,
+    /// The column-major spectrum of the plane being convolved.
+    buffers: Pool<Vec<Complex<f64>>>,
 }
 
-impl DoubleConvolver {
-    /// Plans the convolution of `width`×`height` images with `kernel` less
-    /// its centre weight, and transforms the kernel.
-    pub fn without_centre(kernel: &Kernel, width: usize, height: usize) -> DoubleConvolver {
-        let (kw, kh) = (kernel.width(), kernel.height());
-        let (cx, cy) = kernel.centre();
-        let px = fast_size(needed(kw, width));
-        let py = fast_size(needed(kh, height));
+impl Convolver {
+    /// Plans the convolution of `width`×`height` images with a kernel given
+    /// as planes (row-major, `size` = width × height, centre at its middle),
+    /// and transforms it; with [`Centre::Leave`] the centre weight is left
+    /// out of the spectrum and applied exactly.
+    pub fn new(
+        planes: &[&[f32]],
+        size: (usize, usize),
+        width: usize,
+        height: usize,
+        centre: Centre,
+        control: &mut Control,
+    ) -> Result<Convolver> {
+        let (px, py) = Grid::new(size, (width, height), false).padded();
         let mut real_planner = RealFftPlanner::<f64>::new();
         let mut planner = FftPlanner::<f64>::new();
-        let mut convolver = DoubleConvolver {
+        let mut convolver = Convolver {
             width,
             height,
             px,
             py,
             spectra: Vec::new(),
+            centres: Vec::new(),
             row_fft: real_planner.plan_fft_forward(px),
             row_ifft: real_planner.plan_fft_inverse(px),
             column_fft: planner.plan_fft_forward(py),
             column_ifft: planner.plan_fft_inverse(py),
+            buffers: Pool::new(),
         };
-        convolver.spectra = kernel
-            .channels()
-            .iter()
-            .map(|plane| {
-                // Kernel row j, wrapped so that its centre sits at 0.
-                let rows = (0..kh).into_par_iter().map(|j| {
+        let cancel = control.cancel();
+        for (k, plane) in planes.iter().enumerate() {
+            let placed = Placement {
+                plane,
+                size,
+                centre,
+            };
+            let rows: Vec<(usize, Vec<f64>)> = (0..size.1)
+                .into_par_iter()
+                .map(|j| {
                     let mut row = vec![0.0; px];
-                    for i in 0..kw {
-                        if (i, j) != (cx, cy) {
-                            row[(i + px - cx) % px] = f64::from(plane[j * kw + i]);
-                        }
-                    }
-                    ((j + py - cy) % py, row)
-                });
-                convolver.transform(rows.collect())
-            })
-            .collect();
-        convolver
+                    placed.row(j, &mut row);
+                    (placed.period_row(j, py), row)
+                })
+                .collect();
+            let mut spectrum = Vec::new();
+            convolver.transform(rows, &mut spectrum, &cancel);
+            control.check()?;
+            convolver.spectra.push(spectrum);
+            convolver.centres.push(placed.left_out());
+            control.report((k + 1) as f64 / planes.len() as f64);
+        }
+        Ok(convolver)
     }
 
-    /// The 2-D spectrum, column-major, of the rows given as (padded row
-    /// index, real row of length `px`); other rows are zero.
-    fn transform(&self, rows: Vec<(usize, Vec<f64>)>) -> Vec<Complex<f64>> {
+    /// The 2-D spectrum into `columns` (column-major) of the rows given as
+    /// (padded row index, real row of length `px`); other rows are zero.
+    fn transform(
+        &self,
+        rows: Vec<(usize, Vec<f64>)>,
+        columns: &mut Vec<Complex<f64>>,
+        cancel: &Cancel,
+    ) {
         let half = self.px / 2 + 1;
         let py = self.py;
         let spectra: Vec<(usize, Vec<Complex<f64>>)> = rows
             .into_par_iter()
             .map(|(index, mut row)| {
                 let mut spectrum = self.row_fft.make_output_vec();
-                // The lengths are the planned ones, so this cannot fail.
-                let _ = self.row_fft.process(&mut row, &mut spectrum);
+                if !cancel.is_cancelled() {
+                    // The lengths are the planned ones, so this cannot fail.
+                    let _ = self.row_fft.process(&mut row, &mut spectrum);
+                }
                 (index, spectrum)
             })
             .collect();
-        let mut columns = vec![Complex::new(0.0, 0.0); half * py];
+        columns.clear();
+        columns.resize(half * py, Complex::new(0.0, 0.0));
         columns
             .par_chunks_mut(py)
             .enumerate()
             .for_each(|(u, column)| {
+                if cancel.is_cancelled() {
+                    return;
+                }
                 for (index, spectrum) in &spectra {
                     column[*index] = spectrum[u];
                 }
                 self.column_fft.process(column);
             });
-        columns
     }
 
-    /// `plane` (row-major, `width`×`height`) convolved with kernel channel
-    /// `channel` less its centre, over the same frame.
-    pub fn convolve(&self, plane: &[f64], channel: usize) -> Vec<f64> {
+    /// `plane` (row-major, `width`×`height`) convolved with kernel plane
+    /// `kernel_plane` less what it left out, over the same frame.
+    fn convolve(&self, plane: &[f64], kernel_plane: usize, cancel: &Cancel) -> Vec<f64> {
         let (w, h, px, py) = (self.width, self.height, self.px, self.py);
         let half = px / 2 + 1;
         let rows = (0..h)
@@ -110,20 +141,30 @@ impl DoubleConvolver {
                 (y, row)
             })
             .collect();
-        let mut columns = self.transform(rows);
-        let kernel = &self.spectra[channel];
+        let mut lease = self.buffers.lease();
+        lease.resize_with(1, Vec::new);
+        let columns = &mut lease[0];
+        self.transform(rows, columns, cancel);
+        let kernel = &self.spectra[kernel_plane];
         let scale = 1.0 / (px * py) as f64;
         columns
             .par_chunks_mut(py)
             .zip(kernel.par_chunks(py))
             .for_each(|(column, k)| {
+                if cancel.is_cancelled() {
+                    return;
+                }
                 for (v, k) in column.iter_mut().zip(k) {
                     *v *= k * scale;
                 }
                 self.column_ifft.process(column);
             });
+        let columns = &*columns;
         let mut out = vec![0.0; w * h];
         out.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+            if cancel.is_cancelled() {
+                return;
+            }
             let mut spectrum: Vec<Complex<f64>> = (0..half).map(|u| columns[u * py + y]).collect();
             // The inverse real transform wants exactly real end bins; after
             // the column passes they hold round-off.
@@ -136,5 +177,67 @@ impl DoubleConvolver {
             row.copy_from_slice(&real[..w]);
         });
         out
+    }
+
+    /// One output in f64 throughout: O = I − B + Σ w (K′ ⊛ B + c·B), with
+    /// K′ the kernel plane less its centre weight c; then rounded to f32
+    /// once, into `out`.
+    fn output(&self, spread: &Spread, out: &mut Vec<f32>, control: &mut Control) -> Result<()> {
+        let plane = spread.plane;
+        let bright: Vec<f64> = match spread.fractions {
+            Some(fractions) => plane
+                .par_iter()
+                .zip(fractions)
+                .map(|(&v, &f)| f64::from(v) * f64::from(f))
+                .collect(),
+            None => plane.par_iter().map(|&v| f64::from(v)).collect(),
+        };
+        let mut sum: Vec<f64> = plane
+            .par_iter()
+            .zip(&bright)
+            .map(|(&v, b)| f64::from(v) - b)
+            .collect();
+        for (t, term) in spread.terms.iter().enumerate() {
+            let moved = self.convolve(&bright, term.kernel_plane, &control.cancel());
+            control.check()?;
+            let (weight, centre) = (
+                f64::from(term.weight),
+                f64::from(self.centres[term.kernel_plane]),
+            );
+            sum.par_iter_mut()
+                .zip(&moved)
+                .zip(&bright)
+                .for_each(|((o, s), b)| *o += weight * (s + centre * b));
+            control.report((t + 1) as f64 / spread.terms.len() as f64);
+        }
+        out.clear();
+        out.extend(sum.into_iter().map(|v| v as f32));
+        Ok(())
+    }
+}
+
+impl Engine for Convolver {
+    fn padded_size(&self) -> (usize, usize) {
+        (self.px, self.py)
+    }
+
+    fn kernel_planes(&self) -> usize {
+        self.spectra.len()
+    }
+
+    fn spread(
+        &self,
+        outputs: &[Spread],
+        mut recycled: Vec<Vec<f32>>,
+        control: &mut Control,
+    ) -> Result<Vec<Vec<f32>>> {
+        recycled.resize_with(outputs.len(), Vec::new);
+        recycled.truncate(outputs.len());
+        let share = 1.0 / outputs.len().max(1) as f64;
+        for (o, (spread, out)) in outputs.iter().zip(recycled.iter_mut()).enumerate() {
+            let mut part = control.part(o as f64 * share, (o + 1) as f64 * share);
+            self.output(spread, out, &mut part)?;
+        }
+        Ok(recycled)
     }
 }

@@ -1,5 +1,73 @@
-//! Convolution: the optical chain composes by convolution (MODEL.md §2), and
-//! images are convolved with the chain's kernel (§8).
+//! The convolution engine: spreading planes of light through a kernel
+//! (docs/physics.md §8). The pipeline calls it through one trait,
+//! [`Engine`]; the f32 engine ([`single`]) and the f64 engine ([`double`])
+//! implement it, sharing the size planning ([`grid`]), the kernel's
+//! placement in the period and the buffer pool. A further backend (a GPU)
+//! is a third implementation; nothing outside this module changes for it.
 
 pub mod double;
-pub mod plan;
+mod grid;
+mod placement;
+mod pool;
+mod simd;
+pub mod single;
+
+pub use grid::{fast_size, padded_size};
+
+use crate::control::Control;
+use crate::error::Result;
+
+/// Whether an engine convolves a kernel's centre weight with the rest, or
+/// leaves it out of the transform and applies it exactly, pixel by pixel:
+/// with the (1 − ε) peak out of the FFT its f32 round-off is ~1/ε times
+/// smaller.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Centre {
+    /// Convolve the whole kernel.
+    Include,
+    /// Leave the centre weight out of the transform and apply it exactly.
+    Leave,
+}
+
+/// One kernel plane's share of an output plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Term {
+    /// The kernel plane.
+    pub kernel_plane: usize,
+    /// Its weight in the output.
+    pub weight: f32,
+}
+
+/// One output plane: O = (I − B) + Σ over `terms` of w·K_k ⊛ B, with
+/// B = I·fractions (or all of I), the centre weights applied exactly.
+#[derive(Debug, Clone)]
+pub struct Spread<'a> {
+    /// The input plane I, row-major, the engine's width × height.
+    pub plane: &'a [f32],
+    /// The share of each pixel's light that is spread; `None`: all of it.
+    pub fractions: Option<&'a [f32]>,
+    /// The kernel planes that make the output, with their weights: one
+    /// plane of weight 1 for each colour plane (or a one-plane kernel), or
+    /// a luminance plane as Σ w_k K_k ⊛ Y through a coloured kernel.
+    pub terms: Vec<Term>,
+}
+
+/// Spreads planes of light through a kernel whose spectrum it holds, for
+/// images of one size.
+pub trait Engine: Send + Sync {
+    /// The padded period of its transforms, columns × rows.
+    fn padded_size(&self) -> (usize, usize);
+
+    /// How many kernel planes it holds.
+    fn kernel_planes(&self) -> usize;
+
+    /// Every output of `outputs`, written into the planes of `recycled`
+    /// where there are some (memory already mapped); `control` hears the
+    /// fraction done and may cancel.
+    fn spread(
+        &self,
+        outputs: &[Spread],
+        recycled: Vec<Vec<f32>>,
+        control: &mut Control,
+    ) -> Result<Vec<Vec<f32>>>;
+}

@@ -6,7 +6,7 @@ use super::Kernel;
 /// The mean weight on rings of 1 px width: element i averages the pixels
 /// whose centre lies at a distance in [i − ½, i + ½) from the kernel centre,
 /// for the rings that fit whole inside the kernel.
-pub fn radial_profile(kernel: &Kernel, channel: usize) -> Vec<f64> {
+pub fn radial_profile(kernel: &Kernel, plane: usize) -> Vec<f64> {
     let (cx, cy) = kernel.centre();
     let rings = cx
         .min(cy)
@@ -15,8 +15,8 @@ pub fn radial_profile(kernel: &Kernel, channel: usize) -> Vec<f64> {
         + 1;
     let mut sums = vec![0.0; rings];
     let mut counts = vec![0usize; rings];
-    let plane = &kernel.channels()[channel];
-    for (j, row) in plane.chunks(kernel.width()).enumerate() {
+    let values = &kernel.planes()[plane];
+    for (j, row) in values.chunks(kernel.width()).enumerate() {
         let dy = j as f64 - cy as f64;
         for (i, &v) in row.iter().enumerate() {
             let dx = i as f64 - cx as f64;
@@ -38,7 +38,7 @@ pub fn radial_profile(kernel: &Kernel, channel: usize) -> Vec<f64> {
 /// counter-clockwise, value).
 pub fn angular_profile(
     kernel: &Kernel,
-    channel: usize,
+    plane: usize,
     radius: f64,
     samples: usize,
 ) -> Vec<(f64, f64)> {
@@ -46,16 +46,16 @@ pub fn angular_profile(
         .map(|s| {
             let angle = 360.0 * s as f64 / samples as f64;
             let (sin, cos) = angle.to_radians().sin_cos();
-            (angle, bilinear(kernel, channel, radius * cos, radius * sin))
+            (angle, bilinear(kernel, plane, radius * cos, radius * sin))
         })
         .collect()
 }
 
 /// The kernel interpolated at (x, y) px from the centre, y up; 0 outside.
-pub fn bilinear(kernel: &Kernel, channel: usize, x: f64, y: f64) -> f64 {
+pub fn bilinear(kernel: &Kernel, plane: usize, x: f64, y: f64) -> f64 {
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
-    let at = |dx: f64, dy: f64| f64::from(kernel.at(channel, dx as i64, dy as i64));
+    let at = |dx: f64, dy: f64| f64::from(kernel.at(plane, dx as i64, dy as i64));
     (1.0 - fy) * ((1.0 - fx) * at(x0, y0) + fx * at(x0 + 1.0, y0))
         + fy * ((1.0 - fx) * at(x0, y0 + 1.0) + fx * at(x0 + 1.0, y0 + 1.0))
 }

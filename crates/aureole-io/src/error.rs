@@ -1,0 +1,72 @@
+//! Typed errors of files: each message is one line that names the file and
+//! what is wrong with it.
+
+use std::path::PathBuf;
+
+/// Everything reading and writing files can refuse or fail at.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Reading or writing a file failed.
+    #[error("{path}: {}", aureole::error::describe_io(error))]
+    Io {
+        /// The file concerned.
+        path: PathBuf,
+        /// The underlying failure (not a `source`: the message already says
+        /// it, and a chain would say it twice).
+        error: std::io::Error,
+    },
+
+    /// A file whose content is not what its format requires.
+    #[error("{path}: {message}")]
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, and where.
+        message: String,
+    },
+
+    /// An encoder (PNG, EXR, plot) failed while writing `path`.
+    #[error("{path}: cannot encode {format}: {message}")]
+    Encode {
+        /// The output file.
+        path: PathBuf,
+        /// The format being written.
+        format: &'static str,
+        /// The encoder's message.
+        message: String,
+    },
+
+    /// An output path whose extension names no format that can hold what
+    /// is written there.
+    #[error("{path}: unknown output extension {extension:?}; allowed: {allowed}")]
+    OutputFormat {
+        /// The output path.
+        path: PathBuf,
+        /// The extension found (empty if none).
+        extension: String,
+        /// The allowed extensions, in words.
+        allowed: String,
+    },
+
+    /// What a file holds is refused by the library (a kernel file whose
+    /// weights are negative, say).
+    #[error("{path}: {error}")]
+    Content {
+        /// The file.
+        path: PathBuf,
+        /// The library's reason.
+        error: aureole::Error,
+    },
+}
+
+/// Result with the files' [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    pub(crate) fn io(path: impl Into<PathBuf>, error: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            error,
+        }
+    }
+}

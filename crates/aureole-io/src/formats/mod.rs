@@ -1,0 +1,291 @@
+//! Every file format aureole reads or writes, in one table: how a file is
+//! recognised (by its content when read, by its extension when written),
+//! what decodes and encodes it, and whether it holds linear light or a
+//! picture for a display. A new format is one module and one entry in
+//! [`FORMATS`]; every list of formats in a message comes from the table.
+
+pub(crate) mod exr;
+pub mod pfm;
+pub(crate) mod picture;
+pub(crate) mod radiance;
+
+use std::path::Path;
+
+use aureole::image::Primaries;
+
+use crate::display::Depth;
+use crate::error::Result;
+use crate::limits::Limits;
+
+/// What a format holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// Linear light in the image's own units (HDR).
+    Linear,
+    /// A picture for a display: exposed, tone mapped, sRGB-encoded.
+    Picture,
+}
+
+/// How a format stores a convolution kernel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KernelStorage {
+    /// It does not.
+    Unsupported,
+    /// Its planes, float32, as they are.
+    Planes,
+    /// A log-scaled picture for people.
+    LogPicture,
+}
+
+/// One file format.
+pub struct Format {
+    /// Its name in messages, e.g. `OpenEXR`.
+    pub name: &'static str,
+    /// File name extensions, lower case; the first is the usual one.
+    pub extensions: &'static [&'static str],
+    /// Linear light or a picture.
+    pub kind: Kind,
+    /// How it holds a kernel.
+    pub kernels: KernelStorage,
+    /// The sample depths a picture may have, the default first (none for
+    /// linear formats).
+    pub depths: &'static [Depth],
+    /// Whether a file starting with these bytes is in this format.
+    pub(crate) magic: fn(&[u8]) -> bool,
+    /// Decodes a whole file; the error is one line.
+    pub(crate) decode: fn(&[u8], Limits) -> std::result::Result<Decoded, String>,
+    /// Writes it.
+    pub(crate) encode: Encoder,
+}
+
+/// How a format is written.
+pub(crate) enum Encoder {
+    /// Linear planes, through our own or the `exr` crate's encoder.
+    Linear(fn(&Path, &LinearPlanes) -> Result<Vec<Note>>),
+    /// An 8 or 16-bit RGB picture through the `image` crate.
+    Picture(image::ImageFormat),
+}
+
+/// What a decoder found in a file.
+#[derive(Debug, Clone)]
+pub(crate) struct Decoded {
+    pub image: aureole::Image,
+    /// An 8/16-bit display image, sRGB-decoded: its luminance is relative.
+    pub display_referred: bool,
+    pub notes: Vec<String>,
+}
+
+/// Linear planes to write, borrowed from an image or a kernel.
+pub(crate) struct LinearPlanes<'a> {
+    pub width: usize,
+    pub height: usize,
+    /// One plane (`Y`) or three (`R`, `G`, `B`).
+    pub colour: Vec<&'a [f32]>,
+    pub alpha: Option<&'a [f32]>,
+    pub white_luminance: Option<f32>,
+    pub primaries: Option<Primaries>,
+    /// Half floats, where the format has them.
+    pub half: bool,
+}
+
+/// What a writer could not keep, for the user.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Note {
+    /// Samples beyond the largest half float, written as ±65504.
+    ClampedToHalf {
+        /// How many.
+        count: usize,
+    },
+    /// Negative samples that the format cannot hold, written as 0.
+    NegativesZeroed {
+        /// How many.
+        count: usize,
+        /// The format, in words.
+        format: &'static str,
+    },
+    /// The format has no alpha channel.
+    AlphaDropped {
+        /// The format, in words.
+        format: &'static str,
+    },
+}
+
+impl std::fmt::Display for Note {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Note::ClampedToHalf { count } => write!(
+                f,
+                "{count} samples beyond ±{HALF_MAX} (the largest half float) written as ±{HALF_MAX}"
+            ),
+            Note::NegativesZeroed { count, format } => write!(
+                f,
+                "{format} holds no negative values: {count} samples written as 0"
+            ),
+            Note::AlphaDropped { format } => {
+                write!(f, "{format} has no alpha channel: alpha not written")
+            }
+        }
+    }
+}
+
+/// The largest finite half float.
+pub const HALF_MAX: f32 = 65504.0;
+
+/// Every format, in the order messages list them.
+pub static FORMATS: &[Format] = &[
+    Format {
+        name: "OpenEXR",
+        extensions: &["exr"],
+        kind: Kind::Linear,
+        kernels: KernelStorage::Planes,
+        depths: &[],
+        magic: |head| head.starts_with(&[0x76, 0x2f, 0x31, 0x01]),
+        decode: exr::decode,
+        encode: Encoder::Linear(exr::encode),
+    },
+    Format {
+        name: "Radiance HDR",
+        extensions: &["hdr"],
+        kind: Kind::Linear,
+        kernels: KernelStorage::Unsupported,
+        depths: &[],
+        magic: |head| head.starts_with(b"#?"),
+        decode: picture::decode,
+        encode: Encoder::Linear(radiance::encode),
+    },
+    Format {
+        name: "PFM",
+        extensions: &["pfm"],
+        kind: Kind::Linear,
+        kernels: KernelStorage::Planes,
+        depths: &[],
+        magic: |head| head.starts_with(b"PF") || head.starts_with(b"Pf"),
+        decode: pfm::decode_file,
+        encode: Encoder::Linear(pfm::encode),
+    },
+    Format {
+        name: "PNG",
+        extensions: &["png"],
+        kind: Kind::Picture,
+        kernels: KernelStorage::LogPicture,
+        depths: &[Depth::Eight, Depth::Sixteen],
+        magic: |head| head.starts_with(b"\x89PNG"),
+        decode: picture::decode,
+        encode: Encoder::Picture(image::ImageFormat::Png),
+    },
+    Format {
+        name: "JPEG",
+        extensions: &["jpg", "jpeg"],
+        kind: Kind::Picture,
+        kernels: KernelStorage::Unsupported,
+        depths: &[Depth::Eight],
+        magic: |head| head.starts_with(&[0xff, 0xd8, 0xff]),
+        decode: picture::decode,
+        encode: Encoder::Picture(image::ImageFormat::Jpeg),
+    },
+    Format {
+        name: "TIFF",
+        extensions: &["tif", "tiff"],
+        kind: Kind::Picture,
+        kernels: KernelStorage::Unsupported,
+        depths: &[Depth::Sixteen, Depth::Eight],
+        magic: |head| head.starts_with(b"II*\0") || head.starts_with(b"MM\0*"),
+        decode: picture::decode,
+        encode: Encoder::Picture(image::ImageFormat::Tiff),
+    },
+];
+
+/// The lower-case extension of `path`, empty if none.
+pub fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default()
+}
+
+/// The format a file called `path` is written in, by its extension.
+pub fn by_extension(path: &Path) -> Option<&'static Format> {
+    let extension = extension(path);
+    FORMATS
+        .iter()
+        .find(|f| f.extensions.contains(&extension.as_str()))
+}
+
+/// The format of a file that starts with `head`.
+pub fn by_content(head: &[u8]) -> Option<&'static Format> {
+    FORMATS.iter().find(|f| (f.magic)(head))
+}
+
+/// The formats we read, for messages: `OpenEXR, …, JPEG or TIFF`.
+pub fn readable() -> String {
+    let names: Vec<&str> = FORMATS.iter().map(|f| f.name).collect();
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => names.join(""),
+    }
+}
+
+/// The extensions an image may be written to, for messages:
+/// `.exr, .hdr, .pfm (linear) or .png, .jpg, .tif (for display)`.
+pub fn image_outputs() -> String {
+    let of = |kind: Kind| {
+        FORMATS
+            .iter()
+            .filter(|f| f.kind == kind)
+            .map(|f| format!(".{}", f.extensions[0]))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    format!(
+        "{} (linear) or {} (for display)",
+        of(Kind::Linear),
+        of(Kind::Picture)
+    )
+}
+
+/// The extensions a picture may be written to, with their depths.
+pub fn picture_outputs() -> String {
+    FORMATS
+        .iter()
+        .filter(|f| f.kind == Kind::Picture)
+        .map(|f| {
+            let bits: Vec<String> = sorted_depths(f)
+                .iter()
+                .map(|d| d.bits().to_string())
+                .collect();
+            format!(".{} ({}-bit)", f.extensions[0], bits.join(" or "))
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The extensions a kernel may be written to, with what they hold.
+pub fn kernel_outputs() -> String {
+    FORMATS
+        .iter()
+        .filter_map(|f| {
+            let what = match f.kernels {
+                KernelStorage::Unsupported => return None,
+                KernelStorage::Planes => "float32",
+                KernelStorage::LogPicture => "log-scaled picture",
+            };
+            Some(format!(".{} ({what})", f.extensions[0]))
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The pictures that hold `depth`, for a message: `.png or .tif`.
+pub(crate) fn holding(depth: Depth) -> String {
+    FORMATS
+        .iter()
+        .filter(|f| f.depths.contains(&depth))
+        .map(|f| format!(".{}", f.extensions[0]))
+        .collect::<Vec<_>>()
+        .join(" or ")
+}
+
+fn sorted_depths(format: &Format) -> Vec<Depth> {
+    let mut depths = format.depths.to_vec();
+    depths.sort_by_key(|d| d.bits());
+    depths
+}

@@ -1,0 +1,94 @@
+//! Kernel files: planes out and in (PFM, EXR), and pictures for people,
+//! log-scaled like the paper's "filter profile" images so that faint rays
+//! and the bright core both show.
+
+use std::path::Path;
+
+use aureole::Kernel;
+
+use crate::error::{Error, Result};
+use crate::formats::{by_extension, extension, kernel_outputs, Encoder, KernelStorage};
+use crate::formats::{picture, LinearPlanes};
+use crate::limits::Limits;
+use crate::read::read_image;
+
+/// Decades of weight the picture spans, from its brightest spread pixel down.
+pub const PICTURE_DECADES: f64 = 6.0;
+
+/// Writes `kernel` to `path` in the format its extension names: its planes
+/// as float32 (`.pfm`: `Pf` or `PF`; `.exr`: `Y` or `R`, `G`, `B`), or a
+/// log-scaled picture (`.png`). The file appears whole or not at all.
+pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
+    let refuse = || Error::OutputFormat {
+        path: path.to_path_buf(),
+        extension: extension(path),
+        allowed: kernel_outputs(),
+    };
+    let format = by_extension(path).ok_or_else(refuse)?;
+    match (format.kernels, &format.encode) {
+        (KernelStorage::Planes, Encoder::Linear(encode)) => {
+            let planes = LinearPlanes {
+                width: kernel.width(),
+                height: kernel.height(),
+                colour: kernel.planes().iter().map(Vec::as_slice).collect(),
+                alpha: None,
+                white_luminance: None,
+                primaries: None,
+                half: false,
+            };
+            encode(path, &planes).map(drop)
+        }
+        (KernelStorage::LogPicture, Encoder::Picture(encoding)) => picture::encode_levels(
+            path,
+            (kernel.width(), kernel.height()),
+            log_levels(kernel),
+            *encoding,
+            format.name,
+        ),
+        _ => Err(refuse()),
+    }
+}
+
+/// Reads a kernel written by [`write_kernel`] (or any image of 1 or 3
+/// planes of non-negative weights, centre in its middle) and normalises
+/// each plane to ΣK = 1.
+pub fn read_kernel(path: &Path, limits: Limits) -> Result<Kernel> {
+    let image = read_image(path, limits)?.image;
+    Kernel::from_planes(image.width, image.height, image.planes).map_err(|error| Error::Content {
+        path: path.to_path_buf(),
+        error,
+    })
+}
+
+/// 8-bit RGB levels where grey ∝ log₁₀ K over [`PICTURE_DECADES`] decades
+/// below the brightest pixel outside the centre (the unspread centre is far
+/// brighter and shows white). A coloured kernel gives a colour picture, all
+/// channels on one scale.
+fn log_levels(kernel: &Kernel) -> Vec<u8> {
+    let (width, height) = (kernel.width(), kernel.height());
+    let (cx, cy) = kernel.centre();
+    let centre = cy * width + cx;
+    let planes = kernel.planes();
+    let peak = planes
+        .iter()
+        .flat_map(|plane| {
+            plane
+                .iter()
+                .enumerate()
+                .filter(move |&(i, _)| i != centre || plane.len() == 1)
+                .map(|(_, &v)| v)
+        })
+        .fold(0f32, f32::max);
+    let top = if peak > 0.0 { f64::from(peak) } else { 1.0 };
+    let level = |v: f32| {
+        let t = 1.0 + (f64::from(v).max(1e-300) / top).log10() / PICTURE_DECADES;
+        (t.clamp(0.0, 1.0) * 255.0).round() as u8
+    };
+    let channel = |c: usize| &planes[c.min(planes.len() - 1)];
+    let (r, g, b) = (channel(0), channel(1), channel(2));
+    let mut levels = Vec::with_capacity(width * height * 3);
+    for ((&r, &g), &b) in r.iter().zip(g).zip(b) {
+        levels.extend([level(r), level(g), level(b)]);
+    }
+    levels
+}

@@ -1,0 +1,93 @@
+//! Reading images by their content, whatever their name says: the format
+//! table ([`crate::formats`]) recognises the file and decodes it.
+
+use std::path::Path;
+
+use aureole::image::Image;
+use aureole::memory::format_bytes;
+
+use crate::error::{Error, Result};
+use crate::formats::{by_content, readable};
+use crate::limits::Limits;
+
+/// A decoded file and what the user should know about how it was read.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    /// The pixels, linear, in the file's units.
+    pub image: Image,
+    /// The file's format, in words.
+    pub format: &'static str,
+    /// Whether it was an 8/16-bit display image (sRGB-decoded, so its
+    /// luminance is only relative).
+    pub display_referred: bool,
+    /// Remarks for the user (ignored channels and layers, …), one line each.
+    pub notes: Vec<String>,
+}
+
+/// Reads the image at `path`, recognising the format by its content, and
+/// refusing a file whose decoding would need more than `limits` allows.
+pub fn read_image(path: &Path, limits: Limits) -> Result<Loaded> {
+    let metadata = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    // Every format we read stores at least a byte per pixel's worth of
+    // data for its planes, so a file larger than the bound cannot fit.
+    if metadata.len() > limits.max_bytes {
+        return Err(Error::Decode {
+            path: path.to_path_buf(),
+            message: format!(
+                "the file ({}) is larger than the memory limit ({})",
+                format_bytes(metadata.len()),
+                format_bytes(limits.max_bytes)
+            ),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode_image(&bytes, limits).map_err(|message| Error::Decode {
+        path: path.to_path_buf(),
+        message,
+    })
+}
+
+/// Decodes an image file held in memory, recognising the format by its
+/// content. The error is one line saying what is wrong.
+pub fn decode_image(bytes: &[u8], limits: Limits) -> std::result::Result<Loaded, String> {
+    let head = &bytes[..bytes.len().min(16)];
+    match by_content(head) {
+        Some(format) => {
+            let decoded = (format.decode)(bytes, limits)?;
+            Ok(Loaded {
+                image: decoded.image,
+                format: format.name,
+                display_referred: decoded.display_referred,
+                notes: decoded.notes,
+            })
+        }
+        None if bytes.is_empty() => Err(format!("the file is empty; expected {}", readable())),
+        None => Err(format!(
+            "not an image this tool reads (first bytes {:02x?}); expected {}",
+            &head[..head.len().min(8)],
+            readable()
+        )),
+    }
+}
+
+/// A decoder's message in the user's words: most of the ways a file can be
+/// cut short surface as one of these.
+pub(crate) fn explain(format: &str, message: String) -> String {
+    // Some decoders' messages span lines; ours are one line each.
+    let message = message.split_whitespace().collect::<Vec<_>>().join(" ");
+    let lower = message.to_lowercase();
+    let truncated = [
+        "missing bytes",
+        "fill whole buffer",
+        "unexpected end",
+        "unexpected eof",
+        "eof in header",
+    ]
+    .iter()
+    .any(|m| lower.contains(m));
+    if truncated {
+        format!("cannot read {format}: the file ends early (truncated?): {message}")
+    } else {
+        format!("cannot read {format}: {message}")
+    }
+}

@@ -1,0 +1,137 @@
+//! Writing images by the extension of their path: linear formats as they
+//! are, pictures through the display path. Every file appears whole or not
+//! at all.
+
+use std::path::Path;
+
+use aureole::image::{Image, Layout};
+
+use crate::display::{render, Depth, DisplayOptions, Picture};
+use crate::error::{Error, Result};
+use crate::formats::{
+    by_extension, extension, holding, image_outputs, picture_outputs, Encoder, Format, Kind,
+    LinearPlanes, Note,
+};
+
+/// How to store a linear image.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LinearOptions {
+    /// EXR only: half floats instead of float32.
+    pub half: bool,
+}
+
+/// How to write an image to whatever format its path names.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WriteOptions {
+    /// For linear formats.
+    pub linear: LinearOptions,
+    /// For pictures: exposure and tone curve.
+    pub display: DisplayOptions,
+    /// For pictures: the sample depth, by default the format's own.
+    pub depth: Option<Depth>,
+}
+
+/// What writing made.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Written {
+    /// A linear file, with what the format could not keep.
+    Linear(Vec<Note>),
+    /// A picture, showing this luminance (cd/m²) as white.
+    Picture {
+        /// The luminance shown as white, cd/m².
+        white: f64,
+        /// The exposure value (EV100) that shows it as white.
+        ev100: f64,
+    },
+}
+
+/// The format `path` names for an image, or an error listing those we write.
+pub fn output_format(path: &Path) -> Result<&'static Format> {
+    by_extension(path).ok_or_else(|| Error::OutputFormat {
+        path: path.to_path_buf(),
+        extension: extension(path),
+        allowed: image_outputs(),
+    })
+}
+
+/// Writes `image` (file units, `scale` cd/m² per unit) to `path`: linear
+/// formats keep its values, pictures go through exposure, tone curve and
+/// sRGB.
+pub fn write_image(
+    path: &Path,
+    image: &Image,
+    scale: f64,
+    options: &WriteOptions,
+) -> Result<Written> {
+    let format = output_format(path)?;
+    match format.kind {
+        Kind::Linear => write_linear(path, image, options.linear).map(Written::Linear),
+        Kind::Picture => {
+            let picture = render(image, scale, &options.display);
+            let depth = options.depth.unwrap_or(format.depths[0]);
+            write_picture(path, &picture, depth)?;
+            Ok(Written::Picture {
+                white: picture.white,
+                ev100: picture.ev100(),
+            })
+        }
+    }
+}
+
+/// Writes `image` as `.exr`, `.hdr` or `.pfm` by the extension of `path`.
+/// Returns what the format could not keep.
+pub fn write_linear(path: &Path, image: &Image, options: LinearOptions) -> Result<Vec<Note>> {
+    let encode = match by_extension(path).map(|f| &f.encode) {
+        Some(Encoder::Linear(encode)) => encode,
+        _ => {
+            return Err(Error::OutputFormat {
+                path: path.to_path_buf(),
+                extension: extension(path),
+                allowed: image_outputs(),
+            })
+        }
+    };
+    let colour = match image.layout {
+        Layout::Luminance => vec![image.planes[0].as_slice()],
+        Layout::Rgb => image.planes.iter().take(3).map(Vec::as_slice).collect(),
+    };
+    encode(
+        path,
+        &LinearPlanes {
+            width: image.width,
+            height: image.height,
+            colour,
+            alpha: image.alpha.as_deref(),
+            white_luminance: image.white_luminance,
+            primaries: image.primaries,
+            half: options.half,
+        },
+    )
+}
+
+/// Writes `picture` as PNG, JPEG or TIFF by the extension of `path`.
+pub fn write_picture(path: &Path, picture: &Picture, depth: Depth) -> Result<()> {
+    let format = by_extension(path).filter(|f| f.kind == Kind::Picture);
+    let (Some(format), Some(Encoder::Picture(encoding))) = (format, format.map(|f| &f.encode))
+    else {
+        return Err(Error::OutputFormat {
+            path: path.to_path_buf(),
+            extension: extension(path),
+            allowed: picture_outputs(),
+        });
+    };
+    if !format.depths.contains(&depth) {
+        return Err(Error::Encode {
+            path: path.to_path_buf(),
+            format: format.name,
+            message: format!(
+                "{} holds {} bits per sample; use {} for {}",
+                format.name,
+                format.depths[0].bits(),
+                holding(depth),
+                depth.bits()
+            ),
+        });
+    }
+    crate::formats::picture::encode(path, picture, depth, *encoding, format.name)
+}

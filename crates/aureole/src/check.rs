@@ -1,0 +1,52 @@
+//! Range checks of parameters, with the one-line error that names the
+//! section, the parameter, the value and what is allowed.
+
+use crate::error::{Error, Result};
+
+/// Refuses `value` unless it is finite and `ok` holds, naming the parameter
+/// and the allowed range.
+pub(crate) fn range(
+    section: &str,
+    name: &'static str,
+    value: f64,
+    ok: bool,
+    allowed: &'static str,
+) -> Result<()> {
+    count(section, name, value, value.is_finite() && ok, allowed)
+}
+
+/// Refuses a whole-number (or any other) parameter unless `ok` holds.
+pub(crate) fn count(
+    section: &str,
+    name: &'static str,
+    value: impl ToString,
+    ok: bool,
+    allowed: &'static str,
+) -> Result<()> {
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::Parameter {
+            effect: section.to_string(),
+            name,
+            value: value.to_string(),
+            allowed,
+        })
+    }
+}
+
+/// Refuses an ε outside [0, 1].
+pub(crate) fn epsilon(section: &str, epsilon: f64) -> Result<()> {
+    range(
+        section,
+        "epsilon",
+        epsilon,
+        (0.0..=1.0).contains(&epsilon),
+        "a fraction of the light from 0 to 1",
+    )
+}
+
+/// Refuses an angle in degrees unless it is finite.
+pub(crate) fn angle(section: &str, name: &'static str, degrees: f64) -> Result<()> {
+    range(section, name, degrees, true, "a finite angle in degrees")
+}

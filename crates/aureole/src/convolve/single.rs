@@ -1,0 +1,663 @@
+//! The f32 engine: linear ("same"-size) convolution through real-to-complex
+//! FFTs. The kernel's spectrum is computed once and reused for every plane
+//! and every image of the same size.
+//!
+//! Only what the "same" output needs is transformed: the H image rows (the
+//! padding rows are zeros), and each column transform is pruned when the
+//! padded height P = 2N holds the H rows in its first half: the even and odd
+//! frequencies of a column are then two transforms of length N (of x and of
+//! x·e^{−iπn/N}), and the H output rows come back from two inverse transforms
+//! of length N, which skips a radix-2 stage each way.
+//!
+//! No pass transposes a whole plane: rows are transformed, a block of
+//! [`BLOCK`] at a time, into tiles of [`BLOCK`] rows × [`STRIP`] columns;
+//! each strip of columns gathers its tiles, is transformed (padded,
+//! multiplied by the kernel's spectrum, transformed back and cut to the H
+//! output rows) in cache, and written strip-major; the inverse row
+//! transforms gather their block's tile from each strip.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+use realfft::num_complex::Complex;
+use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::{Fft, FftPlanner};
+
+use super::grid::{ColumnTransform, Grid};
+use super::placement::Placement;
+use super::pool::Pool;
+use super::{Centre, Engine, Spread};
+use crate::control::{Cancel, Control};
+use crate::error::Result;
+
+/// Row spectra (in tiles) and column results (strip-major) of one plane.
+type Buffers = (Vec<Complex<f32>>, Vec<Complex<f32>>);
+
+/// Columns transformed together: a strip of them spans two cache lines per
+/// row, and its column transforms fit in the L2 cache.
+const STRIP: usize = 16;
+
+/// Rows transformed together: row spectra are stored in tiles of
+/// BLOCK rows × [`STRIP`] columns, block by block, so that a strip's column
+/// pass and a block's inverse row transforms each read whole tiles.
+const BLOCK: usize = 8;
+
+/// Values in a tile.
+const TILE: usize = BLOCK * STRIP;
+
+/// What a strip task reads: strip `index` of `strips`, the row spectra in
+/// tiles, the kernel's spectrum.
+pub(super) struct Strip<'a> {
+    index: usize,
+    strips: usize,
+    rows: &'a [Complex<f32>],
+    spectrum: &'a [Complex<f32>],
+}
+
+/// One plane to convolve.
+#[derive(Debug, Clone, Copy)]
+struct Input<'a> {
+    /// Row-major, the convolver's width × height.
+    plane: &'a [f32],
+    /// The share of each pixel's light that is spread, if not all: the rest
+    /// stays where it is, added back unconvolved.
+    fractions: Option<&'a [f32]>,
+    /// The kernel plane to convolve with.
+    kernel_plane: usize,
+}
+
+/// Convolves `width`×`height` planes with one kernel, plane by plane.
+pub struct Convolver {
+    width: usize,
+    height: usize,
+    grid: Grid,
+    /// One spectrum per kernel plane, stored column by column (`px/2 + 1`
+    /// columns of P values; for pruned columns the even frequencies, then
+    /// the odd ones).
+    spectra: Vec<Vec<Complex<f32>>>,
+    /// The weight each kernel plane left out of its spectrum (its centre),
+    /// applied exactly to the plane itself: in the FFT it would dominate
+    /// the round-off of the light that moves.
+    centres: Vec<f32>,
+    /// e^{−iπn/N} for n < N, for pruned columns.
+    twiddles: Vec<Complex<f32>>,
+    row_fft: Arc<dyn RealToComplex<f32>>,
+    row_ifft: Arc<dyn ComplexToReal<f32>>,
+    column_fft: Arc<dyn Fft<f32>>,
+    column_ifft: Arc<dyn Fft<f32>>,
+    buffers: Pool<Buffers>,
+}
+
+impl Convolver {
+    /// Plans the convolution of `width`×`height` images with a kernel given
+    /// as planes (row-major, `size` = width × height, centre at its middle,
+    /// taken as they are), and transforms it; with [`Centre::Leave`] the
+    /// centre weight is left out of the spectrum and applied exactly.
+    pub fn new(
+        planes: &[&[f32]],
+        size: (usize, usize),
+        width: usize,
+        height: usize,
+        centre: Centre,
+        control: &mut Control,
+    ) -> Result<Convolver> {
+        let grid = Grid::new(size, (width, height), true);
+        let mut real_planner = RealFftPlanner::<f32>::new();
+        let mut planner = FftPlanner::<f32>::new();
+        let twiddles = match grid.columns {
+            ColumnTransform::Full(_) => Vec::new(),
+            ColumnTransform::Halves(n) => (0..n)
+                .map(|k| {
+                    let (sin, cos) = (-std::f64::consts::PI * k as f64 / n as f64).sin_cos();
+                    Complex::new(cos as f32, sin as f32)
+                })
+                .collect(),
+        };
+        let row_fft = real_planner.plan_fft_forward(grid.px);
+        let full_column = planner.plan_fft_forward(grid.columns.length());
+        let mut spectra = Vec::with_capacity(planes.len());
+        let mut centres = Vec::with_capacity(planes.len());
+        for (k, plane) in planes.iter().enumerate() {
+            let placed = Placement {
+                plane,
+                size,
+                centre,
+            };
+            let share = 1.0 / planes.len() as f64;
+            let mut part = control.part(k as f64 * share, (k + 1) as f64 * share);
+            spectra.push(kernel_spectrum(
+                &*row_fft,
+                &*full_column,
+                &grid,
+                &placed,
+                &mut part,
+            )?);
+            centres.push(placed.left_out());
+        }
+        Ok(Convolver {
+            width,
+            height,
+            grid,
+            spectra,
+            centres,
+            twiddles,
+            row_fft,
+            row_ifft: real_planner.plan_fft_inverse(grid.px),
+            column_fft: planner.plan_fft_forward(grid.columns.transform_length()),
+            column_ifft: planner.plan_fft_inverse(grid.columns.transform_length()),
+            buffers: Pool::new(),
+        })
+    }
+
+    /// `plane` (row-major, `width`×`height`) convolved with kernel plane
+    /// `kernel_plane`, over the same frame; light beyond the frame is lost.
+    pub fn convolve(
+        &self,
+        plane: &[f32],
+        kernel_plane: usize,
+        control: &mut Control,
+    ) -> Result<Vec<f32>> {
+        let input = Input {
+            plane,
+            fractions: None,
+            kernel_plane,
+        };
+        Ok(self
+            .convolve_all(&[input], Vec::new(), control)?
+            .pop()
+            .unwrap_or_default())
+    }
+
+    /// Every input convolved with its kernel plane, plus its centre weight
+    /// times its bright part, plus the light that stays, written into the
+    /// planes of `recycled` where there are some (memory already mapped).
+    /// The planes go through each pass together, so that the kernel's
+    /// spectrum is read from memory once for all of them.
+    fn convolve_all(
+        &self,
+        inputs: &[Input],
+        mut recycled: Vec<Vec<f32>>,
+        control: &mut Control,
+    ) -> Result<Vec<Vec<f32>>> {
+        let h = self.height;
+        let strips = self.grid.spectrum_width().div_ceil(STRIP);
+        let zero = Complex::new(0.0, 0.0);
+        let mut buffers = self.buffers.lease();
+        buffers.resize_with(inputs.len(), Default::default);
+        for (rows, results) in buffers.iter_mut() {
+            rows.resize(h.div_ceil(BLOCK) * strips * TILE, zero);
+            results.resize(strips * h * STRIP, zero);
+        }
+        for (input, (rows, _)) in inputs.iter().zip(buffers.iter_mut()) {
+            self.forward_rows(input, rows, strips, &control.cancel());
+        }
+        control.check()?;
+        control.report(0.3);
+        self.column_pass(inputs, &mut buffers, strips, &control.cancel());
+        control.check()?;
+        control.report(0.7);
+        recycled.resize_with(inputs.len(), Vec::new);
+        recycled.truncate(inputs.len());
+        let outputs = inputs
+            .iter()
+            .zip(buffers.iter())
+            .zip(recycled)
+            .map(|((input, (_, results)), mut out)| {
+                out.resize(self.width * h, 0.0);
+                self.inverse_rows(input, results, &mut out, strips, &control.cancel());
+                out
+            })
+            .collect();
+        control.check()?;
+        control.report(1.0);
+        Ok(outputs)
+    }
+
+    /// Forward row transforms of one input, a block of rows per task, into
+    /// tiles: block b, strip s, row, column.
+    fn forward_rows(
+        &self,
+        input: &Input,
+        rows: &mut [Complex<f32>],
+        strips: usize,
+        cancel: &Cancel,
+    ) {
+        let w = self.width;
+        let row_fft = &self.row_fft;
+        rows.par_chunks_mut(strips * TILE)
+            .zip(input.plane.par_chunks(BLOCK * w))
+            .enumerate()
+            .for_each_init(
+                || {
+                    (
+                        row_fft.make_input_vec(),
+                        row_fft.make_output_vec(),
+                        row_fft.make_scratch_vec(),
+                    )
+                },
+                |(padded, spectrum, scratch), (block, (tiles, source))| {
+                    if cancel.is_cancelled() {
+                        return;
+                    }
+                    for (r, row) in source.chunks(w).enumerate() {
+                        match input.fractions {
+                            Some(fractions) => {
+                                let at = (block * BLOCK + r) * w;
+                                for ((p, v), f) in
+                                    padded.iter_mut().zip(row).zip(&fractions[at..at + w])
+                                {
+                                    *p = v * f;
+                                }
+                            }
+                            None => padded[..w].copy_from_slice(row),
+                        }
+                        padded[w..].iter_mut().for_each(|v| *v = 0.0);
+                        let _ = row_fft.process_with_scratch(padded, spectrum, scratch);
+                        for (s, values) in spectrum.chunks(STRIP).enumerate() {
+                            let at = s * TILE + r * STRIP;
+                            tiles[at..at + values.len()].copy_from_slice(values);
+                        }
+                    }
+                },
+            );
+    }
+
+    /// The column transforms of every input, strip by strip: each strip task
+    /// gathers its columns from the row spectra, and writes the H output
+    /// rows of the product's inverse into its own part of the results.
+    fn column_pass(
+        &self,
+        inputs: &[Input],
+        buffers: &mut [Buffers],
+        strips: usize,
+        cancel: &Cancel,
+    ) {
+        let h = self.height;
+        let py = self.grid.columns.length();
+        let zero = Complex::new(0.0, 0.0);
+        let (rows, mut results): (Vec<&[Complex<f32>]>, Vec<_>) = buffers
+            .iter_mut()
+            .map(|(rows, results)| (rows.as_slice(), results.chunks_mut(h * STRIP)))
+            .unzip();
+        // Strip s of every input, as one task.
+        let tasks: Vec<Vec<&mut [Complex<f32>]>> = (0..strips)
+            .map(|_| results.iter_mut().filter_map(Iterator::next).collect())
+            .collect();
+        let scratch_len = self
+            .column_fft
+            .get_inplace_scratch_len()
+            .max(self.column_ifft.get_inplace_scratch_len());
+        tasks.into_par_iter().enumerate().for_each_init(
+            || (vec![zero; py], vec![zero; scratch_len]),
+            |(column, scratch), (s, mut outs)| {
+                for ((input, rows), out) in inputs.iter().zip(&rows).zip(outs.iter_mut()) {
+                    if cancel.is_cancelled() {
+                        return;
+                    }
+                    let strip = Strip {
+                        index: s,
+                        strips,
+                        rows,
+                        spectrum: &self.spectra[input.kernel_plane],
+                    };
+                    super::simd::strip(self, &strip, out, column, scratch);
+                }
+            },
+        );
+    }
+
+    /// One strip's columns of one input: its tiles of the row spectra into
+    /// `out` (H rows of [`STRIP`] values, in cache from here on), then each
+    /// column through the transforms, in place.
+    #[inline(always)]
+    pub(super) fn strip(
+        &self,
+        strip: &Strip,
+        out: &mut [Complex<f32>],
+        column: &mut [Complex<f32>],
+        scratch: &mut [Complex<f32>],
+    ) {
+        let h = self.height;
+        let count = self.grid.spectrum_width();
+        let py = self.grid.columns.length();
+        let first = strip.index * STRIP;
+        let width = STRIP.min(count - first);
+        for (block, tiles) in strip.rows.chunks(strip.strips * TILE).enumerate() {
+            let at = block * TILE;
+            let n = TILE.min(h * STRIP - at);
+            out[at..at + n].copy_from_slice(&tiles[strip.index * TILE..strip.index * TILE + n]);
+        }
+        for j in 0..width {
+            let kernel = &strip.spectrum[(first + j) * py..(first + j + 1) * py];
+            self.column(out, j, kernel, column, scratch);
+        }
+    }
+
+    /// Column `j` of a strip (H rows of [`STRIP`] values) through the
+    /// padded column transform, the product with `kernel`'s column spectrum
+    /// and back, in place.
+    #[inline(always)]
+    fn column(
+        &self,
+        strip: &mut [Complex<f32>],
+        j: usize,
+        kernel: &[Complex<f32>],
+        column: &mut [Complex<f32>],
+        scratch: &mut [Complex<f32>],
+    ) {
+        let h = self.height;
+        let zero = Complex::new(0.0, 0.0);
+        match self.grid.columns {
+            ColumnTransform::Full(_) => {
+                for (c, v) in column.iter_mut().zip(strip.iter().skip(j).step_by(STRIP)) {
+                    *c = *v;
+                }
+                column[h..].iter_mut().for_each(|v| *v = zero);
+            }
+            ColumnTransform::Halves(n) => {
+                let (even, odd) = column.split_at_mut(n);
+                for (((e, o), v), t) in even
+                    .iter_mut()
+                    .zip(odd.iter_mut())
+                    .zip(strip.iter().skip(j).step_by(STRIP))
+                    .zip(&self.twiddles)
+                {
+                    *e = *v;
+                    *o = v * t;
+                }
+                even[h..].iter_mut().for_each(|v| *v = zero);
+                odd[h..].iter_mut().for_each(|v| *v = zero);
+            }
+        }
+        // For pruned columns both halves go in one call: rustfft transforms
+        // a buffer of several lengths one after the other.
+        self.column_fft.process_with_scratch(column, scratch);
+        for (a, b) in column.iter_mut().zip(kernel) {
+            *a *= *b;
+        }
+        self.column_ifft.process_with_scratch(column, scratch);
+        let values = strip.iter_mut().skip(j).step_by(STRIP);
+        match self.grid.columns {
+            ColumnTransform::Full(_) => {
+                for (v, c) in values.zip(column.iter()) {
+                    *v = *c;
+                }
+            }
+            ColumnTransform::Halves(n) => {
+                let (even, odd) = column.split_at(n);
+                for (((v, e), o), t) in values.zip(even).zip(odd).zip(&self.twiddles) {
+                    *v = e + o * t.conj();
+                }
+            }
+        }
+    }
+
+    /// Inverse row transforms of one input, a block of rows per task,
+    /// gathered from the strips (a tile's worth from each), plus the
+    /// centre's light and the light that stays.
+    fn inverse_rows(
+        &self,
+        input: &Input,
+        results: &[Complex<f32>],
+        out: &mut [f32],
+        strips: usize,
+        cancel: &Cancel,
+    ) {
+        let w = self.width;
+        let count = self.grid.spectrum_width();
+        let row_ifft = &self.row_ifft;
+        let zero = Complex::new(0.0, 0.0);
+        out.par_chunks_mut(BLOCK * w)
+            .zip(input.plane.par_chunks(BLOCK * w))
+            .enumerate()
+            .for_each_init(
+                || {
+                    (
+                        vec![zero; BLOCK * count],
+                        row_ifft.make_output_vec(),
+                        row_ifft.make_scratch_vec(),
+                    )
+                },
+                |(spectra, output, scratch), (block, (destination, source))| {
+                    if cancel.is_cancelled() {
+                        return;
+                    }
+                    self.gather_block(results, block, destination.len() / w, strips, spectra);
+                    for (r, ((spectrum, destination), source)) in spectra
+                        .chunks_mut(count)
+                        .zip(destination.chunks_mut(w))
+                        .zip(source.chunks(w))
+                        .enumerate()
+                    {
+                        // A real signal's DC and Nyquist bins are real; the
+                        // inverse refuses their round-off.
+                        spectrum[0].im = 0.0;
+                        if self.grid.px % 2 == 0 {
+                            spectrum[count - 1].im = 0.0;
+                        }
+                        let _ = row_ifft.process_with_scratch(spectrum, output, scratch);
+                        let at = (block * BLOCK + r) * w;
+                        self.finish_row(input, at, output, source, destination);
+                    }
+                },
+            );
+    }
+
+    /// The spectra of block `block`'s `rows` rows, a tile from each strip.
+    fn gather_block(
+        &self,
+        results: &[Complex<f32>],
+        block: usize,
+        rows: usize,
+        strips: usize,
+        spectra: &mut [Complex<f32>],
+    ) {
+        let h = self.height;
+        let count = self.grid.spectrum_width();
+        for s in 0..strips {
+            let at = s * h * STRIP + block * TILE;
+            let tile = &results[at..at + rows * STRIP];
+            let first = s * STRIP;
+            let width = STRIP.min(count - first);
+            for (r, values) in tile.chunks(STRIP).enumerate() {
+                spectra[r * count + first..r * count + first + width]
+                    .copy_from_slice(&values[..width]);
+            }
+        }
+    }
+
+    /// One output row from its inverse transform (`convolved`, unscaled):
+    /// the moved light, the centre's share of the bright part, and the
+    /// light that stays (`at` is the row's first pixel).
+    #[inline]
+    fn finish_row(
+        &self,
+        input: &Input,
+        at: usize,
+        convolved: &[f32],
+        source: &[f32],
+        destination: &mut [f32],
+    ) {
+        let scale = 1.0 / (self.grid.px as f32 * self.grid.columns.length() as f32);
+        let centre = self.centres[input.kernel_plane];
+        let values = destination.iter_mut().zip(convolved).zip(source);
+        match input.fractions {
+            Some(fractions) => {
+                for (((d, v), s), f) in values.zip(&fractions[at..at + self.width]) {
+                    let bright = s * f;
+                    *d = v * scale + centre * bright + (s - bright);
+                }
+            }
+            None => {
+                for ((d, v), s) in values {
+                    *d = v * scale + centre * s;
+                }
+            }
+        }
+    }
+}
+
+impl Engine for Convolver {
+    fn padded_size(&self) -> (usize, usize) {
+        self.grid.padded()
+    }
+
+    fn kernel_planes(&self) -> usize {
+        self.spectra.len()
+    }
+
+    /// Each output as one pass over its plane where it takes one kernel
+    /// plane; a luminance plane through a coloured kernel as Σ w_k of its
+    /// bright part through each plane, plus the light that stays.
+    fn spread(
+        &self,
+        outputs: &[Spread],
+        mut recycled: Vec<Vec<f32>>,
+        control: &mut Control,
+    ) -> Result<Vec<Vec<f32>>> {
+        let single = |s: &Spread| matches!(s.terms.as_slice(), [term] if term.weight == 1.0);
+        if outputs.iter().all(single) {
+            let inputs: Vec<Input> = outputs
+                .iter()
+                .map(|s| Input {
+                    plane: s.plane,
+                    fractions: s.fractions,
+                    kernel_plane: s.terms[0].kernel_plane,
+                })
+                .collect();
+            return self.convolve_all(&inputs, recycled, control);
+        }
+        let mut planes = Vec::with_capacity(outputs.len());
+        let share = 1.0 / outputs.len() as f64;
+        for (o, output) in outputs.iter().enumerate() {
+            let mut part = control.part(o as f64 * share, (o + 1) as f64 * share);
+            let spare: Vec<Vec<f32>> = recycled.drain(..recycled.len().min(1)).collect();
+            planes.push(self.weighted(output, spare, &mut part)?);
+        }
+        Ok(planes)
+    }
+}
+
+impl Convolver {
+    /// One output of several weighted terms: the bright part goes through
+    /// each kernel plane, and what stays is added once.
+    fn weighted(
+        &self,
+        output: &Spread,
+        recycled: Vec<Vec<f32>>,
+        control: &mut Control,
+    ) -> Result<Vec<f32>> {
+        let plane = output.plane;
+        let bright: Option<Vec<f32>> = output.fractions.map(|fractions| {
+            plane
+                .par_iter()
+                .zip(fractions)
+                .map(|(v, f)| v * f)
+                .collect()
+        });
+        let source = bright.as_deref().unwrap_or(plane);
+        let inputs: Vec<Input> = output
+            .terms
+            .iter()
+            .map(|term| Input {
+                plane: source,
+                fractions: None,
+                kernel_plane: term.kernel_plane,
+            })
+            .collect();
+        let mut parts = self.convolve_all(&inputs, recycled, control)?.into_iter();
+        let mut weights = output.terms.iter().map(|t| t.weight);
+        let mut sum = parts.next().unwrap_or_default();
+        let first = weights.next().unwrap_or(0.0);
+        sum.par_iter_mut().for_each(|s| *s *= first);
+        for (part, weight) in parts.zip(weights) {
+            sum.par_iter_mut()
+                .zip(&part)
+                .for_each(|(s, p)| *s += weight * p);
+        }
+        if let Some(bright) = &bright {
+            sum.par_iter_mut()
+                .zip(plane)
+                .zip(bright)
+                .for_each(|((s, v), b)| *s += v - b);
+        }
+        Ok(sum)
+    }
+}
+
+/// The 2-D spectrum of a placed kernel plane over the grid, column by
+/// column (pruned columns: even frequencies, then odd). Only the kernel's
+/// own rows are transformed and stored: the other rows of the period are
+/// zeros.
+fn kernel_spectrum(
+    row_fft: &dyn RealToComplex<f32>,
+    column_fft: &dyn Fft<f32>,
+    grid: &Grid,
+    placed: &Placement,
+    control: &mut Control,
+) -> Result<Vec<Complex<f32>>> {
+    let py = grid.columns.length();
+    let kh = placed.size.1;
+    let count = grid.spectrum_width();
+    let zero = Complex::new(0.0, 0.0);
+    let cancel = control.cancel();
+    let mut rows = vec![zero; kh * count];
+    rows.par_chunks_mut(count).enumerate().for_each_init(
+        || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
+        |(input, scratch), (j, out)| {
+            if cancel.is_cancelled() {
+                return;
+            }
+            placed.row(j, input);
+            let _ = row_fft.process_with_scratch(input, out, scratch);
+        },
+    );
+    control.check()?;
+    control.report(0.5);
+    // Column transforms, a strip of columns per task, gathered a cache line
+    // or two per row rather than one value per row.
+    let mut spectrum = vec![zero; count * py];
+    spectrum
+        .par_chunks_mut(STRIP * py)
+        .enumerate()
+        .for_each_init(
+            || {
+                (
+                    vec![zero; py * STRIP],
+                    vec![zero; py],
+                    vec![zero; column_fft.get_inplace_scratch_len()],
+                )
+            },
+            |(strip, column, scratch), (s, out)| {
+                if cancel.is_cancelled() {
+                    return;
+                }
+                let first = s * STRIP;
+                let width = out.len() / py;
+                strip.iter_mut().for_each(|v| *v = zero);
+                for (j, row) in rows.chunks(count).enumerate() {
+                    let r = placed.period_row(j, py);
+                    strip[r * STRIP..r * STRIP + width].copy_from_slice(&row[first..first + width]);
+                }
+                for (j, out) in out.chunks_mut(py).enumerate() {
+                    for (v, s) in column.iter_mut().zip(strip.iter().skip(j).step_by(STRIP)) {
+                        *v = *s;
+                    }
+                    column_fft.process_with_scratch(column, scratch);
+                    match grid.columns {
+                        ColumnTransform::Full(_) => out.copy_from_slice(column),
+                        ColumnTransform::Halves(n) => {
+                            let (even, odd) = out.split_at_mut(n);
+                            for ((e, o), pair) in even.iter_mut().zip(odd).zip(column.chunks(2)) {
+                                *e = pair[0];
+                                *o = pair[1];
+                            }
+                        }
+                    }
+                }
+            },
+        );
+    control.check()?;
+    control.report(1.0);
+    Ok(spectrum)
+}

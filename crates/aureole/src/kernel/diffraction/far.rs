@@ -1,0 +1,181 @@
+//! The far field of a diffraction pattern: beyond ~60 λN the interference
+//! between different edges oscillates faster than a pixel, and the pattern
+//! is the incoherent sum of each edge's |F_k|² = L²(x·n)² sinc²(πu/λ) /
+//! (4π²|x|⁴·area), u the offset across the edge's ray times L/f, averaged
+//! over the pixel analytically; each disc adds its ⟨J₁²⟩ term
+//! R λ f / (2π²|x|³·area), and each piece of a curved side fans its light
+//! over the turn of its normal (docs/physics.md §6).
+
+use super::Spectrum;
+use crate::optics::aperture::pupil::EdgeTerm;
+use crate::optics::aperture::Optics;
+
+/// The far field: incoherent sums over edges, curved sides and discs.
+pub(super) struct FarField {
+    /// (L², normal, unit direction along, L/f) per straight edge.
+    edges: Vec<(f64, [f64; 2], [f64; 2], f64)>,
+    /// Pieces of curved sides: the curve's radius of curvature there
+    /// (L / the normal's turn, mm), the normal's angle and the turn before
+    /// and after it (rad).
+    fans: Vec<(f64, f64, [f64; 2])>,
+    discs: Vec<f64>,
+    /// Per channel: the spectrum-averaged ∫₀ᵘ sinc²(πu'/λ) du'.
+    tables: Vec<Cumulative>,
+    /// Per channel: the sensitivity-weighted mean wavelength, mm.
+    mean_lambda: Vec<f64>,
+    area: f64,
+    focal: f64,
+}
+
+/// G(u) = ∫₀ᵘ g, g(u) = Σ w sinc²(πu/λ) / Σ w, tabulated finely, with the
+/// tail g ≈ ⟨λ²⟩/(2π²u²) beyond.
+struct Cumulative {
+    step: f64,
+    values: Vec<f64>,
+    tail: f64,
+}
+
+impl Cumulative {
+    fn new(light: &[(f64, f64)]) -> Cumulative {
+        let total: f64 = light.iter().map(|(_, w)| w).sum();
+        let shortest = light.iter().map(|(l, _)| *l).fold(f64::INFINITY, f64::min);
+        let longest = light.iter().map(|(l, _)| *l).fold(0.0, f64::max);
+        let step = shortest / 32.0;
+        let count = (256.0 * longest / step).ceil() as usize;
+        let g = |u: f64| {
+            light
+                .iter()
+                .map(|(l, w)| {
+                    let z = std::f64::consts::PI * u / l;
+                    let s = if z.abs() < 1e-9 { 1.0 } else { z.sin() / z };
+                    w * s * s
+                })
+                .sum::<f64>()
+                / total
+        };
+        let mut values = Vec::with_capacity(count + 1);
+        let mut sum = 0.0;
+        let mut last = g(0.0);
+        values.push(0.0);
+        for k in 1..=count {
+            let next = g(k as f64 * step);
+            sum += 0.5 * (last + next) * step;
+            values.push(sum);
+            last = next;
+        }
+        let mean_square = light.iter().map(|(l, w)| w * l * l).sum::<f64>() / total;
+        Cumulative {
+            step,
+            values,
+            tail: mean_square / (2.0 * std::f64::consts::PI.powi(2)),
+        }
+    }
+
+    /// G(u), odd in u.
+    fn at(&self, u: f64) -> f64 {
+        let a = u.abs();
+        let end = (self.values.len() - 1) as f64 * self.step;
+        let g = if a >= end {
+            self.values[self.values.len() - 1] + self.tail * (1.0 / end - 1.0 / a)
+        } else {
+            let position = a / self.step;
+            let k = position as usize;
+            let t = position - k as f64;
+            self.values[k] * (1.0 - t) + self.values[k + 1] * t
+        };
+        g.copysign(u)
+    }
+}
+
+impl FarField {
+    pub fn new(optics: &Optics, spectrum: &Spectrum, weights_total: &[f64]) -> FarField {
+        let (edges, discs) = optics.pupil.far_field_terms();
+        let f = optics.focal_mm;
+        let channels = weights_total.len();
+        let light = |c: usize| -> Vec<(f64, f64)> {
+            spectrum.iter().map(|(l, w)| (l * 1e-6, w[c])).collect()
+        };
+        let (curved, straight): (Vec<EdgeTerm>, Vec<EdgeTerm>) =
+            edges.into_iter().partition(|e| e.fan.is_some());
+        FarField {
+            edges: straight
+                .into_iter()
+                .map(|e| (e.length * e.length, e.normal, e.along, e.length / f))
+                .collect(),
+            fans: curved
+                .into_iter()
+                .filter_map(|e| {
+                    let [before, after] = e.fan?;
+                    (before + after > 0.0).then(|| {
+                        (
+                            e.length / (before + after),
+                            e.normal[1].atan2(e.normal[0]),
+                            [before, after],
+                        )
+                    })
+                })
+                .collect(),
+            discs,
+            tables: (0..channels).map(|c| Cumulative::new(&light(c))).collect(),
+            mean_lambda: (0..channels)
+                .map(|c| {
+                    spectrum.iter().map(|(l, w)| l * 1e-6 * w[c]).sum::<f64>() / weights_total[c]
+                })
+                .collect(),
+            area: optics.pupil.area(),
+            focal: f,
+        }
+    }
+
+    /// The light of channel `c` in the pixel at (x, y) mm.
+    pub fn energy(&self, c: usize, x: f64, y: f64, pitch: f64) -> f64 {
+        let r2 = x * x + y * y;
+        let table = &self.tables[c];
+        let mut sum = 0.0;
+        for (l2, n, a, l_over_f) in &self.edges {
+            let along = x * n[0] + y * n[1];
+            let across = x * a[0] + y * a[1];
+            // The pixel spans this much across the ray (a strip as wide as
+            // the square's projection).
+            let half = 0.5 * pitch * (a[0].abs() + a[1].abs());
+            let (u1, u2) = ((across - half) * l_over_f, (across + half) * l_over_f);
+            let mean = (table.at(u2) - table.at(u1)) / (u2 - u1);
+            sum += l2 * along * along * mean;
+        }
+        let mut value = sum / (4.0 * std::f64::consts::PI.powi(2) * r2 * r2);
+        let r = r2.sqrt();
+        let r3 = r2 * r;
+        if !self.fans.is_empty() {
+            // By stationary phase, the points of a curved side whose normal
+            // is ±x/|x| send ρ λ f / (4π² |x|³) there (two such points on a
+            // disc give its ⟨J₁²⟩ term), ρ the radius of curvature; each
+            // piece covers its share of the normal's directions, averaged
+            // over the angle the pixel spans.
+            let phi = y.atan2(x);
+            let half = 0.5 * pitch * (x.abs() + y.abs()) / r2;
+            let mut covered = 0.0;
+            for (rho, normal, [before, after]) in &self.fans {
+                for side in [0.0, std::f64::consts::PI] {
+                    let offset = wrap(phi - normal - side);
+                    let overlap = (offset + half).min(*after) - (offset - half).max(-before);
+                    if overlap > 0.0 {
+                        covered += rho * overlap;
+                    }
+                }
+            }
+            value += covered / (2.0 * half) * self.mean_lambda[c] * self.focal
+                / (4.0 * std::f64::consts::PI.powi(2) * r3);
+        }
+        for radius in &self.discs {
+            value += radius * self.mean_lambda[c] * self.focal
+                / (2.0 * std::f64::consts::PI.powi(2) * r3);
+        }
+        value / self.area * pitch * pitch
+    }
+}
+
+/// An angle brought into (−π, π].
+fn wrap(angle: f64) -> f64 {
+    let turns = (angle / std::f64::consts::TAU).round();
+    angle - turns * std::f64::consts::TAU
+}

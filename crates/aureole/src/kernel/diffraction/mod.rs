@@ -1,0 +1,271 @@
+//! Rasterising a diffraction PSF (docs/physics.md §6): each pixel gets the
+//! mean over its area of PSF_λ(x) = |Â(x/(λf))|² / ((λf)² · area), for each
+//! wavelength, weighted by each plane's sensitivity; a filter's orders then
+//! shift copies of the pattern.
+//!
+//! Near the centre the transform is evaluated exactly, supersampled
+//! ([`near`]). Beyond ~60 λN the interference between different edges
+//! oscillates faster than a pixel and the spectrum can show: there each
+//! edge's pattern is added incoherently, averaged over the pixel
+//! analytically ([`far`]). Filter orders are in [`orders`].
+
+mod far;
+mod near;
+mod orders;
+
+use super::Extent;
+use crate::control::{for_each_row, Control};
+use crate::error::Result;
+use crate::optics::aperture::spectrum::Light;
+use crate::optics::aperture::Optics;
+use far::FarField;
+use near::NearField;
+
+/// What light to integrate: (wavelength nm, weight per plane).
+pub(crate) type Spectrum = Vec<(f64, Vec<f64>)>;
+
+/// The pattern of `optics` integrated over `light` at `pitch_mm` per pixel:
+/// one plane per colour (one for monochrome light), each normalised to
+/// Σ = 1.
+pub(crate) fn pattern(
+    optics: &Optics,
+    light: Light,
+    extent: &Extent,
+    pitch_mm: f64,
+    control: &mut Control,
+) -> Result<Vec<Vec<f64>>> {
+    let spectrum = light.wavelengths();
+    let longest = spectrum.iter().map(|(l, _)| *l).fold(0.0, f64::max) * 1e-6;
+    let far_from = (48.0 * pitch_mm).max(60.0 * longest * optics.focal_mm / optics.diameter_mm);
+    pattern_with(optics, &spectrum, extent, pitch_mm, far_from, control)
+}
+
+/// As [`pattern`], with the far field from `far_from` mm out.
+fn pattern_with(
+    optics: &Optics,
+    spectrum: &Spectrum,
+    extent: &Extent,
+    pitch_mm: f64,
+    far_from: f64,
+    control: &mut Control,
+) -> Result<Vec<Vec<f64>>> {
+    let planes = spectrum.first().map_or(1, |(_, w)| w.len());
+    let (width, height) = (extent.width, extent.height);
+    let (cx, cy) = (width / 2, height / 2);
+    let weights_total: Vec<f64> = (0..planes)
+        .map(|c| spectrum.iter().map(|(_, w)| w[c]).sum::<f64>())
+        .collect();
+    let near = NearField::new(optics, spectrum, pitch_mm);
+    let far = FarField::new(optics, spectrum, &weights_total);
+    let filtered = optics.orders.len() > 1;
+
+    // Pixel by pixel, the planes' values side by side.
+    let mut interleaved = vec![0.0; width * height * planes];
+    let mut rasterising = control.part(0.0, if filtered { 0.8 } else { 1.0 });
+    for_each_row(
+        &mut interleaved,
+        width * planes,
+        &mut rasterising,
+        |j, row| {
+            let y = (cy as f64 - j as f64) * pitch_mm;
+            for (i, pixel) in row.chunks_mut(planes).enumerate() {
+                let x = (i as f64 - cx as f64) * pitch_mm;
+                if x.hypot(y) >= far_from {
+                    for (c, value) in pixel.iter_mut().enumerate() {
+                        // Weighted like the exact sum, undone below.
+                        *value = weights_total[c] * far.energy(c, x, y, pitch_mm);
+                    }
+                } else {
+                    near.add(x, y, i.abs_diff(cx) <= 1 && j.abs_diff(cy) <= 1, pixel);
+                }
+            }
+        },
+    )?;
+    let mut result: Vec<Vec<f64>> = (0..planes)
+        .map(|c| {
+            interleaved
+                .iter()
+                .skip(c)
+                .step_by(planes)
+                .map(|v| v / weights_total[c])
+                .collect()
+        })
+        .collect();
+    drop(interleaved);
+    if filtered {
+        result = orders::through_filter(
+            optics,
+            spectrum,
+            result,
+            extent,
+            pitch_mm,
+            &weights_total,
+            &mut control.part(0.8, 1.0),
+        )?;
+    }
+    for plane in &mut result {
+        let total: f64 = plane.iter().sum();
+        if total > 0.0 {
+            plane.iter_mut().for_each(|v| *v /= total);
+        }
+    }
+    Ok(result)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::Cancel;
+    use crate::optics::Aperture;
+
+    const SIDE: usize = 141;
+
+    /// A stop of `blades` (0: round) at f/`f_number` on a 50 mm lens.
+    fn stop(blades: u32, roundness: f64, f_number: f64) -> Optics {
+        let aperture = Aperture {
+            blades,
+            rotation_deg: 5.0,
+            roundness,
+            spectral: true,
+            wavelength_nm: 550.0,
+            obstruction: 0.0,
+            vanes: 0,
+            vane_width: 0.02,
+            filters: Vec::new(),
+        };
+        let camera = crate::Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(50.0),
+            f_number: Some(f_number),
+        };
+        aperture.optics(&camera, 1.0).unwrap()
+    }
+
+    /// The 17 wavelengths and their R, G, B weights.
+    fn light() -> Spectrum {
+        Light::Spectral.wavelengths()
+    }
+
+    /// [`pattern_with`], neither reporting nor cancelled.
+    fn rasterise_with(
+        optics: &Optics,
+        spectrum: &Spectrum,
+        extent: &Extent,
+        pitch_mm: f64,
+        far_from: f64,
+    ) -> Vec<Vec<f64>> {
+        let cancel = Cancel::new();
+        let mut control = Control::quiet(&cancel);
+        pattern_with(optics, spectrum, extent, pitch_mm, far_from, &mut control).unwrap()
+    }
+
+    /// The green plane of a stop's PSF on a 141-px square of pixels
+    /// `pitch` mm, with the far field from 48 px out and exact throughout.
+    fn fast_and_exact(
+        blades: u32,
+        roundness: f64,
+        f_number: f64,
+        pitch: f64,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let (optics, light) = (stop(blades, roundness, f_number), light());
+        let extent = Extent::new(SIDE, SIDE).unwrap();
+        let mut fast = rasterise_with(&optics, &light, &extent, pitch, 48.0 * pitch);
+        let mut exact = rasterise_with(&optics, &light, &extent, pitch, f64::INFINITY);
+        (fast.swap_remove(1), exact.swap_remove(1))
+    }
+
+    /// The light of `plane` between radii `r0` and `r1` px, in `bins`
+    /// sectors from the +x axis.
+    fn sectors(plane: &[f64], r0: f64, r1: f64, bins: usize) -> Vec<f64> {
+        let mut out = vec![0.0; bins];
+        let centre = (SIDE / 2) as f64;
+        for (i, v) in plane.iter().enumerate() {
+            let (dx, dy) = ((i % SIDE) as f64 - centre, centre - (i / SIDE) as f64);
+            let r = dx.hypot(dy);
+            if r >= r0 && r < r1 {
+                let turn = dy.atan2(dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
+                out[((turn * bins as f64) as usize).min(bins - 1)] += v;
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn a_round_stop_sends_the_airy_tail_out_of_the_centre_pixel() {
+        // With pixels of half-width a ≫ λN the Airy rings average to the
+        // density λN/(π³r³), so a share λN·4√2/(π³a) of the light lies
+        // outside the centre pixel: the core must be integrated well enough
+        // for the rest to get its share, at every wavelength.
+        let (light, f_number) = (light(), 8.0);
+        let optics = stop(0, 0.0, f_number);
+        for pitch in [0.036, 0.027] {
+            let extent = Extent::new(SIDE, SIDE).unwrap();
+            let cancel = Cancel::new();
+            let planes = pattern(
+                &optics,
+                Light::Spectral,
+                &extent,
+                pitch,
+                &mut Control::quiet(&cancel),
+            )
+            .unwrap();
+            let a = pitch / 2.0;
+            for (c, plane) in planes.iter().enumerate() {
+                let total: f64 = light.iter().map(|(_, w)| w[c]).sum();
+                let mean_lambda = light.iter().map(|(l, w)| l * 1e-6 * w[c]).sum::<f64>() / total;
+                let expected =
+                    mean_lambda * f_number * 4.0 * 2f64.sqrt() / (std::f64::consts::PI.powi(3) * a);
+                let outside = 1.0 - plane[(SIDE / 2) * SIDE + SIDE / 2];
+                assert!(
+                    (outside / expected - 1.0).abs() < 0.03,
+                    "pitch {pitch} mm, channel {c}: {outside:.5} outside, {expected:.5} expected"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_far_field_carries_the_light_the_exact_transform_does() {
+        // 10-px rings from 40 px out, across the switch at 48 px.
+        let pitch = 36.0 / 3840.0; // a 4K frame on full frame
+        for (blades, roundness) in [(0, 0.0), (6, 0.0), (7, 0.0), (8, 0.3)] {
+            let (fast, exact) = fast_and_exact(blades, roundness, 8.0, pitch);
+            for k in 0..3 {
+                let r = 40.0 + 10.0 * k as f64;
+                let (a, b) = (
+                    sectors(&fast, r, r + 10.0, 1)[0],
+                    sectors(&exact, r, r + 10.0, 1)[0],
+                );
+                assert!(
+                    (a / b - 1.0).abs() < 0.1,
+                    "{blades} blades, roundness {roundness}, {r} px: {a} vs {b}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn rounded_blades_fan_their_light_where_the_exact_transform_does() {
+        // f/32 on 36 µm pixels: the pieces that sample a rounded blade are
+        // so short that each one's own ray would be ~20 px wide; the curve
+        // they sample spreads its light only over the turn of its normal.
+        let pitch = 0.036;
+        for (blades, roundness) in [(8, 0.1), (6, 0.4), (5, 0.8)] {
+            let (fast, exact) = fast_and_exact(blades, roundness, 32.0, pitch);
+            let bins = 72;
+            let (a, b) = (
+                sectors(&fast, 50.0, 70.0, bins),
+                sectors(&exact, 50.0, 70.0, bins),
+            );
+            let total: f64 = b.iter().sum();
+            // Half the L1 distance between the angular distributions: the
+            // share of the light that sits in the wrong 5° sector.
+            let misplaced: f64 =
+                a.iter().zip(&b).map(|(x, y)| (x - y).abs()).sum::<f64>() / (2.0 * total);
+            assert!(
+                misplaced < 0.2,
+                "{blades} blades, roundness {roundness}: {misplaced:.3} of the light misplaced\n{a:?}\n{b:?}"
+            );
+        }
+    }
+}

@@ -1,0 +1,349 @@
+//! Diffraction on the camera stop and on star filters, from first principles
+//! (paper §2, docs/physics.md §6): the PSF is |𝔉{pupil}|² in the focal
+//! plane, PSF_λ(x) = |Â(x / (λf))|² / ((λf)² · area), per wavelength,
+//! integrated over the spectrum with each channel's sensitivity. The pupil
+//! and its transform are in [`pupil`], the light in [`spectrum`]; the
+//! kernel's near field, far field and filter orders in
+//! [`crate::kernel::diffraction`].
+
+pub mod pupil;
+pub mod spectrum;
+
+use std::f64::consts::{PI, TAU};
+
+use serde::Deserialize;
+
+use super::{Context, Model, Source};
+use crate::camera::Camera;
+use crate::check;
+use crate::error::{Error, Result};
+use pupil::Pupil;
+use spectrum::Light;
+
+/// The most blades a stop may have.
+pub const MAX_BLADES: u32 = 64;
+/// The most filter families (an 8-point star filter has four).
+pub const MAX_FILTERS: usize = 6;
+/// Straight segments per blade when blades are rounded.
+const ARC_SEGMENTS: usize = 16;
+
+/// A camera stop and optional filter, as in an `[[effect]]` table with
+/// `type = "aperture"`. The f-number, focal length and sensor width come
+/// from `[camera]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Aperture {
+    /// Straight blades of the stop (3 to 64); 0 for a circular stop.
+    pub blades: u32,
+    /// Rotation of the stop, degrees counter-clockwise; at 0 a blade tip
+    /// points along +x.
+    #[serde(default)]
+    pub rotation_deg: f64,
+    /// 0: straight blades … 1: a circle through the blade tips.
+    #[serde(default)]
+    pub roundness: f64,
+    /// true: 17 wavelengths from 380 to 780 nm into linear Rec.709 R, G, B;
+    /// false: one achromatic kernel at `wavelength_nm`.
+    #[serde(default = "yes")]
+    pub spectral: bool,
+    /// The wavelength of an achromatic kernel, nm (380–780).
+    #[serde(default = "green")]
+    pub wavelength_nm: f64,
+    /// Central obstruction (mirror lenses), as a fraction of the diameter.
+    #[serde(default)]
+    pub obstruction: f64,
+    /// Spider vanes holding the obstruction.
+    #[serde(default)]
+    pub vanes: u32,
+    /// Width of each vane, as a fraction of the diameter.
+    #[serde(default = "vane_width")]
+    pub vane_width: f64,
+    /// Star filter or grating: one family of parallel lines per entry.
+    #[serde(default, rename = "filter")]
+    pub filters: Vec<Filter>,
+}
+
+/// One family of parallel opaque lines on a filter in front of the lens.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Filter {
+    /// Direction of the lines, degrees from +x; the rays they make are
+    /// perpendicular to them.
+    #[serde(default)]
+    pub angle_deg: f64,
+    /// d: distance between lines, µm.
+    pub spacing_um: f64,
+    /// e: width of each line, µm.
+    pub width_um: f64,
+}
+
+fn yes() -> bool {
+    true
+}
+fn green() -> f64 {
+    550.0
+}
+fn vane_width() -> f64 {
+    0.02
+}
+
+/// The optics an aperture kernel needs: the pupil, the focal length and
+/// the filter's diffraction orders.
+#[derive(Debug, Clone)]
+pub struct Optics {
+    /// The pupil, mm.
+    pub pupil: Pupil,
+    /// Pupil diameter D = f/N, mm.
+    pub diameter_mm: f64,
+    /// Focal length f, mm.
+    pub focal_mm: f64,
+    /// Filter orders: the spatial frequency each order is shifted by
+    /// (cycles/mm) and its share of the light, |c|².
+    pub orders: Vec<([f64; 2], f64)>,
+}
+
+impl Model for Aperture {
+    const KIND: &'static str = "aperture";
+
+    /// Checks every parameter.
+    fn validate(&self) -> Result<()> {
+        const NAME: &str = "aperture";
+        check::count(
+            NAME,
+            "blades",
+            self.blades,
+            self.blades == 0 || (3..=MAX_BLADES).contains(&self.blades),
+            "0 (a circular stop) or 3 to 64 blades",
+        )?;
+        check::angle(NAME, "rotation_deg", self.rotation_deg)?;
+        check::range(
+            NAME,
+            "roundness",
+            self.roundness,
+            (0.0..=1.0).contains(&self.roundness),
+            "0 (straight blades) to 1 (a circle)",
+        )?;
+        check::range(
+            NAME,
+            "wavelength_nm",
+            self.wavelength_nm,
+            (380.0..=780.0).contains(&self.wavelength_nm),
+            "a visible wavelength from 380 to 780 nm",
+        )?;
+        check::range(
+            NAME,
+            "obstruction",
+            self.obstruction,
+            (0.0..0.95).contains(&self.obstruction),
+            "a fraction of the diameter from 0 to below 0.95",
+        )?;
+        check::range(
+            NAME,
+            "vane_width",
+            self.vane_width,
+            self.vane_width > 0.0 && self.vane_width <= 0.2,
+            "a fraction of the diameter above 0 and at most 0.2",
+        )?;
+        check::count(
+            NAME,
+            "vanes",
+            self.vanes,
+            self.vanes <= 16,
+            "0 to 16 spider vanes",
+        )?;
+        check::count(
+            NAME,
+            "filter",
+            format!("{} families", self.filters.len()),
+            self.filters.len() <= MAX_FILTERS,
+            "at most 6 families of lines",
+        )?;
+        for f in &self.filters {
+            check::angle("aperture filter", "angle_deg", f.angle_deg)?;
+            check::range(
+                "aperture filter",
+                "spacing_um",
+                f.spacing_um,
+                f.spacing_um >= 1.0 && f.spacing_um <= 10_000.0,
+                "a line spacing d from 1 to 10000 µm",
+            )?;
+            check::range(
+                "aperture filter",
+                "width_um",
+                f.width_um,
+                f.width_um > 0.0 && f.width_um < f.spacing_um,
+                "a line width e above 0 and below the spacing",
+            )?;
+        }
+        Ok(())
+    }
+
+    fn planes(&self) -> usize {
+        if self.spectral {
+            3
+        } else {
+            1
+        }
+    }
+
+    fn source(&self, context: &Context) -> Result<Source> {
+        let pitch_mm = context
+            .pitch_mm
+            .ok_or_else(|| Error::needs_sensor_width("aperture diffraction".into()))?;
+        let extent = context.extent;
+        // Orders are kept as far out as the kernel's corners reach.
+        let reach = pitch_mm
+            * ((extent.width * extent.width + extent.height * extent.height) as f64).sqrt()
+            / 2.0;
+        Ok(Source::Diffraction {
+            optics: self.optics(context.camera, reach)?,
+            light: self.light(),
+            pitch_mm,
+        })
+    }
+
+    /// A diffraction pattern is held in f64, at four times an f32 plane's
+    /// bytes per plane, before it becomes f32.
+    fn building_bytes(&self, plane_bytes: u64) -> u64 {
+        4 * plane_bytes * self.planes() as u64
+    }
+}
+
+impl Aperture {
+    /// The light the pattern integrates: the spectrum into R, G, B, or one
+    /// wavelength.
+    pub fn light(&self) -> Light {
+        if self.spectral {
+            Light::Spectral
+        } else {
+            Light::Monochrome(self.wavelength_nm)
+        }
+    }
+
+    /// The pupil and orders for `camera`, with the orders that land within
+    /// `reach_mm` of the centre at 380 nm or longer.
+    pub fn optics(&self, camera: &Camera, reach_mm: f64) -> Result<Optics> {
+        self.validate()?;
+        let need = |field, why| Error::NeedsCamera {
+            what: "aperture diffraction".into(),
+            field,
+            why,
+        };
+        let focal = camera.focal_length_mm.ok_or_else(|| {
+            need(
+                "focal_length_mm",
+                "the pupil's diameter is f/N, and the pattern's scale λf",
+            )
+        })?;
+        let n = camera
+            .f_number
+            .ok_or_else(|| need("f_number", "the pupil's diameter is f/N"))?;
+        let diameter = focal / n;
+        Ok(Optics {
+            pupil: self.pupil(diameter / 2.0),
+            diameter_mm: diameter,
+            focal_mm: focal,
+            orders: self.orders(focal, reach_mm),
+        })
+    }
+
+    /// The stop of circumradius `radius` mm, with obstruction and vanes.
+    fn pupil(&self, radius: f64) -> Pupil {
+        let mut pupil = Pupil::new();
+        let rotation = self.rotation_deg.to_radians();
+        let inner_radius = if self.blades == 0 {
+            pupil.add_disc([0.0, 0.0], radius, true);
+            radius
+        } else {
+            let n = self.blades as usize;
+            let apothem = radius * (PI / n as f64).cos();
+            let segments = if self.roundness > 0.0 {
+                ARC_SEGMENTS
+            } else {
+                1
+            };
+            let mut vertices = Vec::with_capacity(n * segments);
+            for k in 0..n {
+                let start = rotation + TAU * k as f64 / n as f64;
+                let middle = start + PI / n as f64;
+                for s in 0..segments {
+                    let theta = start + TAU / n as f64 * s as f64 / segments as f64;
+                    let straight = apothem / (theta - middle).cos();
+                    let r = (1.0 - self.roundness) * straight + self.roundness * radius;
+                    vertices.push([r * theta.cos(), r * theta.sin()]);
+                }
+            }
+            pupil.add_sampled_polygon(&vertices, true, segments);
+            (1.0 - self.roundness) * apothem + self.roundness * radius
+        };
+        let obstruction = self.obstruction * radius;
+        if obstruction > 0.0 {
+            pupil.add_disc([0.0, 0.0], obstruction, false);
+        }
+        let half_width = self.vane_width * radius;
+        // Vanes run from the obstruction (or near the centre, where they
+        // would overlap) to the inscribed circle, within the open pupil.
+        let start = obstruction.max(2.0 * half_width);
+        for v in 0..self.vanes {
+            let angle = rotation + TAU * v as f64 / self.vanes as f64;
+            let (s, c) = angle.sin_cos();
+            let corner = |along: f64, across: f64| [along * c - across * s, along * s + across * c];
+            if inner_radius > start {
+                pupil.add_polygon(
+                    &[
+                        corner(start, -half_width),
+                        corner(inner_radius, -half_width),
+                        corner(inner_radius, half_width),
+                        corner(start, half_width),
+                    ],
+                    false,
+                );
+            }
+        }
+        pupil
+    }
+
+    /// Diffraction orders of the filter families: a family of opaque lines
+    /// of width e every d transmits T = Σ c_m e^(2πi m s/d) with
+    /// c₀ = 1 − e/d, c_m = −(e/d)·sinc(πme/d). Orders are kept alone or in
+    /// pairs of families (triple products are weaker than 10⁻⁶ of the light).
+    fn orders(&self, focal: f64, reach_mm: f64) -> Vec<([f64; 2], f64)> {
+        // (frequency shift, weight, families with a non-zero order)
+        let mut orders = vec![([0.0, 0.0], 1.0, 0u8)];
+        for family in &self.filters {
+            let (d, e) = (family.spacing_um * 1e-3, family.width_um * 1e-3);
+            let normal = (family.angle_deg + 90.0).to_radians();
+            let (s, c) = normal.sin_cos();
+            // Order m lands at m·λf/d mm: keep those within reach at 380 nm.
+            let count = ((reach_mm * d / (380e-6 * focal)).ceil() as i64).min(4000);
+            let coefficient = |m: i64| {
+                if m == 0 {
+                    1.0 - e / d
+                } else {
+                    let z = PI * m as f64 * e / d;
+                    -(e / d) * z.sin() / z
+                }
+            };
+            let mut next = Vec::new();
+            for &(nu, weight, used) in &orders {
+                for m in -count..=count {
+                    if m != 0 && used >= 2 {
+                        continue;
+                    }
+                    let w = weight * coefficient(m).powi(2);
+                    if w < 1e-12 {
+                        continue;
+                    }
+                    let shift = m as f64 / d;
+                    next.push((
+                        [nu[0] + shift * c, nu[1] + shift * s],
+                        w,
+                        used + u8::from(m != 0),
+                    ));
+                }
+            }
+            orders = next;
+        }
+        orders.into_iter().map(|(nu, w, _)| (nu, w)).collect()
+    }
+}

@@ -1,0 +1,100 @@
+//! Bloom: light scattered in the lens and the film emulsion (paper Eq. 6,
+//! docs/physics.md §3).
+//!
+//! f_b(r) = (β − 1) / (π R²) · (1 + (r/R)²)^(−β), the Moffat profile, whose
+//! integral over the plane is 1 for β > 1.
+
+use serde::Deserialize;
+
+use super::shape::{Grid, SpreadShape};
+use super::{Context, Model, Source};
+use crate::check;
+use crate::error::Result;
+use crate::units::Length;
+
+/// Bloom parameters, as in an `[[effect]]` table with `type = "bloom"`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bloom {
+    /// ε: fraction of the light that is scattered, 0…1.
+    pub epsilon: f64,
+    /// β: falloff exponent, > 1 (the paper uses 3–5, Fig. 4 uses 2).
+    pub beta: f64,
+    /// R: width of the scattering, e.g. 30–120 µm on the film or pixels.
+    pub radius: Length,
+}
+
+impl Model for Bloom {
+    const KIND: &'static str = "bloom";
+
+    /// Checks ε ∈ [0, 1] and β > 1 (β ≤ 1 spreads infinite energy).
+    fn validate(&self) -> Result<()> {
+        check::epsilon("bloom", self.epsilon)?;
+        check::range(
+            "bloom",
+            "beta",
+            self.beta,
+            self.beta > 1.0 && self.beta <= 100.0,
+            "a number above 1 and at most 100 (β ≤ 1 spreads infinite energy)",
+        )
+    }
+
+    fn source(&self, context: &Context) -> Result<Source> {
+        Ok(Source::Shape(
+            self.epsilon,
+            Box::new(self.shape(context.pitch_mm)?),
+        ))
+    }
+}
+
+impl Bloom {
+    /// The profile's value at r pixels for a radius of `radius_px`, with
+    /// the paper's normalisation ε(β − 1)/(πR²): what a kernel pixel at that
+    /// distance should hold when nothing leaves the kernel.
+    pub fn density_at(&self, r: f64, radius_px: f64) -> f64 {
+        let q = r / radius_px;
+        self.epsilon * (self.beta - 1.0) / (std::f64::consts::PI * radius_px * radius_px)
+            * libm::pow(1.0 + q * q, -self.beta)
+    }
+
+    fn shape(&self, pitch_mm: Option<f64>) -> Result<BloomShape> {
+        self.validate()?;
+        let radius = self.radius.to_px(pitch_mm, "bloom radius")?;
+        check::range(
+            "bloom",
+            "radius",
+            radius,
+            radius >= 1e-3,
+            "at least 0.001 px once converted to pixels",
+        )?;
+        Ok(BloomShape {
+            radius,
+            beta: self.beta,
+        })
+    }
+}
+
+struct BloomShape {
+    radius: f64,
+    beta: f64,
+}
+
+impl SpreadShape for BloomShape {
+    fn mirror_symmetric(&self) -> bool {
+        true
+    }
+
+    fn density(&self, x: f64, y: f64) -> f64 {
+        let q2 = (x * x + y * y) / (self.radius * self.radius);
+        libm::pow(1.0 + q2, -self.beta)
+    }
+
+    fn grid(&self, x: f64, y: f64) -> Grid {
+        // |f''/f| of (1 + r²/R²)^−β is at most about 2β(2β + 1)/(R² + r²),
+        // taken at the pixel's nearest point to the centre.
+        let r_near = ((x * x + y * y).sqrt() - std::f64::consts::FRAC_1_SQRT_2).max(0.0);
+        let curvature = 2.0 * self.beta * (2.0 * self.beta + 1.0)
+            / (self.radius * self.radius + r_near * r_near);
+        Grid::for_curvature(curvature, 64)
+    }
+}

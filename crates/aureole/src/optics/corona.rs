@@ -1,0 +1,630 @@
+//! Corona: star rays around bright lights (paper Eq. 7, docs/physics.md §4).
+//!
+//! f_c(r, φ) = C · l(r) · |cos(k (φ − φ₀) / 2)|^n(r), with
+//! l(r) = exp(−σ r / l_m) and n(r) = −1 / ln(cos ω), ω = (r / w)^(s − 1);
+//! n = 0 where ω ≥ π/2 (the isotropic core). Each ray m has its own length
+//! l_m = l·(1 + j·ξ_m), and optionally its own width and intensity, drawn from
+//! one seed.
+
+use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, TAU};
+
+use rand_core::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+use serde::Deserialize;
+
+use super::shape::{Grid, SpreadShape};
+use super::{Context, Model, Source};
+use crate::check;
+use crate::error::Result;
+use crate::units::Length;
+
+/// The most rays a corona may have.
+pub const MAX_RAYS: u32 = 1024;
+
+/// Below this fraction of its start a ray carries no light worth resolving:
+/// there its pixels are sampled once.
+const FADED: f64 = 1e-9;
+
+/// A jittered factor never goes below this fraction of its mean, so that a
+/// ray's length, width and intensity stay positive.
+const JITTER_FLOOR: f64 = 0.05;
+
+/// Corona parameters, as in an `[[effect]]` table with `type = "corona"`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Corona {
+    /// ε: fraction of the light that goes into the rays, 0…1.
+    pub epsilon: f64,
+    /// k: number of rays (a stop with n blades makes n rays for even n, 2n
+    /// for odd n).
+    pub rays: u32,
+    /// l: mean ray length, the distance over which a ray fades by e^−σ.
+    pub length: Length,
+    /// σ: fade-out along the ray, > 0.
+    #[serde(default = "one")]
+    pub fadeout: f64,
+    /// w: ray width parameter.
+    #[serde(default = "three_px")]
+    pub width: Length,
+    /// s: spread. 0: constant width; < 0: rays converge; > 0: they diverge;
+    /// 1: constant angular width (w has no effect).
+    #[serde(default = "one")]
+    pub spread: f64,
+    /// Relative standard deviation of each ray's length (0.25 in the paper).
+    #[serde(default = "quarter")]
+    pub length_jitter: f64,
+    /// Relative standard deviation of each ray's width.
+    #[serde(default)]
+    pub width_jitter: f64,
+    /// Relative standard deviation of each ray's intensity.
+    #[serde(default)]
+    pub intensity_jitter: f64,
+    /// φ₀: direction of the first ray, degrees counter-clockwise from the +x
+    /// axis (to the right on the displayed image).
+    #[serde(default)]
+    pub rotation_deg: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+fn quarter() -> f64 {
+    0.25
+}
+fn three_px() -> Length {
+    Length::px(3.0)
+}
+
+/// The random factors of one ray: its length, width and intensity relative
+/// to the corona's mean values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RayFactors {
+    /// l_m / l.
+    pub length: f64,
+    /// w_m / w.
+    pub width: f64,
+    /// Relative intensity of the ray.
+    pub intensity: f64,
+}
+
+impl Model for Corona {
+    const KIND: &'static str = "corona";
+
+    /// Checks every parameter's range.
+    fn validate(&self) -> Result<()> {
+        const NAME: &str = "corona";
+        check::epsilon(NAME, self.epsilon)?;
+        check::count(
+            NAME,
+            "rays",
+            self.rays,
+            (1..=MAX_RAYS).contains(&self.rays),
+            "a whole number of rays from 1 to 1024",
+        )?;
+        check::range(
+            NAME,
+            "fadeout",
+            self.fadeout,
+            self.fadeout > 0.0,
+            "a number above 0 (without fade-out a ray carries infinite energy)",
+        )?;
+        check::range(
+            NAME,
+            "spread",
+            self.spread,
+            self.spread.abs() <= 10.0,
+            "a number from -10 to 10",
+        )?;
+        let jitter = "a relative deviation from 0 to 1";
+        check::range(
+            NAME,
+            "length_jitter",
+            self.length_jitter,
+            (0.0..=1.0).contains(&self.length_jitter),
+            jitter,
+        )?;
+        check::range(
+            NAME,
+            "width_jitter",
+            self.width_jitter,
+            (0.0..=1.0).contains(&self.width_jitter),
+            jitter,
+        )?;
+        check::range(
+            NAME,
+            "intensity_jitter",
+            self.intensity_jitter,
+            (0.0..=1.0).contains(&self.intensity_jitter),
+            jitter,
+        )?;
+        check::angle(NAME, "rotation_deg", self.rotation_deg)
+    }
+
+    fn source(&self, context: &Context) -> Result<Source> {
+        Ok(Source::Shape(
+            self.epsilon,
+            Box::new(self.shape(context.pitch_mm, context.seed, context.index_of_kind)?),
+        ))
+    }
+}
+
+impl Corona {
+    /// Each ray's random factors, ray 0 first (ray m points at
+    /// φ₀ + 2πm/k). The same `seed` and `corona_index` (the number of coronas
+    /// before this one in the chain) give the same factors on every machine.
+    pub fn ray_factors(&self, seed: u64, corona_index: usize) -> Vec<RayFactors> {
+        let stream = seed.wrapping_add((corona_index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let mut rng = Pcg64::seed_from_u64(stream);
+        let jittered = |jitter: f64, xi: f64| (1.0 + jitter * xi).max(JITTER_FLOOR);
+        (0..self.rays)
+            .map(|_| {
+                // All three deviates are drawn for every ray, so that turning
+                // one jitter on leaves the other factors as they were.
+                let (xl, xw, xi) = (
+                    standard_normal(&mut rng),
+                    standard_normal(&mut rng),
+                    standard_normal(&mut rng),
+                );
+                RayFactors {
+                    length: jittered(self.length_jitter, xl),
+                    width: jittered(self.width_jitter, xw),
+                    intensity: jittered(self.intensity_jitter, xi),
+                }
+            })
+            .collect()
+    }
+
+    fn shape(&self, pitch_mm: Option<f64>, seed: u64, corona_index: usize) -> Result<CoronaShape> {
+        self.validate()?;
+        let length = self.length.to_px(pitch_mm, "corona length")?;
+        let width = self.width.to_px(pitch_mm, "corona width")?;
+        let rays = self
+            .ray_factors(seed, corona_index)
+            .into_iter()
+            .map(|f| Ray {
+                fade_per_px: self.fadeout / (length * f.length),
+                width: width * f.width,
+                intensity: f.intensity,
+            })
+            .collect::<Vec<Ray>>();
+        Ok(CoronaShape {
+            slowest_fade: rays
+                .iter()
+                .map(|r| r.fade_per_px)
+                .fold(f64::INFINITY, f64::min),
+            brightest: rays.iter().map(|r| r.intensity).fold(0.0, f64::max),
+            widest: rays.iter().map(|r| r.width).fold(0.0, f64::max),
+            narrowest: rays.iter().map(|r| r.width).fold(f64::INFINITY, f64::min),
+            k: f64::from(self.rays),
+            rotation: self.rotation_deg.to_radians(),
+            spread: self.spread,
+            rays,
+        })
+    }
+}
+
+/// atan2(y, x) to within 2e-5 rad (Abramowitz & Stegun 4.4.49 for atan
+/// on [0, 1], then the octant), for tests that allow for that error: several
+/// times cheaper than libm's correctly rounded one.
+fn fast_atan2(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
+    if ax == 0.0 && ay == 0.0 {
+        return 0.0;
+    }
+    let z = ax.min(ay) / ax.max(ay);
+    let z2 = z * z;
+    let mut a = z
+        * (0.999_866_0
+            + z2 * (-0.330_299_5 + z2 * (0.180_141_0 + z2 * (-0.085_133_0 + z2 * 0.020_835_1))));
+    if ay > ax {
+        a = FRAC_PI_2 - a;
+    }
+    if x < 0.0 {
+        a = std::f64::consts::PI - a;
+    }
+    if y < 0.0 {
+        -a
+    } else {
+        a
+    }
+}
+
+/// A standard normal deviate by Box–Muller, with libm so that every
+/// platform computes the same bits.
+fn standard_normal(rng: &mut Pcg64) -> f64 {
+    let unit = |bits: u64| (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    let u1 = 1.0 - unit(rng.next_u64()); // (0, 1]: the logarithm stays finite
+    let u2 = unit(rng.next_u64());
+    libm::sqrt(-2.0 * libm::log(u1)) * libm::cos(TAU * u2)
+}
+
+struct Ray {
+    /// σ / l_m in px⁻¹.
+    fade_per_px: f64,
+    /// w_m in px.
+    width: f64,
+    intensity: f64,
+}
+
+struct CoronaShape {
+    /// The slowest fade of any ray, σ / max l_m, in px⁻¹.
+    slowest_fade: f64,
+    /// The largest ray intensity.
+    brightest: f64,
+    /// The widest and the narrowest ray, in px.
+    widest: f64,
+    narrowest: f64,
+    k: f64,
+    rotation: f64,
+    spread: f64,
+    rays: Vec<Ray>,
+}
+
+impl CoronaShape {
+    /// The angle from a ray's axis beyond which a pixel centred at distance
+    /// r (or more) from the centre is exactly 0, for a least exponent n over
+    /// its radii. |cos u| ≤ exp(−u²/2) for |u| ≤ π/2 bounds the lobe by
+    /// exp(−n (k δ/2)²/2); below e^−760 its exp underflows to exactly 0,
+    /// with room for the round-off of log and cos. The pixel spans
+    /// directions within asin(√2/2 / r) < 0.78/r of its centre's, which
+    /// `fast_atan2` finds to 2e-5 rad. Infinite where n = 0.
+    fn dark_angle(&self, n: f64, r: f64) -> f64 {
+        2.0 / self.k * (1520.0 / n).sqrt() + 0.78 / r + 3e-5
+    }
+
+    /// The least exponent n of any ray at radii in [near, far]: ω = (r/w)^(s−1)
+    /// and n = −1/ln cos ω falls as ω grows, so it is least at the widest ray
+    /// (s < 1, at `near`) or the narrowest (s > 1, at `far`).
+    fn least_exponent(&self, near: f64, far: f64) -> f64 {
+        if self.spread > 1.0 {
+            self.exponent(far, self.narrowest)
+        } else {
+            self.exponent(near.max(0.0), self.widest)
+        }
+    }
+
+    /// The nearest ray to direction φ (relative to φ₀) and the angle from its
+    /// axis, in (−π/k, π/k].
+    fn nearest_ray(&self, phi: f64) -> (&Ray, f64) {
+        let period = TAU / self.k;
+        let u = (phi - self.rotation).rem_euclid(TAU);
+        let m = (u / period).round();
+        let offset = u - m * period;
+        let index = (m as usize) % self.rays.len();
+        (&self.rays[index], offset)
+    }
+
+    /// n(r) of docs/physics.md §4 for a ray of width `width`; 0 where ω ≥ π/2.
+    fn exponent(&self, r: f64, width: f64) -> f64 {
+        // The paper's cases s = 0 and s = 1 without a pow: millions of
+        // samples near the rays need this.
+        let omega = if self.spread == 0.0 {
+            width / r
+        } else if self.spread == 1.0 {
+            1.0
+        } else {
+            libm::pow(r / width, self.spread - 1.0)
+        };
+        if omega >= FRAC_PI_2 || omega.is_nan() {
+            return 0.0;
+        }
+        let g = neg_ln_cos(omega);
+        if g <= 0.0 {
+            f64::INFINITY
+        } else {
+            1.0 / g
+        }
+    }
+}
+
+/// −ln cos x for |x| ≤ π/2. Where x is small (the far, thin parts of the
+/// rays, millions of samples) its Taylor series, whose next term is below
+/// 10⁻¹⁸ of the sum there; up to 1, ln(1 − 2 sin²(x/2)), which keeps the
+/// digits a cosine near 1 loses; beyond, ln cos x itself, exact where cos x
+/// nears 0.
+fn neg_ln_cos(x: f64) -> f64 {
+    let x2 = x * x;
+    if x2 <= 0.0025 {
+        x2 * (1.0 / 2.0
+            + x2 * (1.0 / 12.0
+                + x2 * (1.0 / 45.0
+                    + x2 * (17.0 / 2520.0 + x2 * (31.0 / 14175.0 + x2 * (691.0 / 467_775.0))))))
+    } else if x2 <= 1.0 {
+        let half = libm::sin(0.5 * x);
+        -libm::log1p(-2.0 * half * half)
+    } else {
+        -libm::log(libm::fabs(libm::cos(x)))
+    }
+}
+
+impl SpreadShape for CoronaShape {
+    fn lit_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
+        // Every pixel of the row lies at r ≥ |y|. Where n grows with r
+        // (s ≤ 1) the least exponent on the row is at |y| − √2/2, and the
+        // bound of `vanishes_over_pixel` then holds for every direction
+        // farther than `reach` from a ray's axis.
+        if self.spread > 1.0 || y.abs() < 2.0 {
+            return None;
+        }
+        let n = self.least_exponent(y.abs() - FRAC_1_SQRT_2, y.abs());
+        let reach = self.dark_angle(n, y.abs());
+        let period = TAU / self.k;
+        if reach >= 0.5 * period {
+            return None;
+        }
+        // Directions on this row: (0, π) above the centre, (−π, 0) below;
+        // x = y·cot φ runs monotonically over them.
+        let (low, high) = if y > 0.0 {
+            (0.0, std::f64::consts::PI)
+        } else {
+            (-std::f64::consts::PI, 0.0)
+        };
+        let x_at = |phi: f64| y * libm::cos(phi) / libm::sin(phi);
+        let mut spans = Vec::new();
+        for m in 0..self.rays.len() {
+            let axis = (self.rotation + m as f64 * period).rem_euclid(TAU);
+            for shift in [-TAU, 0.0] {
+                let (a, b) = (axis + shift - reach, axis + shift + reach);
+                if b <= low || a >= high {
+                    continue;
+                }
+                let ends = [
+                    if a <= low { None } else { Some(x_at(a)) },
+                    if b >= high { None } else { Some(x_at(b)) },
+                ];
+                // Above the centre x falls as φ grows, below it rises.
+                let (first, last) = if y > 0.0 {
+                    (ends[1], ends[0])
+                } else {
+                    (ends[0], ends[1])
+                };
+                spans.push((
+                    first.map_or(f64::NEG_INFINITY, |x| x - 1.0),
+                    last.map_or(f64::INFINITY, |x| x + 1.0),
+                ));
+            }
+        }
+        Some(spans)
+    }
+
+    fn vanishes_over_pixel(&self, x: f64, y: f64) -> bool {
+        let r = (x * x + y * y).sqrt();
+        if r < 2.0 {
+            return false;
+        }
+        let (_, offset) = self.nearest_ray(fast_atan2(y, x));
+        let n = self.least_exponent(r - FRAC_1_SQRT_2, r + FRAC_1_SQRT_2);
+        offset.abs() > self.dark_angle(n, r)
+    }
+
+    fn density(&self, x: f64, y: f64) -> f64 {
+        let r = (x * x + y * y).sqrt();
+        let (ray, offset) = self.nearest_ray(libm::atan2(y, x));
+        let n = self.exponent(r, ray.width);
+        // |cos(kδ/2)|^n·e^(−σr/l) as one exponential.
+        let lobe = if n == 0.0 {
+            0.0
+        } else {
+            n * neg_ln_cos(0.5 * self.k * offset)
+        };
+        ray.intensity * libm::exp(-ray.fade_per_px * r - lobe)
+    }
+
+    fn grid(&self, x: f64, y: f64) -> Grid {
+        let r = (x * x + y * y).sqrt();
+        if r < 2.0 {
+            // Every ray meets here, within a pixel or two.
+            return Grid::square(8);
+        }
+        if libm::exp(-self.slowest_fade * r) * self.brightest < FADED {
+            return Grid::square(1);
+        }
+        let phi = libm::atan2(y, x);
+        let (ray, offset) = self.nearest_ray(phi);
+        // Along the ray, l(r) changes by a factor e^(σ/l_m) per pixel.
+        let along = ((6.5 * ray.fade_per_px).ceil() as u32).clamp(1, 64);
+        // Across it, |cos(kδ/2)|^n ≈ exp(−n k² δ²/8): a Gaussian of standard
+        // deviation t = 2r / (k √n) pixels across the ray. A spacing of t/6.5
+        // keeps the midpoint rule within 10⁻³ of the pixel's mean (and sums
+        // the profile far better).
+        let n = self.exponent(r, ray.width).max(1.0);
+        let t = 2.0 * r / (self.k * n.sqrt());
+        let distance = r * libm::fabs(libm::sin(offset));
+        let across = if distance > 0.75 + 6.0 * t {
+            1
+        } else if t.is_finite() && t > 0.0 {
+            ((6.5 / t).ceil() as u32).clamp(1, 64)
+        } else {
+            64
+        };
+        if across <= along {
+            return Grid::square(along);
+        }
+        // A thin ray needs fine steps only across itself: along the pixel
+        // axis nearer its normal (a step there moves at least 1/√2 of it
+        // across the ray), while each line of samples along the other axis
+        // still crosses the whole profile.
+        let fine = ((f64::from(across) * std::f64::consts::SQRT_2).ceil() as u32).min(96);
+        let coarse = along.max(2);
+        let axis = phi - offset;
+        if libm::fabs(libm::cos(axis)) >= libm::fabs(libm::sin(axis)) {
+            Grid { x: coarse, y: fine }
+        } else {
+            Grid { x: fine, y: coarse }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_atan2_is_within_its_stated_error() {
+        let mut worst = 0f64;
+        for i in 0..20_000 {
+            let a = i as f64 * TAU / 20_000.0;
+            for r in [0.5, 3.0, 1e4] {
+                let (y, x) = (r * a.sin(), r * a.cos());
+                let d = (fast_atan2(y, x) - libm::atan2(y, x)).abs();
+                worst = worst.max(d.min(TAU - d));
+            }
+        }
+        assert!(worst < 2e-5, "{worst}");
+    }
+
+    #[test]
+    fn neg_ln_cos_is_minus_the_log_of_the_cosine() {
+        for x in [1e-9, 1e-4, 0.01, 0.0499, 0.05, 0.0501, 0.3, 1.0, 1.5] {
+            // ln(1 − 2 sin²(x/2)) within an ulp or two where ln(cos x)
+            // loses the digits of a cosine near 1.
+            let exact = if x <= 1.0 {
+                -libm::log1p(-2.0 * libm::sin(0.5 * x).powi(2))
+            } else {
+                -libm::log(libm::cos(x))
+            };
+            for v in [x, -x] {
+                let g = neg_ln_cos(v);
+                assert!((g - exact).abs() <= 4e-15 * exact, "{v}: {g} vs {exact}");
+            }
+        }
+        assert_eq!(neg_ln_cos(FRAC_PI_2), -libm::log(libm::cos(FRAC_PI_2)));
+        assert_eq!(neg_ln_cos(0.0), 0.0);
+    }
+
+    /// f is exactly 0 at 5×5 points over the pixel centred at (x, y),
+    /// its corners and edges included.
+    fn assert_dark(shape: &CoronaShape, x: f64, y: f64, spread: f64) {
+        for a in 0..=4 {
+            for b in 0..=4 {
+                let (sx, sy) = (x - 0.5 + 0.25 * f64::from(b), y - 0.5 + 0.25 * f64::from(a));
+                assert_eq!(shape.density(sx, sy), 0.0, "s = {spread} at ({sx}, {sy})");
+            }
+        }
+    }
+
+    #[test]
+    fn pixels_outside_a_rows_lit_spans_are_zero_everywhere() {
+        for (spread, rotation_deg) in [(-0.5, 0.0), (0.0, 7.0), (0.5, 90.0), (1.0, 3.0)] {
+            let c = Corona {
+                spread,
+                rotation_deg,
+                width_jitter: 0.3,
+                length: Length::px(400.0),
+                ..corona()
+            };
+            let shape = c.shape(None, 3, 0).unwrap();
+            let mut dark = 0;
+            for j in -300..300 {
+                let y = f64::from(j);
+                let Some(spans) = shape.lit_spans(y) else {
+                    continue;
+                };
+                for i in -300..300 {
+                    let x = f64::from(i);
+                    if spans.iter().any(|&(a, b)| a <= x && x <= b) {
+                        continue;
+                    }
+                    dark += 1;
+                    assert_dark(&shape, x, y, spread);
+                }
+            }
+            if spread <= 0.0 {
+                assert!(dark > 100_000, "s = {spread}: {dark}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_pixel_said_to_vanish_is_zero_everywhere() {
+        for spread in [-0.5, 0.0, 0.5, 1.5] {
+            let c = Corona {
+                spread,
+                width_jitter: 0.3,
+                length: Length::px(400.0),
+                ..corona()
+            };
+            let shape = c.shape(None, 3, 0).unwrap();
+            let mut vanished = 0;
+            for j in -150..150 {
+                for i in -150..150 {
+                    let (x, y) = (f64::from(i) + 0.37, f64::from(j) * 1.01);
+                    if !shape.vanishes_over_pixel(x, y) {
+                        continue;
+                    }
+                    vanished += 1;
+                    assert_dark(&shape, x, y, spread);
+                }
+            }
+            // Thin rays (s ≤ 0) leave most of the plane dark.
+            if spread <= 0.0 {
+                assert!(vanished > 10_000, "s = {spread}: {vanished}");
+            }
+        }
+    }
+
+    fn corona() -> Corona {
+        Corona {
+            epsilon: 0.005,
+            rays: 14,
+            length: Length::px(15.6),
+            fadeout: 1.0,
+            width: Length::px(3.0),
+            spread: 1.0,
+            length_jitter: 0.25,
+            width_jitter: 0.0,
+            intensity_jitter: 0.0,
+            rotation_deg: 0.0,
+        }
+    }
+
+    #[test]
+    fn ray_lengths_are_reproducible_and_seed_dependent() {
+        let c = corona();
+        assert_eq!(c.ray_factors(7, 0), c.ray_factors(7, 0));
+        assert_ne!(c.ray_factors(7, 0), c.ray_factors(8, 0));
+        assert_ne!(c.ray_factors(7, 0), c.ray_factors(7, 1));
+    }
+
+    #[test]
+    fn ray_length_deviation_follows_the_jitter() {
+        // Many rays: the sample mean and deviation of l_m/l are 1 and j.
+        let c = Corona {
+            rays: 1024,
+            length_jitter: 0.2,
+            ..corona()
+        };
+        let lengths: Vec<f64> = c.ray_factors(3, 0).iter().map(|f| f.length).collect();
+        let mean = lengths.iter().sum::<f64>() / lengths.len() as f64;
+        let var = lengths.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / lengths.len() as f64;
+        assert!((mean - 1.0).abs() < 0.02, "mean {mean}");
+        assert!((var.sqrt() - 0.2).abs() < 0.02, "deviation {}", var.sqrt());
+    }
+
+    #[test]
+    fn jitter_off_gives_unit_factors() {
+        let c = Corona {
+            length_jitter: 0.0,
+            ..corona()
+        };
+        for f in c.ray_factors(1, 0) {
+            assert_eq!((f.length, f.width, f.intensity), (1.0, 1.0, 1.0));
+        }
+    }
+
+    #[test]
+    fn exponent_is_zero_in_the_core_and_grows_outside() {
+        let shape = Corona {
+            spread: 0.0,
+            ..corona()
+        }
+        .shape(None, 1, 0)
+        .unwrap();
+        // s = 0: ω = w/r ≥ π/2 for r ≤ 2w/π.
+        assert_eq!(shape.exponent(1.0, 3.0), 0.0);
+        let (n10, n100) = (shape.exponent(10.0, 3.0), shape.exponent(100.0, 3.0));
+        assert!(n10 > 0.0 && n100 > n10);
+        // Far out, n ≈ 2/ω² = 2 r²/w².
+        assert!((n100 / (2.0 * 100.0f64.powi(2) / 9.0) - 1.0).abs() < 1e-3);
+    }
+}

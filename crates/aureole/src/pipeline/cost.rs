@@ -1,0 +1,40 @@
+//! Which way of spreading is faster for an image: the FFT's cost does not
+//! depend on how many pixels are bright, splatting's grows with them.
+//! Fitted to runs at 4K with full-frame and 401×401 kernels on two cores
+//! (`cargo run --release -p aureole-tools --bin crossover`).
+
+/// Nanoseconds the FFT route takes for `convolutions` planes of
+/// `width`×`height` pixels on a `padded` grid: the transforms' n·log₂n
+/// count plus the passes over the planes around them.
+pub(super) fn fft(
+    padded: (usize, usize),
+    (width, height): (usize, usize),
+    convolutions: usize,
+) -> f64 {
+    let (px, py) = padded;
+    let n_log = |n: usize| n as f64 * (n as f64).log2();
+    let h = height as f64;
+    let columns = (px / 2 + 1) as f64;
+    let per_plane = 2.0 * h * n_log(px) + 2.0 * columns * n_log(py);
+    let pixels = (width * height) as f64;
+    (0.04 * per_plane + 5.0 * pixels) * convolutions as f64
+}
+
+/// Nanoseconds splatting takes: every bright pixel adds the part of a
+/// `kernel_pixels` kernel that falls inside the frame (`area` output pixels
+/// in all) to every output plane, after a pass over the planes.
+pub(super) fn splat(
+    kernel_pixels: usize,
+    area: usize,
+    (width, height): (usize, usize),
+    convolutions: usize,
+) -> f64 {
+    let pixels = (width * height) as f64;
+    // Kernel rows that stay in cache between bright pixels add faster.
+    let per_add = if kernel_pixels <= 1 << 20 {
+        0.055
+    } else {
+        0.19
+    };
+    (per_add * area as f64 + 2.0 * pixels) * convolutions as f64
+}

@@ -1,0 +1,18 @@
+//! The pipeline (docs/physics.md §7–8): a [`Plan`] applies one kernel to
+//! images of one size; a [`Session`] is what front ends call, deciding the
+//! input scale, bad samples, plan reuse and memory the same way for all of
+//! them.
+
+mod cost;
+mod options;
+mod plan;
+mod precision;
+mod session;
+mod splat;
+mod threshold;
+
+pub use options::{Applied, ApplyOptions, Method};
+pub use plan::Plan;
+pub use precision::f32_round_off;
+pub use session::{Frame, FrameOptions, ScaleSource, Session, Stage};
+pub use threshold::spread_fraction;

@@ -1,0 +1,56 @@
+//! What a caller asks of one application of the camera, and what it gets
+//! back.
+
+use crate::image::Image;
+
+/// How the light is split and what is written.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ApplyOptions {
+    /// Threshold T in cd/m²: pixels whose luminance is at or below it keep
+    /// their light in place. `None`: the configuration's `threshold` (0 for
+    /// a kernel given ready-made).
+    pub threshold: Option<f64>,
+    /// Soft knee, relative to T: between T and T·(1 + knee) the spread
+    /// fraction rises smoothly from 0 to 1. 0 is the paper's hard threshold.
+    pub knee: f64,
+    /// Write only the light the camera adds (output − input), for
+    /// compositing additively over the original.
+    pub glare_only: bool,
+    /// How the bright pixels are spread.
+    pub method: Method,
+}
+
+/// How the light of the bright pixels is spread. Both give the same result
+/// up to f32 round-off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Method {
+    /// Whichever the cost estimate says is faster for this image.
+    #[default]
+    Auto,
+    /// The FFT convolution of the bright planes: its cost does not depend
+    /// on how many pixels are bright.
+    Fft,
+    /// The kernel added, weighted, at every bright pixel: cheaper for a few
+    /// bright pixels or a small kernel, and exact in f32.
+    Splat,
+}
+
+/// The result of applying a plan.
+#[derive(Debug, Clone)]
+pub struct Applied {
+    /// The camera's image (or only its glare), in the input's units.
+    pub image: Image,
+    /// Σ luminance of the input, file units.
+    pub energy_in: f64,
+    /// Σ luminance of the camera's image, file units: the input's less what
+    /// was spread beyond the frame.
+    pub energy_out: f64,
+    /// How many pixels were above the threshold and spread.
+    pub spread_pixels: usize,
+    /// The threshold applied, cd/m².
+    pub threshold: f64,
+    /// How they were spread ([`Method::Fft`] or [`Method::Splat`]).
+    pub method: Method,
+    /// Whether the FFT ran in f64 because the scene's range is beyond f32.
+    pub double: bool,
+}

@@ -1,0 +1,302 @@
+//! A [`Plan`]: the kernel of an optical chain for one image size, with its
+//! spectrum, applied to any number of images (docs/physics.md §7–8).
+
+use std::sync::OnceLock;
+
+use rayon::prelude::*;
+
+use super::options::{Applied, ApplyOptions, Method};
+use super::splat::{copies, splat};
+use super::threshold::Threshold;
+use super::{cost, precision};
+use crate::config::Config;
+use crate::control::{Cancel, Control};
+use crate::convolve::{double, single, Centre, Engine, Spread, Term};
+use crate::error::{Error, Result};
+use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
+use crate::kernel::{Extent, Kernel};
+
+/// The kernel of an optical chain for one image size, with its spectrum.
+pub struct Plan {
+    width: usize,
+    height: usize,
+    kernel: Kernel,
+    /// The configuration's threshold, cd/m², for callers that give none.
+    threshold: f64,
+    /// The f32 engine, the kernel's centre weight applied exactly.
+    single: single::Convolver,
+    /// The f64 engine, built the first time a scene's range needs it.
+    double: OnceLock<double::Convolver>,
+}
+
+impl Plan {
+    /// Builds the kernel of `config` for `width`×`height` images, by default
+    /// large enough that light from any pixel reaches every other
+    /// ((2W − 1)×(2H − 1)), or at most `max_extent`, and transforms it.
+    pub fn for_image(
+        config: &Config,
+        width: usize,
+        height: usize,
+        max_extent: Option<(usize, usize)>,
+    ) -> Result<Plan> {
+        Plan::build(
+            config,
+            width,
+            height,
+            max_extent,
+            &mut Control::quiet(&Cancel::new()),
+        )
+    }
+
+    /// [`Plan::for_image`], reporting to `control` and stopping when it is
+    /// cancelled.
+    pub fn build(
+        config: &Config,
+        width: usize,
+        height: usize,
+        max_extent: Option<(usize, usize)>,
+        control: &mut Control,
+    ) -> Result<Plan> {
+        let extent = Extent::for_image_within(width, height, max_extent)?;
+        let kernel = config.kernel_with(&extent, &mut control.part(0.0, 0.9))?;
+        let mut plan = Plan::transform(kernel, width, height, &mut control.part(0.9, 1.0))?;
+        plan.threshold = config.threshold;
+        Ok(plan)
+    }
+
+    /// A plan for `width`×`height` images with a kernel built before (e.g.
+    /// by `aureole psf`, read back from a file): kernels are cacheable. Its
+    /// threshold is 0 unless the options give one.
+    pub fn with_kernel(kernel: Kernel, width: usize, height: usize) -> Result<Plan> {
+        Plan::transform(kernel, width, height, &mut Control::quiet(&Cancel::new()))
+    }
+
+    /// [`Plan::with_kernel`], reporting to `control` and stopping when it
+    /// is cancelled.
+    pub fn transform(
+        kernel: Kernel,
+        width: usize,
+        height: usize,
+        control: &mut Control,
+    ) -> Result<Plan> {
+        let single = single::Convolver::new(
+            &kernel_planes(&kernel),
+            (kernel.width(), kernel.height()),
+            width,
+            height,
+            Centre::Leave,
+            control,
+        )?;
+        Ok(Plan {
+            width,
+            height,
+            kernel,
+            threshold: 0.0,
+            single,
+            double: OnceLock::new(),
+        })
+    }
+
+    /// The image size the plan is for, width × height.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// The kernel in use.
+    pub fn kernel(&self) -> &Kernel {
+        &self.kernel
+    }
+
+    /// The kernel back, the spectra dropped.
+    pub fn into_kernel(self) -> Kernel {
+        self.kernel
+    }
+
+    /// The threshold applied when the options give none, cd/m².
+    pub fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    /// Applies the camera to `image` (which must have the plan's size and
+    /// holds `scale` cd/m² per unit); `progress` hears the fraction done, 0
+    /// to 1.
+    pub fn apply(
+        &self,
+        image: &Image,
+        scale: f64,
+        options: &ApplyOptions,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<Applied> {
+        let cancel = Cancel::new();
+        self.apply_with(
+            image,
+            scale,
+            options,
+            Vec::new(),
+            &mut Control::new(&cancel, progress),
+        )
+    }
+
+    /// [`Plan::apply`], writing into `recycled`, the planes of a result
+    /// that is no longer needed (e.g. the previous frame's): in a frame
+    /// sequence this saves mapping fresh memory for every frame. `control`
+    /// hears the progress and may cancel.
+    pub fn apply_with(
+        &self,
+        image: &Image,
+        scale: f64,
+        options: &ApplyOptions,
+        recycled: Vec<Vec<f32>>,
+        control: &mut Control,
+    ) -> Result<Applied> {
+        if (image.width, image.height) != (self.width, self.height) {
+            return Err(Error::SizeMismatch {
+                expected: (self.width, self.height),
+                found: (image.width, image.height),
+            });
+        }
+        let threshold_cd = options.threshold.unwrap_or(self.threshold);
+        let threshold = Threshold {
+            level: threshold_cd / scale,
+            knee: options.knee,
+        };
+        let luminance = PixelLuminance::of(image);
+        let pixels = image.width * image.height;
+        let size = (image.width, image.height);
+        let kernel_size = (self.kernel.width(), self.kernel.height());
+        let survey = threshold.survey(&luminance, size, kernel_size, self.kernel.centre());
+        let energy_in = image.total_luminance();
+        let convolutions = match image.layout {
+            Layout::Rgb => 3,
+            Layout::Luminance => self.single.kernel_planes(),
+        };
+        let method = match options.method {
+            Method::Auto
+                if cost::splat(
+                    kernel_size.0 * kernel_size.1,
+                    survey.splat_area,
+                    size,
+                    convolutions,
+                ) < cost::fft(self.single.padded_size(), size, convolutions) =>
+            {
+                Method::Splat
+            }
+            Method::Auto => Method::Fft,
+            chosen => chosen,
+        };
+        let double = survey.spread > 0
+            && method == Method::Fft
+            && precision::beyond_f32(
+                &luminance,
+                pixels,
+                survey.squares,
+                &self.kernel.centre_weights(),
+                self.single.padded_size(),
+            );
+        let terms: Vec<Vec<Term>> = (0..image.planes.len())
+            .map(|c| terms(image.layout, self.kernel.planes().len(), c))
+            .collect();
+        let mut output = image.clone_without_planes();
+        output.planes = if survey.spread == 0 {
+            copies(&image.planes, recycled)
+        } else if method == Method::Splat {
+            splat(
+                image,
+                &luminance,
+                threshold,
+                &self.kernel,
+                &terms,
+                recycled,
+                control,
+            )?
+        } else {
+            // With every pixel fully spread, each plane is its own bright
+            // part and nothing stays: no plane of fractions.
+            let fractions =
+                (survey.full != pixels).then(|| threshold.fractions(&luminance, pixels));
+            let spreads: Vec<Spread> = image
+                .planes
+                .iter()
+                .zip(terms)
+                .map(|(plane, terms)| Spread {
+                    plane,
+                    fractions: fractions.as_deref(),
+                    terms,
+                })
+                .collect();
+            let engine: &dyn Engine = if double {
+                self.double_engine(control)?
+            } else {
+                &self.single
+            };
+            engine.spread(&spreads, recycled, control)?
+        };
+        control.report(1.0);
+        let energy_out = output.total_luminance();
+        if options.glare_only {
+            for (out, input) in output.planes.iter_mut().zip(&image.planes) {
+                out.par_iter_mut().zip(input).for_each(|(o, i)| *o -= i);
+            }
+        }
+        Ok(Applied {
+            image: output,
+            energy_in,
+            energy_out,
+            spread_pixels: survey.spread,
+            threshold: threshold_cd,
+            method,
+            double,
+        })
+    }
+
+    /// The f64 engine, built on first use.
+    fn double_engine(&self, control: &mut Control) -> Result<&double::Convolver> {
+        if let Some(engine) = self.double.get() {
+            return Ok(engine);
+        }
+        let engine = double::Convolver::new(
+            &kernel_planes(&self.kernel),
+            (self.kernel.width(), self.kernel.height()),
+            self.width,
+            self.height,
+            Centre::Leave,
+            &mut control.part(0.0, 0.0),
+        )?;
+        Ok(self.double.get_or_init(|| engine))
+    }
+}
+
+impl std::fmt::Debug for Plan {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Plan")
+            .field("size", &self.size())
+            .field("kernel", &(self.kernel.width(), self.kernel.height()))
+            .field("threshold", &self.threshold)
+            .finish()
+    }
+}
+
+fn kernel_planes(kernel: &Kernel) -> Vec<&[f32]> {
+    kernel.planes().iter().map(Vec::as_slice).collect()
+}
+
+/// Output plane `c` of an image of `layout` as Σ weight · (kernel plane
+/// k ⊛ plane c), over a kernel of `kernel_planes` planes: a coloured kernel
+/// spreads a luminance plane as Y = Σ w_k K_k ⊛ Y, otherwise each plane goes
+/// through its own kernel plane (or the one plane).
+fn terms(layout: Layout, kernel_planes: usize, c: usize) -> Vec<Term> {
+    match (layout, kernel_planes) {
+        (Layout::Luminance, k) if k > 1 => REC709_LUMINANCE
+            .iter()
+            .enumerate()
+            .map(|(kernel_plane, &weight)| Term {
+                kernel_plane,
+                weight,
+            })
+            .collect(),
+        (_, k) => vec![Term {
+            kernel_plane: c.min(k - 1),
+            weight: 1.0,
+        }],
+    }
+}

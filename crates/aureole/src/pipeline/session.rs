@@ -1,0 +1,349 @@
+//! The session every front end calls (the command line, the studio, the
+//! Python package): it takes an image with its metadata and the options a
+//! user gives, and decides everything else the same way for all of them,
+//! so that every front end gives the same bytes.
+
+use super::options::{Applied, ApplyOptions};
+use super::plan::Plan;
+use crate::config::Config;
+use crate::control::{Cancel, Control};
+use crate::error::{Error, Result};
+use crate::image::Image;
+use crate::kernel::Kernel;
+use crate::memory::Workload;
+use crate::optics::Effect;
+
+/// How to take an image as luminance.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FrameOptions {
+    /// cd/m² per file unit; by default the image's `whiteLuminance`, else 1.
+    pub input_scale: Option<f64>,
+    /// Replace NaN and infinite samples (and negative ones, unless
+    /// `keep_negative`) by 0 instead of refusing the image.
+    pub sanitize: bool,
+    /// Let negative samples through: they never pass the threshold, so
+    /// they stay where they are.
+    pub keep_negative: bool,
+}
+
+/// Where a frame's luminance scale came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScaleSource {
+    /// The caller gave it.
+    Given,
+    /// The image's `whiteLuminance`.
+    WhiteLuminance,
+    /// Neither: file units are cd/m².
+    Default,
+}
+
+/// An image ready for the camera: its samples checked, its scale chosen.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    image: Image,
+    scale: f64,
+    scale_source: ScaleSource,
+    replaced: usize,
+}
+
+impl Frame {
+    /// Takes `image` as luminance: NaN, infinite and (unless kept)
+    /// negative samples are refused, or replaced by 0 with `sanitize`; the
+    /// scale is the one given, else the image's `whiteLuminance`, else 1.
+    pub fn new(mut image: Image, options: &FrameOptions) -> Result<Frame> {
+        if !options.sanitize {
+            if let Some(found) = image.non_finite() {
+                return Err(Error::BadSamples {
+                    found,
+                    negative: false,
+                });
+            }
+            if let Some(found) = image.negatives().filter(|_| !options.keep_negative) {
+                return Err(Error::BadSamples {
+                    found,
+                    negative: true,
+                });
+            }
+        }
+        let replaced = if options.sanitize {
+            image.sanitize(!options.keep_negative)
+        } else {
+            0
+        };
+        let (scale, scale_source) = match (options.input_scale, image.white_luminance) {
+            (Some(scale), _) => (scale, ScaleSource::Given),
+            (None, Some(white)) => (f64::from(white), ScaleSource::WhiteLuminance),
+            (None, None) => (1.0, ScaleSource::Default),
+        };
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(Error::Parameter {
+                effect: "input".into(),
+                name: "scale",
+                value: scale.to_string(),
+                allowed: "cd/m² per file unit, a finite number above 0",
+            });
+        }
+        Ok(Frame {
+            image,
+            scale,
+            scale_source,
+            replaced,
+        })
+    }
+
+    /// The image, in its file's units.
+    pub fn image(&self) -> &Image {
+        &self.image
+    }
+
+    /// The image back, to use otherwise.
+    pub fn into_image(self) -> Image {
+        self.image
+    }
+
+    /// cd/m² per file unit.
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// Where the scale came from.
+    pub fn scale_source(&self) -> ScaleSource {
+        self.scale_source
+    }
+
+    /// How many samples `sanitize` replaced by 0.
+    pub fn replaced(&self) -> usize {
+        self.replaced
+    }
+}
+
+/// The stage of a run that progress is reported for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Stage {
+    /// Building the kernel and its spectrum (once per image size).
+    BuildingKernel,
+    /// Spreading the light of an image.
+    Convolving,
+}
+
+impl Stage {
+    /// The stage in words, for a progress bar.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Stage::BuildingKernel => "building kernel",
+            Stage::Convolving => "convolving",
+        }
+    }
+}
+
+/// What a session applies: a configuration whose kernel it builds for each
+/// image size, or a kernel built before.
+#[derive(Debug)]
+enum Lens {
+    Config(Config),
+    /// `None` while the plan holds it.
+    Kernel(Option<Kernel>),
+}
+
+/// Applies one camera to a sequence of frames: the plan (kernel and
+/// spectrum) is built once per image size, the memory a run needs is
+/// checked against a limit before anything large is allocated, and the
+/// previous frame's planes are reused.
+///
+/// ```
+/// use aureole::{presets, ApplyOptions, Config, Frame, FrameOptions, Image, Layout, Session};
+///
+/// let mut config = Config::default();
+/// config.apply(presets::find("paper-fig5-both")?.config()?);
+/// let mut session = Session::new(config).with_memory_limit(1 << 30);
+/// for frame in 0..3 {
+///     // A lamp of 5·10⁴ cd/m² moving along a dim street.
+///     let mut image = Image::filled(96, 54, Layout::Rgb, 0.05);
+///     for plane in &mut image.planes {
+///         plane[27 * 96 + 30 + 10 * frame] = 5e4;
+///     }
+///     let frame = Frame::new(image, &FrameOptions::default())?;
+///     let applied = session.apply(&frame, &ApplyOptions::default(), &mut |stage, done| {
+///         eprintln!("{} {:.0} %", stage.describe(), done * 100.0);
+///     })?;
+///     assert!(applied.energy_out <= applied.energy_in * (1.0 + 1e-6));
+///     // … write applied.image, then hand its planes back for the next frame.
+///     session.recycle(applied.image);
+/// }
+/// # Ok::<(), aureole::Error>(())
+/// ```
+#[derive(Debug)]
+pub struct Session {
+    lens: Lens,
+    memory_limit: Option<u64>,
+    max_extent: Option<(usize, usize)>,
+    cancel: Cancel,
+    plan: Option<Plan>,
+    recycled: Vec<Vec<f32>>,
+}
+
+impl Session {
+    /// A session that builds the kernel of `config`.
+    pub fn new(config: Config) -> Session {
+        Session::of(Lens::Config(config))
+    }
+
+    /// A session that applies `kernel`, built before.
+    pub fn with_kernel(kernel: Kernel) -> Session {
+        Session::of(Lens::Kernel(Some(kernel)))
+    }
+
+    fn of(lens: Lens) -> Session {
+        Session {
+            lens,
+            memory_limit: None,
+            max_extent: None,
+            cancel: Cancel::new(),
+            plan: None,
+            recycled: Vec::new(),
+        }
+    }
+
+    /// Refuses a frame whose run would need more than `bytes`.
+    pub fn with_memory_limit(mut self, bytes: u64) -> Session {
+        self.memory_limit = Some(bytes);
+        self
+    }
+
+    /// Caps the kernel's extent (width, height); by default light from any
+    /// pixel reaches the whole frame, (2W − 1)×(2H − 1). No effect on a
+    /// kernel built before.
+    pub fn with_max_extent(mut self, max_extent: Option<(usize, usize)>) -> Session {
+        self.max_extent = max_extent;
+        self
+    }
+
+    /// The flag that stops this session's work: raise it from any thread
+    /// and the running call returns [`Error::Cancelled`].
+    pub fn cancel_token(&self) -> Cancel {
+        self.cancel.clone()
+    }
+
+    /// The configuration, when the session builds its kernel.
+    pub fn config(&self) -> Option<&Config> {
+        match &self.lens {
+            Lens::Config(config) => Some(config),
+            Lens::Kernel(_) => None,
+        }
+    }
+
+    /// The plan of the last frame's size, if one is built.
+    pub fn plan(&self) -> Option<&Plan> {
+        self.plan.as_ref()
+    }
+
+    /// Applies the camera to `frame`; `progress` hears the stage and the
+    /// fraction of it done. The plan of the previous frame is reused when
+    /// the size is the same; else a new one is built, once its memory is
+    /// known to fit the limit.
+    pub fn apply(
+        &mut self,
+        frame: &Frame,
+        options: &ApplyOptions,
+        progress: &mut dyn FnMut(Stage, f64),
+    ) -> Result<Applied> {
+        let image = frame.image();
+        self.cancel.check()?;
+        let size = (image.width, image.height);
+        if self.plan.as_ref().is_some_and(|p| p.size() != size) {
+            self.release_plan();
+        }
+        if self.plan.is_none() {
+            self.check_memory(image)?;
+            let mut report = |f| progress(Stage::BuildingKernel, f);
+            let mut control = Control::new(&self.cancel, &mut report);
+            let plan = match &mut self.lens {
+                Lens::Config(config) => {
+                    Plan::build(config, size.0, size.1, self.max_extent, &mut control)?
+                }
+                Lens::Kernel(kernel) => {
+                    let Some(kernel) = kernel.take() else {
+                        return Err(Error::NoEffect);
+                    };
+                    Plan::transform(kernel, size.0, size.1, &mut control)?
+                }
+            };
+            self.plan = Some(plan);
+        }
+        let Some(plan) = &self.plan else {
+            return Err(Error::NoEffect);
+        };
+        let mut report = |f| progress(Stage::Convolving, f);
+        let mut control = Control::new(&self.cancel, &mut report);
+        let recycled = std::mem::take(&mut self.recycled);
+        plan.apply_with(image, frame.scale(), options, recycled, &mut control)
+    }
+
+    /// Hands back a result that is no longer needed (written out), so that
+    /// the next frame writes into its memory.
+    pub fn recycle(&mut self, image: Image) {
+        self.recycled = image.planes;
+    }
+
+    /// Drops the plan of another size, keeping a kernel built before.
+    fn release_plan(&mut self) {
+        self.recycled = Vec::new();
+        if let Some(plan) = self.plan.take() {
+            if let Lens::Kernel(slot) = &mut self.lens {
+                *slot = Some(plan.into_kernel());
+            }
+        }
+    }
+
+    /// Refuses a frame whose run would need more than the memory limit,
+    /// with the estimate and the largest kernel that would fit.
+    fn check_memory(&self, image: &Image) -> Result<()> {
+        let Some(limit) = self.memory_limit else {
+            return Ok(());
+        };
+        let planes = image.planes.len();
+        let alpha = image.alpha.is_some();
+        let (workload, effects, start): (Workload, &[Effect], (usize, usize)) = match &self.lens {
+            Lens::Config(config) => {
+                let workload = Workload::of_config(
+                    config,
+                    image.width,
+                    image.height,
+                    planes,
+                    alpha,
+                    self.max_extent,
+                )?;
+                (
+                    workload,
+                    &config.effects,
+                    self.max_extent.unwrap_or(workload.kernel),
+                )
+            }
+            Lens::Kernel(kernel) => {
+                let (kernel, kernel_planes) = kernel
+                    .as_ref()
+                    .map_or(((1, 1), 1), |k| ((k.width(), k.height()), k.planes().len()));
+                let workload = Workload {
+                    width: image.width,
+                    height: image.height,
+                    planes,
+                    alpha,
+                    kernel,
+                    kernel_planes,
+                };
+                (workload, &[], kernel)
+            }
+        };
+        let needed = workload.estimate(effects);
+        if needed.bytes <= limit {
+            return Ok(());
+        }
+        Err(Error::Memory {
+            needed,
+            limit,
+            fits: workload.largest_fitting(effects, start, limit),
+            built: !effects.is_empty(),
+        })
+    }
+}

@@ -1,0 +1,95 @@
+//! Splatting (docs/physics.md §8): the kernel added, weighted, at every
+//! bright pixel, O = I − B + Σ over bright pixels of B·K. Exact in f32, and
+//! cheaper than the FFT for a few bright pixels or a small kernel.
+
+use rayon::prelude::*;
+
+use super::threshold::Threshold;
+use crate::control::{for_each_row, Control};
+use crate::convolve::Term;
+use crate::error::Result;
+use crate::image::{Image, PixelLuminance};
+use crate::kernel::Kernel;
+
+/// Bright pixels added between two looks at the cancellation flag.
+const CHECK_EVERY: usize = 4096;
+
+/// The image through `kernel`, splatted row by row: each output row adds
+/// the bright pixels in a fixed order, so the bits are the same with any
+/// number of threads. `terms` are each output plane's kernel planes and
+/// weights; the results go into the planes of `recycled`.
+pub(super) fn splat(
+    image: &Image,
+    luminance: &PixelLuminance,
+    threshold: Threshold,
+    kernel: &Kernel,
+    terms: &[Vec<Term>],
+    recycled: Vec<Vec<f32>>,
+    control: &mut Control,
+) -> Result<Vec<Vec<f32>>> {
+    let (w, h) = (image.width, image.height);
+    let (kw, kh) = (kernel.width(), kernel.height());
+    let (cx, cy) = kernel.centre();
+    let planes = kernel.planes();
+    // Bright pixels: position and spread fraction, in row-major order.
+    let rows: Vec<Vec<(usize, usize, f32)>> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            (0..w)
+                .filter_map(|x| {
+                    let f = threshold.fraction(luminance, y * w + x);
+                    (f > 0.0).then_some((x, y, f))
+                })
+                .collect()
+        })
+        .collect();
+    let bright: Vec<(usize, usize, f32)> = rows.iter().flatten().copied().collect();
+    let mut outputs = copies(&image.planes, recycled);
+    let cancel = control.cancel();
+    let share = 1.0 / outputs.len().max(1) as f64;
+    for (c, ((out, plane), terms)) in outputs.iter_mut().zip(&image.planes).zip(terms).enumerate() {
+        let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
+        for_each_row(out, w, &mut part, |y, row| {
+            // The light that leaves: the bright part of this row.
+            for &(x, by, f) in &rows[y] {
+                row[x] -= plane[by * w + x] * f;
+            }
+            for (n, &(x, by, f)) in bright.iter().enumerate() {
+                if n % CHECK_EVERY == 0 && cancel.is_cancelled() {
+                    return;
+                }
+                // Kernel row j lands on output row by + j − cy.
+                let Some(j) = (y + cy).checked_sub(by).filter(|&j| j < kh) else {
+                    continue;
+                };
+                let value = plane[by * w + x] * f;
+                let first = x.saturating_sub(cx);
+                let last = (x + kw - cx).min(w);
+                if first >= last {
+                    continue;
+                }
+                for term in terms {
+                    let start = first + cx - x;
+                    let weights =
+                        &planes[term.kernel_plane][j * kw + start..j * kw + start + (last - first)];
+                    let v = value * term.weight;
+                    for (o, &kv) in row[first..last].iter_mut().zip(weights) {
+                        *o += v * kv;
+                    }
+                }
+            }
+        })?;
+    }
+    Ok(outputs)
+}
+
+/// `planes` copied into the planes of `recycled` (resized to match).
+pub(super) fn copies(planes: &[Vec<f32>], mut recycled: Vec<Vec<f32>>) -> Vec<Vec<f32>> {
+    recycled.truncate(planes.len());
+    recycled.resize_with(planes.len(), Vec::new);
+    for (out, plane) in recycled.iter_mut().zip(planes) {
+        out.clear();
+        out.extend_from_slice(plane);
+    }
+    recycled
+}

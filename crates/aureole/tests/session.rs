@@ -1,0 +1,256 @@
+//! The session every front end calls: the threshold of the configuration,
+//! the input scale, bad samples, plan reuse, the memory limit and
+//! cancellation, decided once for all of them.
+
+use aureole::{
+    presets, ApplyOptions, Config, Error, Frame, FrameOptions, Image, Layout, Method, ScaleSource,
+    Session, Stage,
+};
+
+fn config(preset: &str) -> Config {
+    let mut config = Config::default();
+    config.apply(presets::find(preset).unwrap().config().unwrap());
+    config
+}
+
+/// A dim street with lamps of 50 to 5·10⁴ cd/m².
+fn street(w: usize, h: usize, layout: Layout) -> Image {
+    let mut image = Image::filled(w, h, layout, 0.05);
+    for (k, level) in [50.0, 500.0, 5e3, 5e4].into_iter().enumerate() {
+        for plane in &mut image.planes {
+            plane[(h / 2) * w + 5 + 9 * k] = level;
+        }
+    }
+    image
+}
+
+fn frame(image: Image) -> Frame {
+    Frame::new(image, &FrameOptions::default()).unwrap()
+}
+
+#[test]
+fn a_configs_threshold_is_honoured_when_the_caller_gives_none() {
+    let mut config = config("paper-fig4-bloom");
+    config.threshold = 200.0;
+    let image = street(48, 20, Layout::Rgb);
+    let mut session = Session::new(config.clone());
+    let applied = session
+        .apply(
+            &frame(image.clone()),
+            &ApplyOptions::default(),
+            &mut |_, _| {},
+        )
+        .unwrap();
+    // The lamps of 500, 5·10³ and 5·10⁴ cd/m²; not the one of 50.
+    assert_eq!((applied.spread_pixels, applied.threshold), (3, 200.0));
+    // The plan alone does the same, and a threshold given wins.
+    let plan = aureole::Plan::for_image(&config, 48, 20, None).unwrap();
+    let alone = plan
+        .apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})
+        .unwrap();
+    assert_eq!(alone.image, applied.image);
+    let given = ApplyOptions {
+        threshold: Some(0.0),
+        ..ApplyOptions::default()
+    };
+    let all = session
+        .apply(&frame(image), &given, &mut |_, _| {})
+        .unwrap();
+    assert_eq!(all.spread_pixels, 48 * 20);
+}
+
+#[test]
+fn the_scale_is_given_else_white_luminance_else_one() {
+    let mut image = street(16, 8, Layout::Luminance);
+    let at = |image: Image, input_scale| {
+        let options = FrameOptions {
+            input_scale,
+            ..FrameOptions::default()
+        };
+        let frame = Frame::new(image, &options).unwrap();
+        (frame.scale(), frame.scale_source())
+    };
+    assert_eq!(at(image.clone(), None), (1.0, ScaleSource::Default));
+    image.white_luminance = Some(621.0);
+    assert_eq!(
+        at(image.clone(), None),
+        (621.0, ScaleSource::WhiteLuminance)
+    );
+    assert_eq!(at(image, Some(3.0)), (3.0, ScaleSource::Given));
+}
+
+#[test]
+fn samples_that_are_not_luminance_are_refused_or_replaced() {
+    let mut image = street(16, 8, Layout::Rgb);
+    image.planes[1][3] = f32::NAN;
+    image.planes[2][9] = -1.0;
+    let refused = Frame::new(image.clone(), &FrameOptions::default()).unwrap_err();
+    assert!(
+        matches!(refused, Error::BadSamples { negative: false, found } if found.first == (3, 0)),
+        "{refused}"
+    );
+    let keep = FrameOptions {
+        keep_negative: true,
+        ..FrameOptions::default()
+    };
+    assert!(Frame::new(image.clone(), &keep).is_err());
+    image.planes[1][3] = 0.0;
+    let negative = Frame::new(image.clone(), &FrameOptions::default()).unwrap_err();
+    assert!(matches!(negative, Error::BadSamples { negative: true, .. }));
+    assert!(Frame::new(image.clone(), &keep).is_ok());
+    image.planes[0][0] = f32::INFINITY;
+    let sanitize = FrameOptions {
+        sanitize: true,
+        ..FrameOptions::default()
+    };
+    let frame = Frame::new(image, &sanitize).unwrap();
+    assert_eq!(frame.replaced(), 2);
+    assert!(frame.image().non_finite().is_none() && frame.image().negatives().is_none());
+}
+
+#[test]
+fn a_frame_sequence_builds_the_kernel_once_per_size() {
+    let mut session = Session::new(config("paper-fig5-both"));
+    let mut builds = 0;
+    let mut run = |session: &mut Session, w, h| {
+        let mut built = false;
+        let applied = session
+            .apply(
+                &frame(street(w, h, Layout::Rgb)),
+                &ApplyOptions::default(),
+                &mut |stage, _| built |= stage == Stage::BuildingKernel,
+            )
+            .unwrap();
+        builds += usize::from(built);
+        session.recycle(applied.image);
+    };
+    for (w, h) in [(40, 20), (40, 20), (40, 20), (30, 20), (30, 20)] {
+        run(&mut session, w, h);
+    }
+    assert_eq!(builds, 2);
+    assert_eq!(session.plan().unwrap().size(), (30, 20));
+}
+
+#[test]
+fn a_kernel_given_is_applied_at_every_size_and_kept() {
+    let kernel = config("paper-fig4-bloom")
+        .kernel(&aureole::Extent::new(15, 15).unwrap())
+        .unwrap();
+    let mut session = Session::with_kernel(kernel.clone());
+    for (w, h) in [(40, 20), (24, 12), (40, 20)] {
+        let image = street(w, h, Layout::Rgb);
+        let applied = session
+            .apply(
+                &frame(image.clone()),
+                &ApplyOptions::default(),
+                &mut |_, _| {},
+            )
+            .unwrap();
+        let plan = aureole::Plan::with_kernel(kernel.clone(), w, h).unwrap();
+        let alone = plan
+            .apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})
+            .unwrap();
+        assert_eq!(applied.image, alone.image, "{w}x{h}");
+        assert_eq!(session.plan().unwrap().kernel(), &kernel);
+    }
+}
+
+#[test]
+fn a_run_beyond_the_memory_limit_stops_before_it_allocates_and_says_what_fits() {
+    let mut session = Session::new(config("paper-fig5-both")).with_memory_limit(64 << 20);
+    let image = street(1000, 600, Layout::Rgb);
+    let error = session
+        .apply(&frame(image), &ApplyOptions::default(), &mut |_, _| {
+            panic!("no work may start")
+        })
+        .unwrap_err();
+    let Error::Memory {
+        needed,
+        limit,
+        fits: Some(fit),
+        built: true,
+    } = error
+    else {
+        panic!("{error}");
+    };
+    assert!(
+        needed.bytes > limit && fit.bytes <= limit,
+        "{needed:?} {fit:?}"
+    );
+    assert!(fit.kernel.0 < 1999 && fit.kernel.1 < 1199, "{fit:?}");
+    // The suggestion fits.
+    let mut capped = Session::new(config("paper-fig5-both"))
+        .with_memory_limit(64 << 20)
+        .with_max_extent(Some(fit.kernel));
+    let image = street(1000, 600, Layout::Rgb);
+    assert!(capped
+        .apply(&frame(image), &ApplyOptions::default(), &mut |_, _| {})
+        .is_ok());
+}
+
+/// Applies `method` to a 4-lamp street through `session`, cancelling at
+/// the first report of `stage`, and returns the result.
+fn cancelled_at(
+    session: &mut Session,
+    image: Image,
+    method: Method,
+    stage: Stage,
+) -> Result<aureole::Applied, Error> {
+    let cancel = session.cancel_token();
+    let options = ApplyOptions {
+        method,
+        ..ApplyOptions::default()
+    };
+    session.apply(&frame(image), &options, &mut |at, _| {
+        if at == stage {
+            cancel.cancel();
+        }
+    })
+}
+
+#[test]
+fn every_long_loop_stops_when_cancelled() {
+    // The kernel build: rasterising (a rounded 8-blade stop in colour), the
+    // composition with a bloom and the spectrum.
+    let mut night = config("camera-f8-7blade");
+    night.apply(presets::find("paper-fig4-bloom").unwrap().config().unwrap());
+    let mut session = Session::new(night);
+    let result = cancelled_at(
+        &mut session,
+        street(64, 40, Layout::Rgb),
+        Method::Fft,
+        Stage::BuildingKernel,
+    );
+    assert!(matches!(result, Err(Error::Cancelled)), "{result:?}");
+    assert!(session.plan().is_none());
+    // Each way of spreading, in f32 and (a sun over a night sky) in f64.
+    let mut sun = street(64, 40, Layout::Rgb);
+    for plane in &mut sun.planes {
+        plane[200] = 1e9;
+    }
+    for (image, method) in [
+        (street(64, 40, Layout::Rgb), Method::Fft),
+        (street(64, 40, Layout::Rgb), Method::Splat),
+        (sun, Method::Fft),
+    ] {
+        let mut session = Session::new(config("paper-fig5-both"));
+        let result = cancelled_at(&mut session, image, method, Stage::Convolving);
+        assert!(
+            matches!(result, Err(Error::Cancelled)),
+            "{method:?}: {result:?}"
+        );
+    }
+}
+
+#[test]
+fn a_session_cancelled_from_another_thread_stops() {
+    let mut session = Session::new(config("camera-f11-6blade"));
+    let cancel = session.cancel_token();
+    std::thread::spawn(move || cancel.cancel()).join().unwrap();
+    let result = session.apply(
+        &frame(street(64, 40, Layout::Rgb)),
+        &ApplyOptions::default(),
+        &mut |_, _| {},
+    );
+    assert!(matches!(result, Err(Error::Cancelled)));
+}
