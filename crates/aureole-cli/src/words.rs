@@ -26,6 +26,7 @@ pub fn library(error: &Error) -> String {
         ),
         Error::Memory {
             needed,
+            stage,
             limit,
             fits,
             built,
@@ -47,8 +48,8 @@ pub fn library(error: &Error) -> String {
             };
             format!(
                 "needs about {} (peak while {}) but --max-memory is {}; {hint}, or raise --max-memory",
-                format_bytes(needed.bytes),
-                needed.stage,
+                format_bytes(*needed),
+                stage,
                 format_bytes(*limit)
             )
         }

@@ -3,8 +3,7 @@
 
 use std::path::PathBuf;
 
-use crate::image::BadSamples;
-use crate::memory::{format_bytes, Estimate, Fit};
+use crate::bytes::format_bytes;
 
 /// Everything the library can refuse or fail at.
 #[derive(Debug, thiserror::Error)]
@@ -108,20 +107,24 @@ pub enum Error {
 
     /// A frame holds samples that are not luminance: NaN or infinite, or
     /// negative.
-    #[error("{} {} samples (luminance must be a finite number of at least 0), the first at column {} row {} (from the top)", found.count, if *negative { "negative" } else { "NaN or infinite" }, found.first.0, found.first.1)]
+    #[error("{count} {} samples (luminance must be a finite number of at least 0), the first at column {} row {} (from the top)", if *negative { "negative" } else { "NaN or infinite" }, first.0, first.1)]
     BadSamples {
-        /// How many, and where the first is.
-        found: BadSamples,
+        /// How many samples (over all colour planes).
+        count: usize,
+        /// Column and row (from the top) of the first.
+        first: (usize, usize),
         /// Whether they are negative (which a caller may choose to keep)
         /// rather than NaN or infinite.
         negative: bool,
     },
 
     /// A run would need more memory than its limit.
-    #[error("needs about {} (peak while {}) but the memory limit is {}{}", format_bytes(needed.bytes), needed.stage, format_bytes(*limit), fits.map(|f| format!("; a kernel of at most {}x{} would need about {}", f.kernel.0, f.kernel.1, format_bytes(f.bytes))).unwrap_or_default())]
+    #[error("needs about {} (peak while {stage}) but the memory limit is {}{}", format_bytes(*needed), format_bytes(*limit), fits.map(|f| format!("; a kernel of at most {}x{} would need about {}", f.kernel.0, f.kernel.1, format_bytes(f.bytes))).unwrap_or_default())]
     Memory {
-        /// The estimate, and the stage where it peaks.
-        needed: Estimate,
+        /// The bytes the run would need at its peak.
+        needed: u64,
+        /// The stage where it peaks, in words.
+        stage: &'static str,
         /// The limit, bytes.
         limit: u64,
         /// The largest kernel, halving the extent, that would fit; `None`
@@ -135,6 +138,15 @@ pub enum Error {
     /// The caller cancelled the run.
     #[error("cancelled")]
     Cancelled,
+}
+
+/// A smaller kernel that would fit a memory limit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fit {
+    /// Its extent, width × height.
+    pub kernel: (usize, usize),
+    /// The bytes the run would then need.
+    pub bytes: u64,
 }
 
 /// Result with the library's [`Error`].

@@ -1,9 +1,11 @@
 //! How much memory a run will take, known before anything large is
 //! allocated. How much a front end may use is the front end's to say.
 
+pub use crate::bytes::format_bytes;
+
 use crate::config::Config;
 use crate::convolve::padded_size;
-use crate::error::Result;
+use crate::error::{Fit, Result};
 use crate::kernel::Extent;
 use crate::optics::Effect;
 
@@ -15,15 +17,6 @@ pub struct Estimate {
     pub bytes: u64,
     /// The stage that peaks, in words ("building the kernel", …).
     pub stage: &'static str,
-}
-
-/// A smaller kernel that would fit a memory limit.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Fit {
-    /// Its extent, width × height.
-    pub kernel: (usize, usize),
-    /// The bytes the run would then need.
-    pub bytes: u64,
 }
 
 /// What a run works on: the image and the kernel it will build (or load).
@@ -161,29 +154,30 @@ impl Workload {
     }
 }
 
-/// Bytes in binary units for people, e.g. `1.2 GiB`.
-pub fn format_bytes(bytes: u64) -> String {
-    const UNITS: [&str; 5] = ["B", "KiB", "MiB", "GiB", "TiB"];
-    let mut value = bytes as f64;
-    let mut unit = 0;
-    while value >= 1024.0 && unit < UNITS.len() - 1 {
-        value /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{bytes} B")
-    } else {
-        format!("{value:.1} {}", UNITS[unit])
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn bytes_are_shown_in_binary_units() {
-        assert_eq!(format_bytes(3 << 29), "1.5 GiB");
-        assert_eq!(format_bytes(12), "12 B");
+    fn a_smaller_kernel_fits_a_smaller_limit() {
+        let workload = Workload {
+            width: 1000,
+            height: 600,
+            planes: 3,
+            alpha: false,
+            kernel: (1999, 1199),
+            kernel_planes: 1,
+        };
+        let half = Workload {
+            kernel: (999, 599),
+            ..workload
+        };
+        let limit = half.estimate(&[]).bytes;
+        assert!(workload.estimate(&[]).bytes > limit);
+        let fit = workload
+            .largest_fitting(&[], workload.kernel, limit)
+            .unwrap();
+        assert_eq!((fit.kernel, fit.bytes), ((999, 599), limit));
+        assert!(workload.largest_fitting(&[], workload.kernel, 1).is_none());
     }
 }

@@ -86,7 +86,14 @@ fn samples_that_are_not_luminance_are_refused_or_replaced() {
     image.planes[2][9] = -1.0;
     let refused = Frame::new(image.clone(), &FrameOptions::default()).unwrap_err();
     assert!(
-        matches!(refused, Error::BadSamples { negative: false, found } if found.first == (3, 0)),
+        matches!(
+            refused,
+            Error::BadSamples {
+                negative: false,
+                first: (3, 0),
+                ..
+            }
+        ),
         "{refused}"
     );
     let keep = FrameOptions {
@@ -169,14 +176,12 @@ fn a_run_beyond_the_memory_limit_stops_before_it_allocates_and_says_what_fits() 
         limit,
         fits: Some(fit),
         built: true,
+        ..
     } = error
     else {
         panic!("{error}");
     };
-    assert!(
-        needed.bytes > limit && fit.bytes <= limit,
-        "{needed:?} {fit:?}"
-    );
+    assert!(needed > limit && fit.bytes <= limit, "{needed} {fit:?}");
     assert!(fit.kernel.0 < 1999 && fit.kernel.1 < 1199, "{fit:?}");
     // The suggestion fits.
     let mut capped = Session::new(config("paper-fig5-both"))

@@ -47,7 +47,7 @@ const TILE: usize = BLOCK * STRIP;
 
 /// What a strip task reads: strip `index` of `strips`, the row spectra in
 /// tiles, the kernel's spectrum.
-pub(super) struct Strip<'a> {
+struct Strip<'a> {
     index: usize,
     strips: usize,
     rows: &'a [Complex<f32>],
@@ -300,7 +300,10 @@ impl Convolver {
                         rows,
                         spectrum: &self.spectra[input.kernel_plane],
                     };
-                    super::simd::strip(self, &strip, out, column, scratch);
+                    super::simd::widest(
+                        #[inline(always)]
+                        || self.strip(&strip, out, column, scratch),
+                    );
                 }
             },
         );
@@ -310,7 +313,7 @@ impl Convolver {
     /// `out` (H rows of [`STRIP`] values, in cache from here on), then each
     /// column through the transforms, in place.
     #[inline(always)]
-    pub(super) fn strip(
+    fn strip(
         &self,
         strip: &Strip,
         out: &mut [Complex<f32>],

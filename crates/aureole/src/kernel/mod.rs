@@ -226,7 +226,7 @@ pub fn build(
                 .iter()
                 .filter(|e| e.kind() == effect.kind())
                 .count(),
-            extent,
+            kernel_size: (extent.width, extent.height),
         };
         let start = index as f64 * share;
         // Rasterising takes most of an effect's time, composing the rest.

@@ -28,7 +28,6 @@ use serde::Deserialize;
 
 use crate::camera::Camera;
 use crate::error::Result;
-use crate::kernel::Extent;
 use aperture::{spectrum::Light, Optics};
 use shape::SpreadShape;
 
@@ -44,8 +43,8 @@ pub(crate) struct Context<'a> {
     /// How many effects of the same type come before this one in the
     /// chain: each draws its own random numbers from the one seed.
     pub index_of_kind: usize,
-    /// The kernel being built.
-    pub extent: &'a Extent,
+    /// The size of the kernel being built, width × height in pixels.
+    pub kernel_size: (usize, usize),
 }
 
 /// An effect ready to rasterise.

@@ -54,13 +54,15 @@ impl Frame {
         if !options.sanitize {
             if let Some(found) = image.non_finite() {
                 return Err(Error::BadSamples {
-                    found,
+                    count: found.count,
+                    first: found.first,
                     negative: false,
                 });
             }
             if let Some(found) = image.negatives().filter(|_| !options.keep_negative) {
                 return Err(Error::BadSamples {
-                    found,
+                    count: found.count,
+                    first: found.first,
                     negative: true,
                 });
             }
@@ -340,7 +342,8 @@ impl Session {
             return Ok(());
         }
         Err(Error::Memory {
-            needed,
+            needed: needed.bytes,
+            stage: needed.stage,
             limit,
             fits: workload.largest_fitting(effects, start, limit),
             built: !effects.is_empty(),

@@ -190,11 +190,9 @@ impl Model for Aperture {
         let pitch_mm = context
             .pitch_mm
             .ok_or_else(|| Error::needs_sensor_width("aperture diffraction".into()))?;
-        let extent = context.extent;
+        let (width, height) = context.kernel_size;
         // Orders are kept as far out as the kernel's corners reach.
-        let reach = pitch_mm
-            * ((extent.width * extent.width + extent.height * extent.height) as f64).sqrt()
-            / 2.0;
+        let reach = pitch_mm * ((width * width + height * height) as f64).sqrt() / 2.0;
         Ok(Source::Diffraction {
             optics: self.optics(context.camera, reach)?,
             light: self.light(),
