@@ -19,7 +19,7 @@ peers=("numpy/scipy rfft2, cached kernel spectrum" "scipy.signal.fftconvolve" "s
 if "$venv/bin/python" -c "import pyfftw" 2>/dev/null; then
   peers+=("pyFFTW rfft2 (FFTW, 2 threads, measured plans), cached kernel spectrum")
 fi
-cargo build --release --example bench_workload
+cargo build --release --locked -p aureole-tools --bin bench_workload
 {
   echo "# Benchmark results"
   echo
@@ -31,7 +31,7 @@ cargo build --release --example bench_workload
 } > bench/RESULTS.md
 for size in $sizes; do
   out=bench/out/$size
-  ./target/release/examples/bench_workload "$size" "$out"
+  ./target/release/bench_workload "$size" "$out"
   rows=$(mktemp)
   for peer in "${peers[@]}"; do
     "$venv/bin/python" bench/peers.py "$out" "$peer" >> "$rows" || echo "{\"peer\": \"$peer\", \"failed\": true}" >> "$rows"

@@ -3,17 +3,17 @@
 # built-in demo scene and the photographs in ../shared/data:
 #   bash scripts/gallery.sh
 # Every picture is made by the release binary (and the `montage` and
-# `star_rays` examples, which lay pictures side by side and count a star's
-# rays); nothing is edited by hand. Without ../shared/data the pictures made
+# `star_rays` programs of tools/, which lay pictures side by side and count
+# a star's rays); nothing is edited by hand. Without ../shared/data the pictures made
 # from photographs are left as they are.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 cargo build --release --locked -q -p aureole-cli
-cargo build --release --locked -q -p aureole --example montage --example star_rays
+cargo build --release --locked -q -p aureole-tools --bin montage --bin star_rays
 aureole=target/release/aureole
-montage=target/release/examples/montage
-star_rays=$PWD/target/release/examples/star_rays
+montage=target/release/montage
+star_rays=$PWD/target/release/star_rays
 out=docs/gallery
 data=../shared/data
 work=$(mktemp -d)

@@ -1,5 +1,7 @@
 //! `aureole`: the command-line shell over the aureole library.
 
+#![deny(unsafe_code)]
+
 mod apply;
 mod batch;
 mod chain;

@@ -259,3 +259,20 @@ fn a_session_cancelled_from_another_thread_stops() {
     );
     assert!(matches!(result, Err(Error::Cancelled)));
 }
+
+#[test]
+fn a_session_goes_on_after_a_cancelled_run_with_a_fresh_flag() {
+    let mut session = Session::new(config("paper-fig4-bloom"));
+    session.cancel_token().cancel();
+    let image = street(32, 16, Layout::Rgb);
+    let run = |session: &mut Session| {
+        session.apply(
+            &frame(image.clone()),
+            &ApplyOptions::default(),
+            &mut |_, _| {},
+        )
+    };
+    assert!(matches!(run(&mut session), Err(Error::Cancelled)));
+    session.set_cancel_token(aureole::Cancel::new());
+    assert!(run(&mut session).is_ok());
+}

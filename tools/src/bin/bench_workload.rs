@@ -7,6 +7,8 @@
 //! warm-up, each frame reusing the previous frame's planes; the same with
 //! fresh planes; kernel build time; peak memory in MB).
 
+#![deny(unsafe_code)]
+
 #[path = "../../../crates/aureole/benches/workload.rs"]
 mod workload;
 

@@ -6,6 +6,8 @@
 //!
 //! `cargo run --release -p aureole-tools --bin crossover`
 
+#![deny(unsafe_code)]
+
 #[path = "../../../crates/aureole/benches/workload.rs"]
 mod workload;
 

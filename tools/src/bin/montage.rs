@@ -12,6 +12,8 @@
 //! output's extension picks JPEG (at `--quality`, default 88) or PNG;
 //! `--gap` is the dark margin around and between panels (default 6).
 
+#![deny(unsafe_code)]
+
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 

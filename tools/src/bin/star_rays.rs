@@ -12,6 +12,8 @@
 //! Angles are in degrees, counter-clockwise from the +x axis with y up;
 //! `--exclude` leaves out a sector (what stands in front of the light).
 
+#![deny(unsafe_code)]
+
 use std::f64::consts::PI;
 use std::path::PathBuf;
 use std::process::ExitCode;

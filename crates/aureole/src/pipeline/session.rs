@@ -227,6 +227,13 @@ impl Session {
         self.cancel.clone()
     }
 
+    /// Replaces the flag with `cancel`: for a front end that cancels each
+    /// request on its own (a server whose clients come and go) and goes on
+    /// with the session after one was cancelled.
+    pub fn set_cancel_token(&mut self, cancel: Cancel) {
+        self.cancel = cancel;
+    }
+
     /// The configuration, when the session builds its kernel.
     pub fn config(&self) -> Option<&Config> {
         match &self.lens {
