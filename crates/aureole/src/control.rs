@@ -109,9 +109,13 @@ impl<'a> Control<'a> {
     }
 }
 
-/// How many batches a loop over rows is cut into: each batch runs in
-/// parallel and ends with a progress report and a check of the flag.
+/// How many batches a loop over rows is cut into, at most: each batch runs
+/// in parallel and ends with a progress report and a check of the flag.
 const BATCHES: usize = 64;
+
+/// The fewest rows a batch gives each thread: at the end of a batch the
+/// threads wait for its slowest row, so a batch must hold many of them.
+const ROWS_PER_THREAD: usize = 32;
 
 /// Runs `work(row index, row)` on every row (`width` items) of `plane` in
 /// parallel, in batches that report progress; rows not yet started are
@@ -124,7 +128,10 @@ pub(crate) fn for_each_row<T: Send>(
 ) -> Result<()> {
     let width = width.max(1);
     let height = plane.len() / width;
-    let rows_per_batch = height.div_ceil(BATCHES).max(1);
+    let rows_per_batch = height
+        .div_ceil(BATCHES)
+        .max(ROWS_PER_THREAD * rayon::current_num_threads())
+        .max(1);
     let cancel = control.cancel();
     for (batch, rows) in plane.chunks_mut(rows_per_batch * width).enumerate() {
         control.check()?;

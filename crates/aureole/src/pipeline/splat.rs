@@ -54,27 +54,29 @@ pub(super) fn splat(
             for &(x, by, f) in &rows[y] {
                 row[x] -= plane[by * w + x] * f;
             }
-            for (n, &(x, by, f)) in bright.iter().enumerate() {
-                if n % CHECK_EVERY == 0 && cancel.is_cancelled() {
+            for batch in bright.chunks(CHECK_EVERY) {
+                if cancel.is_cancelled() {
                     return;
                 }
-                // Kernel row j lands on output row by + j − cy.
-                let Some(j) = (y + cy).checked_sub(by).filter(|&j| j < kh) else {
-                    continue;
-                };
-                let value = plane[by * w + x] * f;
-                let first = x.saturating_sub(cx);
-                let last = (x + kw - cx).min(w);
-                if first >= last {
-                    continue;
-                }
-                for term in terms {
-                    let start = first + cx - x;
-                    let weights =
-                        &planes[term.kernel_plane][j * kw + start..j * kw + start + (last - first)];
-                    let v = value * term.weight;
-                    for (o, &kv) in row[first..last].iter_mut().zip(weights) {
-                        *o += v * kv;
+                for &(x, by, f) in batch {
+                    // Kernel row j lands on output row by + j − cy.
+                    let Some(j) = (y + cy).checked_sub(by).filter(|&j| j < kh) else {
+                        continue;
+                    };
+                    let value = plane[by * w + x] * f;
+                    let first = x.saturating_sub(cx);
+                    let last = (x + kw - cx).min(w);
+                    if first >= last {
+                        continue;
+                    }
+                    for term in terms {
+                        let start = first + cx - x;
+                        let weights = &planes[term.kernel_plane]
+                            [j * kw + start..j * kw + start + (last - first)];
+                        let v = value * term.weight;
+                        for (o, &kv) in row[first..last].iter_mut().zip(weights) {
+                            *o += v * kv;
+                        }
                     }
                 }
             }

@@ -19,9 +19,9 @@ pub(super) struct FarField {
     /// and after it (rad).
     fans: Vec<(f64, f64, [f64; 2])>,
     discs: Vec<f64>,
-    /// Per channel: the spectrum-averaged ∫₀ᵘ sinc²(πu'/λ) du'.
+    /// Per plane: the spectrum-averaged ∫₀ᵘ sinc²(πu'/λ) du'.
     tables: Vec<Cumulative>,
-    /// Per channel: the sensitivity-weighted mean wavelength, mm.
+    /// Per plane: the sensitivity-weighted mean wavelength, mm.
     mean_lambda: Vec<f64>,
     area: f64,
     focal: f64,
@@ -91,7 +91,7 @@ impl FarField {
     pub fn new(optics: &Optics, spectrum: &Spectrum, weights_total: &[f64]) -> FarField {
         let (edges, discs) = optics.pupil.far_field_terms();
         let f = optics.focal_mm;
-        let channels = weights_total.len();
+        let planes = weights_total.len();
         let light = |c: usize| -> Vec<(f64, f64)> {
             spectrum.iter().map(|(l, w)| (l * 1e-6, w[c])).collect()
         };
@@ -116,8 +116,8 @@ impl FarField {
                 })
                 .collect(),
             discs,
-            tables: (0..channels).map(|c| Cumulative::new(&light(c))).collect(),
-            mean_lambda: (0..channels)
+            tables: (0..planes).map(|c| Cumulative::new(&light(c))).collect(),
+            mean_lambda: (0..planes)
                 .map(|c| {
                     spectrum.iter().map(|(l, w)| l * 1e-6 * w[c]).sum::<f64>() / weights_total[c]
                 })
@@ -127,7 +127,7 @@ impl FarField {
         }
     }
 
-    /// The light of channel `c` in the pixel at (x, y) mm.
+    /// The light of plane `c` in the pixel at (x, y) mm.
     pub fn energy(&self, c: usize, x: f64, y: f64, pitch: f64) -> f64 {
         let r2 = x * x + y * y;
         let table = &self.tables[c];

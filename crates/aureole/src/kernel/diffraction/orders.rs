@@ -67,7 +67,7 @@ fn spread_orders(
     let side = 2 * window.reach + 1;
     let direct = entries * (side * side) as f64;
     // Measured on two cores: scattering costs ~1.7 ns per multiply-add, the
-    // FFT route ~1.8 s per channel of a 4K kernel, as much as 0.3·P·log₂P
+    // FFT route ~1.8 s per plane of a 4K kernel, as much as 0.3·P·log₂P
     // multiply-adds for P padded pixels.
     let padded = (2 * extent.width) as f64 * (2 * extent.height) as f64;
     let fft = 0.3 * padded * padded.log2();
@@ -182,7 +182,7 @@ fn scatter(
 
 /// The filter's non-zero orders for plane `c`: each order m at x = ν_m λ f,
 /// with its share |c_m|² of the light, spread bilinearly over the pixels, for
-/// every wavelength of the channel (so orders disperse into spectra).
+/// every wavelength of the plane (so orders disperse into spectra).
 fn order_comb(
     optics: &Optics,
     spectrum: &Spectrum,
