@@ -38,7 +38,7 @@ pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
             };
             encode(path, &planes).map(drop)
         }
-        (KernelStorage::LogPicture, Encoder::Picture(encoding)) => picture::encode_levels(
+        (KernelStorage::LogPicture, Encoder::Picture(encoding)) => picture::encode_samples(
             path,
             (kernel.width(), kernel.height()),
             log_levels(kernel),

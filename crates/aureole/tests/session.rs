@@ -28,19 +28,21 @@ fn frame(image: Image) -> Frame {
     Frame::new(image, &FrameOptions::default()).unwrap()
 }
 
+/// `image` through `session` with the default options.
+fn through(session: &mut Session, image: &Image) -> aureole::Applied {
+    let options = ApplyOptions::default();
+    session
+        .apply(&frame(image.clone()), &options, &mut |_, _| {})
+        .unwrap()
+}
+
 #[test]
 fn a_configs_threshold_is_honoured_when_the_caller_gives_none() {
     let mut config = config("paper-fig4-bloom");
     config.threshold = 200.0;
     let image = street(48, 20, Layout::Rgb);
     let mut session = Session::new(config.clone());
-    let applied = session
-        .apply(
-            &frame(image.clone()),
-            &ApplyOptions::default(),
-            &mut |_, _| {},
-        )
-        .unwrap();
+    let applied = through(&mut session, &image);
     // The lamps of 500, 5·10³ and 5·10⁴ cd/m²; not the one of 50.
     assert_eq!((applied.spread_pixels, applied.threshold), (3, 200.0));
     // The plan alone does the same, and a threshold given wins.
@@ -146,13 +148,7 @@ fn a_kernel_given_is_applied_at_every_size_and_kept() {
     let mut session = Session::with_kernel(kernel.clone());
     for (w, h) in [(40, 20), (24, 12), (40, 20)] {
         let image = street(w, h, Layout::Rgb);
-        let applied = session
-            .apply(
-                &frame(image.clone()),
-                &ApplyOptions::default(),
-                &mut |_, _| {},
-            )
-            .unwrap();
+        let applied = through(&mut session, &image);
         let plan = aureole::Plan::with_kernel(kernel.clone(), w, h).unwrap();
         let alone = plan
             .apply(&image, 1.0, &ApplyOptions::default(), &mut |_| {})

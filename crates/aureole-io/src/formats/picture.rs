@@ -89,60 +89,48 @@ pub(crate) fn encode(
     format: ImageFormat,
     name: &'static str,
 ) -> Result<()> {
-    let encode_error = |message: String| Error::Encode {
-        path: path.to_path_buf(),
-        format: name,
-        message,
-    };
-    write_atomic(path, |out| match depth {
+    let size = (picture.width, picture.height);
+    match depth {
         Depth::Sixteen => {
-            quantise(picture, |v| (v * 65535.0).round() as u16, format, out).map_err(encode_error)
+            let samples = quantise(picture, |v| (v * 65535.0).round() as u16);
+            encode_samples(path, size, samples, format, name)
         }
         Depth::Eight => {
-            quantise(picture, |v| (v * 255.0).round() as u8, format, out).map_err(encode_error)
+            let samples = quantise(picture, |v| (v * 255.0).round() as u8);
+            encode_samples(path, size, samples, format, name)
         }
-    })
+    }
 }
 
-/// Quantises the picture's 0…1 values with `sample` and encodes them.
-fn quantise<T, W>(
-    picture: &Picture,
-    sample: impl Fn(f32) -> T,
+/// The picture's 0…1 values through `sample`.
+fn quantise<T>(picture: &Picture, sample: impl Fn(f32) -> T) -> Vec<T> {
+    picture
+        .rgb
+        .iter()
+        .map(|v| sample(v.clamp(0.0, 1.0)))
+        .collect()
+}
+
+/// Encodes RGB samples (row-major, top row first) in `format`, atomically;
+/// `name` is the format in words.
+pub(crate) fn encode_samples<T>(
+    path: &Path,
+    (width, height): (usize, usize),
+    samples: Vec<T>,
     format: ImageFormat,
-    out: &mut W,
-) -> std::result::Result<(), String>
+    name: &'static str,
+) -> Result<()>
 where
     T: image::Primitive,
     Rgb<T>: image::Pixel<Subpixel = T> + image::PixelWithColorType,
     [T]: image::EncodableLayout,
-    W: std::io::Write + std::io::Seek,
 {
-    let data: Vec<T> = picture
-        .rgb
-        .iter()
-        .map(|v| sample(v.clamp(0.0, 1.0)))
-        .collect();
-    ImageBuffer::<Rgb<T>, _>::from_raw(picture.width as u32, picture.height as u32, data)
-        .ok_or_else(|| "picture buffer has the wrong size".to_string())?
-        .write_to(out, format)
-        .map_err(|e| e.to_string())
-}
-
-/// Encodes 8-bit RGB levels (row-major, top row first) in `format`,
-/// atomically.
-pub(crate) fn encode_levels(
-    path: &Path,
-    (width, height): (usize, usize),
-    levels: Vec<u8>,
-    format: ImageFormat,
-    name: &'static str,
-) -> Result<()> {
     let encode_error = |message: String| Error::Encode {
         path: path.to_path_buf(),
         format: name,
         message,
     };
-    let picture = ImageBuffer::<Rgb<u8>, _>::from_raw(width as u32, height as u32, levels)
+    let picture = ImageBuffer::<Rgb<T>, _>::from_raw(width as u32, height as u32, samples)
         .ok_or_else(|| encode_error("picture buffer has the wrong size".into()))?;
     write_atomic(path, |out| {
         picture
