@@ -272,3 +272,22 @@ fn a_session_goes_on_after_a_cancelled_run_with_a_fresh_flag() {
     session.set_cancel_token(aureole::Cancel::new());
     assert!(run(&mut session).is_ok());
 }
+
+#[test]
+fn a_kernel_given_survives_a_cancelled_plan() {
+    let kernel = config("paper-fig4-bloom")
+        .kernel(&aureole::Extent::new(15, 15).unwrap())
+        .unwrap();
+    let mut session = Session::with_kernel(kernel);
+    let image = street(40, 20, Layout::Rgb);
+    let cancelled = cancelled_at(
+        &mut session,
+        image.clone(),
+        Method::Fft,
+        Stage::BuildingKernel,
+    );
+    assert!(matches!(cancelled, Err(Error::Cancelled)), "{cancelled:?}");
+    assert!(session.plan().is_none());
+    session.set_cancel_token(aureole::Cancel::new());
+    through(&mut session, &image);
+}

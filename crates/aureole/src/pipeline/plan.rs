@@ -79,6 +79,17 @@ impl Plan {
         height: usize,
         control: &mut Control,
     ) -> Result<Plan> {
+        Plan::transform_or_return(kernel, width, height, control).map_err(|failed| failed.1)
+    }
+
+    /// [`Plan::transform`], handing the kernel back when it fails (is
+    /// cancelled), for a caller that keeps it for the next try.
+    pub(crate) fn transform_or_return(
+        kernel: Kernel,
+        width: usize,
+        height: usize,
+        control: &mut Control,
+    ) -> std::result::Result<Plan, Box<(Kernel, Error)>> {
         let single = single::Convolver::new(
             &kernel_planes(&kernel),
             (kernel.width(), kernel.height()),
@@ -86,15 +97,18 @@ impl Plan {
             height,
             Centre::Leave,
             control,
-        )?;
-        Ok(Plan {
-            width,
-            height,
-            kernel,
-            threshold: 0.0,
-            single,
-            double: OnceLock::new(),
-        })
+        );
+        match single {
+            Ok(single) => Ok(Plan {
+                width,
+                height,
+                kernel,
+                threshold: 0.0,
+                single,
+                double: OnceLock::new(),
+            }),
+            Err(error) => Err(Box::new((kernel, error))),
+        }
     }
 
     /// The image size the plan is for, width × height.

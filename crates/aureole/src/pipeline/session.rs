@@ -271,11 +271,18 @@ impl Session {
                 Lens::Config(config) => {
                     Plan::build(config, size.0, size.1, self.max_extent, &mut control)?
                 }
-                Lens::Kernel(kernel) => {
-                    let Some(kernel) = kernel.take() else {
+                Lens::Kernel(slot) => {
+                    let Some(kernel) = slot.take() else {
                         return Err(Error::NoEffect);
                     };
-                    Plan::transform(kernel, size.0, size.1, &mut control)?
+                    match Plan::transform_or_return(kernel, size.0, size.1, &mut control) {
+                        Ok(plan) => plan,
+                        Err(failed) => {
+                            let (kernel, error) = *failed;
+                            *slot = Some(kernel);
+                            return Err(error);
+                        }
+                    }
                 }
             };
             self.plan = Some(plan);
