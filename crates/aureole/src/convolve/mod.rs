@@ -2,8 +2,9 @@
 //! (docs/physics.md §8). The pipeline calls it through one trait,
 //! [`Engine`]; the f32 engine ([`single`]) and the f64 engine ([`double`])
 //! implement it, sharing the size planning ([`grid`]), the kernel's
-//! placement in the period and the buffer pool. A further backend (a GPU)
-//! is a third implementation; nothing outside this module changes for it.
+//! placement in the period and the buffer pool. [`engine`] chooses among
+//! them. A further backend (a GPU) is a third implementation chosen there;
+//! nothing outside this module changes for it.
 
 pub mod double;
 mod grid;
@@ -50,6 +51,36 @@ pub struct Spread<'a> {
     /// plane of weight 1 for each colour plane (or a one-plane kernel), or
     /// a luminance plane as Σ w_k K_k ⊛ Y through a coloured kernel.
     pub terms: Vec<Term>,
+}
+
+/// The arithmetic an engine computes in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Precision {
+    /// f32: fast, round-off ~10⁻⁷ of the bright part.
+    Single,
+    /// f64: for scenes whose range f32 cannot hold.
+    Double,
+}
+
+/// The engine that convolves `width`×`height` images with a kernel given as
+/// planes (row-major, `size` = width × height, centre at its middle) in
+/// `precision`: the one place that chooses among the implementations.
+pub fn engine(
+    precision: Precision,
+    planes: &[&[f32]],
+    size: (usize, usize),
+    (width, height): (usize, usize),
+    centre: Centre,
+    control: &mut Control,
+) -> Result<Box<dyn Engine>> {
+    Ok(match precision {
+        Precision::Single => Box::new(single::Convolver::new(
+            planes, size, width, height, centre, control,
+        )?),
+        Precision::Double => Box::new(double::Convolver::new(
+            planes, size, width, height, centre, control,
+        )?),
+    })
 }
 
 /// Spreads planes of light through a kernel whose spectrum it holds, for

@@ -11,7 +11,7 @@ use super::threshold::Threshold;
 use super::{cost, precision};
 use crate::config::Config;
 use crate::control::{Cancel, Control};
-use crate::convolve::{double, single, Centre, Engine, Spread, Term};
+use crate::convolve::{engine, Centre, Engine, Precision, Spread, Term};
 use crate::error::{Error, Result};
 use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
 use crate::kernel::{Extent, Kernel};
@@ -24,9 +24,9 @@ pub struct Plan {
     /// The configuration's threshold, cd/m², for callers that give none.
     threshold: f64,
     /// The f32 engine, the kernel's centre weight applied exactly.
-    single: single::Convolver,
+    single: Box<dyn Engine>,
     /// The f64 engine, built the first time a scene's range needs it.
-    double: OnceLock<double::Convolver>,
+    double: OnceLock<Box<dyn Engine>>,
 }
 
 impl Plan {
@@ -90,11 +90,11 @@ impl Plan {
         height: usize,
         control: &mut Control,
     ) -> std::result::Result<Plan, Box<(Kernel, Error)>> {
-        let single = single::Convolver::new(
+        let single = engine(
+            Precision::Single,
             &kernel_planes(&kernel),
             (kernel.width(), kernel.height()),
-            width,
-            height,
+            (width, height),
             Centre::Leave,
             control,
         );
@@ -238,10 +238,10 @@ impl Plan {
                     terms,
                 })
                 .collect();
-            let engine: &dyn Engine = if double {
+            let engine = if double {
                 self.double_engine(control)?
             } else {
-                &self.single
+                self.single.as_ref()
             };
             engine.spread(&spreads, recycled, control)?
         };
@@ -264,19 +264,19 @@ impl Plan {
     }
 
     /// The f64 engine, built on first use.
-    fn double_engine(&self, control: &mut Control) -> Result<&double::Convolver> {
-        if let Some(engine) = self.double.get() {
-            return Ok(engine);
+    fn double_engine(&self, control: &mut Control) -> Result<&dyn Engine> {
+        if let Some(built) = self.double.get() {
+            return Ok(built.as_ref());
         }
-        let engine = double::Convolver::new(
+        let built = engine(
+            Precision::Double,
             &kernel_planes(&self.kernel),
             (self.kernel.width(), self.kernel.height()),
-            self.width,
-            self.height,
+            (self.width, self.height),
             Centre::Leave,
             &mut control.part(0.0, 0.0),
         )?;
-        Ok(self.double.get_or_init(|| engine))
+        Ok(self.double.get_or_init(|| built).as_ref())
     }
 }
 
