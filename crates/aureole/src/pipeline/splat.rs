@@ -1,6 +1,8 @@
 //! Splatting (docs/physics.md §8): the kernel added, weighted, at every
 //! bright pixel, O = I − B + Σ over bright pixels of B·K. Exact in f32, and
-//! cheaper than the FFT for a few bright pixels or a small kernel.
+//! cheaper than the FFT for a few bright pixels or a small kernel. Its cost
+//! is the area the bright pixels' kernels cover in the frame: each output
+//! row visits only the source rows within the kernel's height.
 
 use rayon::prelude::*;
 
@@ -10,9 +12,6 @@ use crate::convolve::Term;
 use crate::error::Result;
 use crate::image::{Image, PixelLuminance};
 use crate::kernel::Kernel;
-
-/// Bright pixels added between two looks at the cancellation flag.
-const CHECK_EVERY: usize = 4096;
 
 /// The image through `kernel`, splatted row by row: each output row adds
 /// the bright pixels in a fixed order, so the bits are the same with any
@@ -31,19 +30,18 @@ pub(super) fn splat(
     let (kw, kh) = (kernel.width(), kernel.height());
     let (cx, cy) = kernel.centre();
     let planes = kernel.planes();
-    // Bright pixels: position and spread fraction, in row-major order.
-    let rows: Vec<Vec<(usize, usize, f32)>> = (0..h)
+    // The bright pixels of each row: column and spread fraction.
+    let rows: Vec<Vec<(usize, f32)>> = (0..h)
         .into_par_iter()
         .map(|y| {
             (0..w)
                 .filter_map(|x| {
                     let f = threshold.fraction(luminance, y * w + x);
-                    (f > 0.0).then_some((x, y, f))
+                    (f > 0.0).then_some((x, f))
                 })
                 .collect()
         })
         .collect();
-    let bright: Vec<(usize, usize, f32)> = rows.iter().flatten().copied().collect();
     let mut outputs = copies(&image.planes, recycled);
     let cancel = control.cancel();
     let share = 1.0 / outputs.len().max(1) as f64;
@@ -51,26 +49,28 @@ pub(super) fn splat(
         let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
         for_each_row(out, w, &mut part, |y, row| {
             // The light that leaves: the bright part of this row.
-            for &(x, by, f) in &rows[y] {
-                row[x] -= plane[by * w + x] * f;
+            for &(x, f) in &rows[y] {
+                row[x] -= plane[y * w + x] * f;
             }
-            for batch in bright.chunks(CHECK_EVERY) {
+            // Kernel row j lands on output row by + j − cy: only the source
+            // rows by from y + cy − (kh − 1) to y + cy reach this one. They
+            // are visited top to bottom, so every output row adds its
+            // bright pixels in row-major order.
+            let reach = (y + cy + 1).saturating_sub(kh)..(y + cy + 1).min(h);
+            for by in reach {
                 if cancel.is_cancelled() {
                     return;
                 }
-                for &(x, by, f) in batch {
-                    // Kernel row j lands on output row by + j − cy.
-                    let Some(j) = (y + cy).checked_sub(by).filter(|&j| j < kh) else {
-                        continue;
-                    };
+                let j = y + cy - by;
+                for &(x, f) in &rows[by] {
                     let value = plane[by * w + x] * f;
                     let first = x.saturating_sub(cx);
                     let last = (x + kw - cx).min(w);
                     if first >= last {
                         continue;
                     }
+                    let start = first + cx - x;
                     for term in terms {
-                        let start = first + cx - x;
                         let weights = &planes[term.kernel_plane]
                             [j * kw + start..j * kw + start + (last - first)];
                         let v = value * term.weight;
