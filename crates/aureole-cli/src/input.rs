@@ -4,12 +4,11 @@
 
 use std::path::Path;
 
-use anyhow::anyhow;
 use aureole::{Frame, FrameOptions, ScaleSource};
 use aureole_io::limits::Limits;
 use aureole_io::read::{read_image, Loaded};
 
-use crate::{words, Failure};
+use crate::Failure;
 
 /// Reads `path` as a frame, saying what the user should know about it and
 /// the luminance scale it takes.
@@ -76,10 +75,12 @@ pub fn scale_source(source: ScaleSource) -> &'static str {
 /// A library error about the image at `path`: what its samples hold or
 /// what it would need is said with the file's name.
 pub fn about(path: &Path, error: aureole::Error) -> Failure {
-    match error {
-        aureole::Error::BadSamples { .. } | aureole::Error::Memory { .. } => {
-            Failure::Run(anyhow!("{}: {}", path.display(), words::library(&error)))
-        }
-        other => other.into(),
+    let named = matches!(
+        error,
+        aureole::Error::BadSamples { .. } | aureole::Error::Memory { .. }
+    );
+    match Failure::from(error) {
+        Failure::Run(e) if named => Failure::Run(e.context(path.display().to_string())),
+        failure => failure,
     }
 }

@@ -64,7 +64,7 @@ pub fn write_image(
     options: &WriteOptions,
 ) -> Result<Written> {
     let format = output_format(path)?;
-    match format.kind {
+    match format.kind() {
         Kind::Linear => write_linear(path, image, options.linear).map(Written::Linear),
         Kind::Picture => {
             let picture = render(image, scale, &options.display);
@@ -111,9 +111,11 @@ pub fn write_linear(path: &Path, image: &Image, options: LinearOptions) -> Resul
 
 /// Writes `picture` as PNG, JPEG or TIFF by the extension of `path`.
 pub fn write_picture(path: &Path, picture: &Picture, depth: Depth) -> Result<()> {
-    let format = by_extension(path).filter(|f| f.kind == Kind::Picture);
-    let (Some(format), Some(Encoder::Picture(encoding))) = (format, format.map(|f| &f.encode))
-    else {
+    let picture_format = |f: &'static Format| match f.encode {
+        Encoder::Picture(encoding) => Some((f, encoding)),
+        Encoder::Linear(_) => None,
+    };
+    let Some((format, encoding)) = by_extension(path).and_then(picture_format) else {
         return Err(Error::OutputFormat {
             path: path.to_path_buf(),
             extension: extension(path),
@@ -133,5 +135,5 @@ pub fn write_picture(path: &Path, picture: &Picture, depth: Depth) -> Result<()>
             ),
         });
     }
-    crate::formats::picture::encode(path, picture, depth, *encoding, format.name)
+    crate::formats::picture::encode(path, picture, depth, encoding, format.name)
 }

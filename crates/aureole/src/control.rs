@@ -99,10 +99,7 @@ impl<'a> Control<'a> {
         let span = self.to - self.from;
         Control {
             cancel: self.cancel.clone(),
-            report: match self.report.as_deref_mut() {
-                Some(report) => Some(report),
-                None => None,
-            },
+            report: self.report.as_deref_mut().map(|report| report as _),
             from: self.from + span * from,
             to: self.from + span * to,
         }

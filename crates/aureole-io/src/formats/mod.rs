@@ -43,8 +43,6 @@ pub struct Format {
     pub name: &'static str,
     /// File name extensions, lower case; the first is the usual one.
     pub extensions: &'static [&'static str],
-    /// Linear light or a picture.
-    pub kind: Kind,
     /// How it holds a kernel.
     pub kernels: KernelStorage,
     /// The sample depths a picture may have, the default first (none for
@@ -56,6 +54,16 @@ pub struct Format {
     pub(crate) decode: fn(&[u8], Limits) -> std::result::Result<Decoded, String>,
     /// Writes it.
     pub(crate) encode: Encoder,
+}
+
+impl Format {
+    /// Linear light or a picture: what its encoder writes.
+    pub fn kind(&self) -> Kind {
+        match self.encode {
+            Encoder::Linear(_) => Kind::Linear,
+            Encoder::Picture(_) => Kind::Picture,
+        }
+    }
 }
 
 /// How a format is written.
@@ -136,7 +144,6 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "OpenEXR",
         extensions: &["exr"],
-        kind: Kind::Linear,
         kernels: KernelStorage::Planes,
         depths: &[],
         magic: |head| head.starts_with(&[0x76, 0x2f, 0x31, 0x01]),
@@ -146,7 +153,6 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "Radiance HDR",
         extensions: &["hdr"],
-        kind: Kind::Linear,
         kernels: KernelStorage::Unsupported,
         depths: &[],
         magic: |head| head.starts_with(b"#?"),
@@ -156,7 +162,6 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "PFM",
         extensions: &["pfm"],
-        kind: Kind::Linear,
         kernels: KernelStorage::Planes,
         depths: &[],
         magic: |head| head.starts_with(b"PF") || head.starts_with(b"Pf"),
@@ -166,7 +171,6 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "PNG",
         extensions: &["png"],
-        kind: Kind::Picture,
         kernels: KernelStorage::LogPicture,
         depths: &[Depth::Eight, Depth::Sixteen],
         magic: |head| head.starts_with(b"\x89PNG"),
@@ -176,7 +180,6 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "JPEG",
         extensions: &["jpg", "jpeg"],
-        kind: Kind::Picture,
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Eight],
         magic: |head| head.starts_with(&[0xff, 0xd8, 0xff]),
@@ -186,7 +189,6 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "TIFF",
         extensions: &["tif", "tiff"],
-        kind: Kind::Picture,
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Sixteen, Depth::Eight],
         magic: |head| head.starts_with(b"II*\0") || head.starts_with(b"MM\0*"),
@@ -230,7 +232,7 @@ pub fn image_outputs() -> String {
     let of = |kind: Kind| {
         FORMATS
             .iter()
-            .filter(|f| f.kind == kind)
+            .filter(|f| f.kind() == kind)
             .map(|f| format!(".{}", f.extensions[0]))
             .collect::<Vec<_>>()
             .join(", ")
@@ -246,7 +248,7 @@ pub fn image_outputs() -> String {
 pub fn picture_outputs() -> String {
     FORMATS
         .iter()
-        .filter(|f| f.kind == Kind::Picture)
+        .filter(|f| f.kind() == Kind::Picture)
         .map(|f| {
             let bits: Vec<String> = sorted_depths(f)
                 .iter()

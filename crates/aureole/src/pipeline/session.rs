@@ -263,37 +263,39 @@ impl Session {
         if self.plan.as_ref().is_some_and(|p| p.size() != size) {
             self.release_plan();
         }
-        if self.plan.is_none() {
-            self.check_memory(image)?;
-            let mut report = |f| progress(Stage::BuildingKernel, f);
-            let mut control = Control::new(&self.cancel, &mut report);
-            let plan = match &mut self.lens {
-                Lens::Config(config) => {
-                    Plan::build(config, size.0, size.1, self.max_extent, &mut control)?
-                }
-                Lens::Kernel(slot) => {
-                    let Some(kernel) = slot.take() else {
-                        return Err(Error::NoEffect);
-                    };
-                    match Plan::transform_or_return(kernel, size.0, size.1, &mut control) {
-                        Ok(plan) => plan,
-                        Err(failed) => {
-                            let (kernel, error) = *failed;
-                            *slot = Some(kernel);
-                            return Err(error);
-                        }
-                    }
-                }
-            };
-            self.plan = Some(plan);
-        }
-        let Some(plan) = &self.plan else {
-            return Err(Error::NoEffect);
+        let plan = match self.plan.take() {
+            Some(plan) => plan,
+            None => self.build_plan(image, progress)?,
         };
+        let plan = self.plan.insert(plan);
         let mut report = |f| progress(Stage::Convolving, f);
         let mut control = Control::new(&self.cancel, &mut report);
         let recycled = std::mem::take(&mut self.recycled);
         plan.apply_with(image, frame.scale(), options, recycled, &mut control)
+    }
+
+    /// The plan for `image`'s size, once its memory is known to fit the
+    /// limit; a kernel given is kept when the plan cannot be made.
+    fn build_plan(&mut self, image: &Image, progress: &mut dyn FnMut(Stage, f64)) -> Result<Plan> {
+        self.check_memory(image)?;
+        let (width, height) = (image.width, image.height);
+        let mut report = |f| progress(Stage::BuildingKernel, f);
+        let mut control = Control::new(&self.cancel, &mut report);
+        match &mut self.lens {
+            Lens::Config(config) => {
+                Plan::build(config, width, height, self.max_extent, &mut control)
+            }
+            Lens::Kernel(slot) => {
+                let Some(kernel) = slot.take() else {
+                    return Err(Error::NoEffect);
+                };
+                Plan::transform_or_return(kernel, width, height, &mut control).map_err(|failed| {
+                    let (kernel, error) = *failed;
+                    *slot = Some(kernel);
+                    error
+                })
+            }
+        }
     }
 
     /// Hands back a result that is no longer needed (written out), so that
