@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aureole::{ApplyOptions, FrameOptions, Method, Session};
+use aureole::{ApplyOptions, Arithmetic, FrameOptions, Method, Session};
 use aureole_io::kernel::read_kernel;
 use aureole_io::limits::{default_memory_limit, Limits};
 use clap::ArgMatches;
@@ -288,10 +288,15 @@ impl Run<'_> {
                 kernel.1,
                 applied.spread_pixels,
                 applied.threshold,
-                match (applied.method, applied.double) {
-                    (Method::Splat, _) => "splatted",
-                    (_, true) => "FFT in f64: the scene's range is beyond f32",
-                    _ => "FFT",
+                match (applied.method, applied.arithmetic) {
+                    (Method::Splat, _) => "splatted".to_string(),
+                    (_, Arithmetic::Lamps(lamps)) => format!(
+                        "FFT, the near light of the {lamps} brightest px added exactly"
+                    ),
+                    (_, Arithmetic::Double) => {
+                        "FFT in f64: the scene's range is beyond f32".to_string()
+                    }
+                    (_, Arithmetic::Single) => "FFT".to_string(),
                 },
                 applied.energy_in,
                 applied.energy_out,

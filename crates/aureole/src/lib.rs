@@ -90,6 +90,7 @@ pub use image::{Image, Layout};
 pub use kernel::{Extent, Kernel};
 pub use optics::{Aperture, Bloom, Corona, Effect, Filter, Vos};
 pub use pipeline::{
-    Applied, ApplyOptions, Frame, FrameOptions, Method, Plan, ScaleSource, Session, Stage,
+    Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, Method, Plan, ScaleSource, Session,
+    Stage,
 };
 pub use units::{Length, Unit};

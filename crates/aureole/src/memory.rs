@@ -97,12 +97,13 @@ impl Workload {
 
         // Then the plan (the kernel and its spectrum at the apply size, and
         // the row spectra it keeps for every plane) and the output planes
-        // stay until the result is written.
+        // stay until the result is written; a night scene's lamps add the
+        // spectrum of the kernel beyond their windows.
         let (px, py) = padded_size(self.kernel.0, self.kernel.1, self.width, self.height);
         let half = px as u64 / 2 + 1;
         let spectrum = half * py as u64 * COMPLEX * self.kernel_planes as u64;
         let rows = half * self.height as u64 * COMPLEX * self.planes as u64;
-        let plan = kernel + spectrum + rows + image;
+        let plan = kernel + 2 * spectrum + rows + image;
         let stages = [
             ("reading", 2 * image),
             ("building the kernel", building),
@@ -123,6 +124,21 @@ impl Workload {
             bytes: bytes + bytes / 4 + BASELINE,
             stage,
         }
+    }
+
+    /// What the f64 engine adds to [`Workload::estimate`] when a scene's
+    /// range needs it: the spectra in f64, and per plane its f64 planes and
+    /// the column spectra, with the same margin.
+    pub fn double_extra(&self) -> u64 {
+        const COMPLEX: u64 = 16;
+        let (px, py) = padded_size(self.kernel.0, self.kernel.1, self.width, self.height);
+        let half = px as u64 / 2 + 1;
+        let pixels = self.width as u64 * self.height as u64;
+        let spectra = half * py as u64 * COMPLEX * self.kernel_planes as u64;
+        let plane =
+            3 * pixels * 8 + half * py as u64 * COMPLEX + self.height as u64 * px as u64 * 24;
+        let bytes = spectra + plane;
+        bytes + bytes / 4
     }
 
     /// The largest kernel, halving the extent from `start` (width, height),

@@ -12,8 +12,8 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use aureole::{
-    presets, ApplyOptions, Cancel, Config, ConfigFile, Control, Error, Extent, Frame, FrameOptions,
-    Method, Session,
+    presets, ApplyOptions, Arithmetic, Cancel, Config, ConfigFile, Control, Error, Extent, Frame,
+    FrameOptions, Method, Session,
 };
 
 const RUNS: usize = 5;
@@ -59,10 +59,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ..options
         };
         let built = session.apply(&frame, &build, &mut |_, _| {})?;
-        let route = match (method, built.double) {
+        let route = match (method, built.arithmetic) {
             (Method::Splat, _) => "splatting",
-            (_, true) => "FFT in f64",
-            _ => "FFT in f32",
+            (_, Arithmetic::Double) => "FFT in f64",
+            (_, Arithmetic::Lamps(_)) => "FFT in f32, lamps apart",
+            (_, Arithmetic::Single) => "FFT in f32",
         };
         let name = format!("{route}, 4K street, {preset}");
         report(&name, after, |cancel| {

@@ -8,12 +8,14 @@
 
 pub mod double;
 mod grid;
+mod near;
 mod placement;
 mod pool;
 mod simd;
 pub mod single;
 
 pub use grid::{fast_size, padded_size};
+pub use near::split_radii;
 
 use crate::control::Control;
 use crate::error::Result;
@@ -51,6 +53,11 @@ pub struct Spread<'a> {
     /// plane of weight 1 for each colour plane (or a one-plane kernel), or
     /// a luminance plane as Σ w_k K_k ⊛ Y through a coloured kernel.
     pub terms: Vec<Term>,
+    /// The brightest pixels (row-major indices, ascending), whose light
+    /// near them is added exactly and only the rest transformed, so that
+    /// their round-off does not drown the dark pixels; empty for none.
+    /// Taken only after [`Engine::split_near`] has said yes.
+    pub lamps: &'a [usize],
 }
 
 /// The arithmetic an engine computes in.
@@ -91,6 +98,19 @@ pub trait Engine: Send + Sync {
 
     /// How many kernel planes it holds.
     fn kernel_planes(&self) -> usize;
+
+    /// Prepares to take lamps ([`Spread::lamps`]): the kernel (the planes
+    /// it was built from) split at `radius`, its part beyond transformed.
+    /// Kept until a call asks for another radius. `false`: this engine
+    /// cannot.
+    fn split_near(
+        &self,
+        _planes: &[&[f32]],
+        _radius: usize,
+        _control: &mut Control,
+    ) -> Result<bool> {
+        Ok(false)
+    }
 
     /// Every output of `outputs`, written into the planes of `recycled`
     /// where there are some (memory already mapped); `control` hears the

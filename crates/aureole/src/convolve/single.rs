@@ -16,7 +16,7 @@
 //! output rows) in cache, and written strip-major; the inverse row
 //! transforms gather their block's tile from each strip.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 
 use rayon::prelude::*;
 use realfft::num_complex::Complex;
@@ -24,6 +24,7 @@ use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 
 use super::grid::{ColumnTransform, Grid};
+use super::near::Near;
 use super::placement::Placement;
 use super::pool::Pool;
 use super::{Centre, Engine, Spread};
@@ -45,13 +46,30 @@ const BLOCK: usize = 8;
 /// Values in a tile.
 const TILE: usize = BLOCK * STRIP;
 
+/// The kernel split for lamps: its near windows and, per kernel plane, the
+/// spectrum of the rest.
+type Split = (Near, Vec<Vec<Complex<f32>>>);
+
+/// Row spectra of the lamps alone, by row: (row, its spectrum).
+type LampRows = Vec<(usize, Vec<Complex<f32>>)>;
+
+/// The lamps' share of one column: their row spectra, the column's index
+/// in them, and the far kernel's spectrum of the column.
+struct LampColumn<'a> {
+    rows: &'a LampRows,
+    u: usize,
+    far: &'a [Complex<f32>],
+}
+
 /// What a strip task reads: strip `index` of `strips`, the row spectra in
-/// tiles, the kernel's spectrum.
+/// tiles, the kernel's spectrum, and the lamps' row spectra with the
+/// spectrum of the kernel beyond its near window, if there are lamps.
 struct Strip<'a> {
     index: usize,
     strips: usize,
     rows: &'a [Complex<f32>],
     spectrum: &'a [Complex<f32>],
+    lamps: Option<(&'a LampRows, &'a [Complex<f32>])>,
 }
 
 /// One plane to convolve.
@@ -64,12 +82,23 @@ struct Input<'a> {
     fractions: Option<&'a [f32]>,
     /// The kernel plane to convolve with.
     kernel_plane: usize,
+    /// Pixels whose light near them is added exactly ([`Spread::lamps`]).
+    lamps: &'a [usize],
+}
+
+/// The lamps of row `y` of a plane `w` wide, from ascending indices.
+fn lamps_in_row(lamps: &[usize], y: usize, w: usize) -> &[usize] {
+    let first = lamps.partition_point(|&i| i < y * w);
+    let last = lamps.partition_point(|&i| i < (y + 1) * w);
+    &lamps[first..last]
 }
 
 /// Convolves `width`×`height` planes with one kernel, plane by plane.
 pub struct Convolver {
     width: usize,
     height: usize,
+    /// The kernel's width and height.
+    kernel_size: (usize, usize),
     grid: Grid,
     /// One spectrum per kernel plane, stored column by column (`px/2 + 1`
     /// columns of P values; for pruned columns the even frequencies, then
@@ -86,6 +115,9 @@ pub struct Convolver {
     column_fft: Arc<dyn Fft<f32>>,
     column_ifft: Arc<dyn Fft<f32>>,
     buffers: Pool<Buffers>,
+    /// The kernel split for lamps, with the spectra (per kernel plane) of
+    /// its part beyond the near window, as last asked for.
+    near: Mutex<Option<Arc<Split>>>,
 }
 
 impl Convolver {
@@ -137,6 +169,7 @@ impl Convolver {
         Ok(Convolver {
             width,
             height,
+            kernel_size: size,
             grid,
             spectra,
             centres,
@@ -146,6 +179,7 @@ impl Convolver {
             column_fft: planner.plan_fft_forward(grid.columns.transform_length()),
             column_ifft: planner.plan_fft_inverse(grid.columns.transform_length()),
             buffers: Pool::new(),
+            near: Mutex::new(None),
         })
     }
 
@@ -161,6 +195,7 @@ impl Convolver {
             plane,
             fractions: None,
             kernel_plane,
+            lamps: &[],
         };
         Ok(self
             .convolve_all(&[input], Vec::new(), control)?
@@ -191,9 +226,23 @@ impl Convolver {
         for (input, (rows, _)) in inputs.iter().zip(buffers.iter_mut()) {
             self.forward_rows(input, rows, strips, &control.cancel());
         }
+        let split = self.split();
+        let near = split.as_deref().map(|(near, _)| near);
+        let far = split.as_deref().map(|(_, far)| far);
+        let lamp_rows: Vec<Option<LampRows>> = inputs
+            .iter()
+            .map(|input| (near.is_some() && !input.lamps.is_empty()).then(|| self.lamp_rows(input)))
+            .collect();
         control.check()?;
         control.report(0.3);
-        self.column_pass(inputs, &mut buffers, strips, &control.cancel());
+        self.column_pass(
+            inputs,
+            &lamp_rows,
+            far,
+            &mut buffers,
+            strips,
+            &control.cancel(),
+        );
         control.check()?;
         control.report(0.7);
         recycled.resize_with(inputs.len(), Vec::new);
@@ -205,6 +254,17 @@ impl Convolver {
             .map(|((input, (_, results)), mut out)| {
                 out.resize(self.width * h, 0.0);
                 self.inverse_rows(input, results, &mut out, strips, &control.cancel());
+                if let (Some(near), false) = (near, input.lamps.is_empty()) {
+                    let bright = |i: usize| input.plane[i] * input.fractions.map_or(1.0, |f| f[i]);
+                    near.add(
+                        input.kernel_plane,
+                        input.lamps,
+                        &bright,
+                        &mut out,
+                        self.width,
+                        &control.cancel(),
+                    );
+                }
                 out
             })
             .collect();
@@ -251,6 +311,9 @@ impl Convolver {
                             }
                             None => padded[..w].copy_from_slice(row),
                         }
+                        for &i in lamps_in_row(input.lamps, block * BLOCK + r, w) {
+                            padded[i % w] = 0.0;
+                        }
                         padded[w..].iter_mut().for_each(|v| *v = 0.0);
                         let _ = row_fft.process_with_scratch(padded, spectrum, scratch);
                         for (s, values) in spectrum.chunks(STRIP).enumerate() {
@@ -262,12 +325,33 @@ impl Convolver {
             );
     }
 
+    /// The row spectra of an input's lamps alone (the forward rows leave
+    /// them out), one per row that has lamps.
+    fn lamp_rows(&self, input: &Input) -> LampRows {
+        let w = self.width;
+        let mut rows: Vec<usize> = input.lamps.iter().map(|&i| i / w).collect();
+        rows.dedup();
+        rows.into_par_iter()
+            .map(|y| {
+                let mut padded = self.row_fft.make_input_vec();
+                for &i in lamps_in_row(input.lamps, y, w) {
+                    padded[i % w] = input.plane[i] * input.fractions.map_or(1.0, |f| f[i]);
+                }
+                let mut spectrum = self.row_fft.make_output_vec();
+                let _ = self.row_fft.process(&mut padded, &mut spectrum);
+                (y, spectrum)
+            })
+            .collect()
+    }
+
     /// The column transforms of every input, strip by strip: each strip task
     /// gathers its columns from the row spectra, and writes the H output
     /// rows of the product's inverse into its own part of the results.
     fn column_pass(
         &self,
         inputs: &[Input],
+        lamp_rows: &[Option<LampRows>],
+        far: Option<&Vec<Vec<Complex<f32>>>>,
         buffers: &mut [Buffers],
         strips: usize,
         cancel: &Cancel,
@@ -288,9 +372,11 @@ impl Convolver {
             .get_inplace_scratch_len()
             .max(self.column_ifft.get_inplace_scratch_len());
         tasks.into_par_iter().enumerate().for_each_init(
-            || (vec![zero; py], vec![zero; scratch_len]),
-            |(column, scratch), (s, mut outs)| {
-                for ((input, rows), out) in inputs.iter().zip(&rows).zip(outs.iter_mut()) {
+            || (vec![zero; py], vec![zero; py], vec![zero; scratch_len]),
+            |(column, extra, scratch), (s, mut outs)| {
+                for (((input, rows), lamps), out) in
+                    inputs.iter().zip(&rows).zip(lamp_rows).zip(outs.iter_mut())
+                {
                     if cancel.is_cancelled() {
                         return;
                     }
@@ -299,10 +385,14 @@ impl Convolver {
                         strips,
                         rows,
                         spectrum: &self.spectra[input.kernel_plane],
+                        lamps: lamps
+                            .as_ref()
+                            .zip(far)
+                            .map(|(lamps, far)| (lamps, far[input.kernel_plane].as_slice())),
                     };
                     super::simd::widest(
                         #[inline(always)]
-                        || self.strip(&strip, out, column, scratch),
+                        || self.strip(&strip, out, column, extra, scratch),
                     );
                 }
             },
@@ -318,6 +408,7 @@ impl Convolver {
         strip: &Strip,
         out: &mut [Complex<f32>],
         column: &mut [Complex<f32>],
+        extra: &mut [Complex<f32>],
         scratch: &mut [Complex<f32>],
     ) {
         let h = self.height;
@@ -331,21 +422,32 @@ impl Convolver {
             out[at..at + n].copy_from_slice(&tiles[strip.index * TILE..strip.index * TILE + n]);
         }
         for j in 0..width {
-            let kernel = &strip.spectrum[(first + j) * py..(first + j + 1) * py];
-            self.column(out, j, kernel, column, scratch);
+            let u = first + j;
+            let kernel = &strip.spectrum[u * py..(u + 1) * py];
+            let lamps = strip.lamps.map(|(rows, far)| LampColumn {
+                rows,
+                u,
+                far: &far[u * py..(u + 1) * py],
+            });
+            self.column(out, j, kernel, lamps, column, extra, scratch);
         }
     }
 
     /// Column `j` of a strip (H rows of [`STRIP`] values) through the
     /// padded column transform, the product with `kernel`'s column spectrum
-    /// and back, in place.
+    /// and back, in place; with lamps (their row spectra, the column's
+    /// index among them, and the far kernel's column spectrum), their
+    /// column through the far kernel is added before going back.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn column(
         &self,
         strip: &mut [Complex<f32>],
         j: usize,
         kernel: &[Complex<f32>],
+        lamps: Option<LampColumn>,
         column: &mut [Complex<f32>],
+        extra: &mut [Complex<f32>],
         scratch: &mut [Complex<f32>],
     ) {
         let h = self.height;
@@ -377,6 +479,22 @@ impl Convolver {
         self.column_fft.process_with_scratch(column, scratch);
         for (a, b) in column.iter_mut().zip(kernel) {
             *a *= *b;
+        }
+        if let Some(LampColumn { rows, u, far }) = lamps {
+            extra.iter_mut().for_each(|v| *v = zero);
+            for (y, spectrum) in rows {
+                match self.grid.columns {
+                    ColumnTransform::Full(_) => extra[*y] = spectrum[u],
+                    ColumnTransform::Halves(n) => {
+                        extra[*y] = spectrum[u];
+                        extra[n + *y] = spectrum[u] * self.twiddles[*y];
+                    }
+                }
+            }
+            self.column_fft.process_with_scratch(extra, scratch);
+            for ((a, e), f) in column.iter_mut().zip(extra.iter()).zip(far) {
+                *a += e * f;
+            }
         }
         self.column_ifft.process_with_scratch(column, scratch);
         let values = strip.iter_mut().skip(j).step_by(STRIP);
@@ -509,6 +627,36 @@ impl Engine for Convolver {
         self.spectra.len()
     }
 
+    fn split_near(&self, planes: &[&[f32]], radius: usize, control: &mut Control) -> Result<bool> {
+        if self.split().is_some_and(|split| split.0.radius == radius) {
+            return Ok(true);
+        }
+        let size = self.kernel_size;
+        let near = Near::new(planes, size, radius);
+        let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(self.grid.px);
+        let full_column = FftPlanner::<f32>::new().plan_fft_forward(self.grid.columns.length());
+        let mut far = Vec::with_capacity(planes.len());
+        for (k, plane) in planes.iter().enumerate() {
+            let rest = near.far_plane(plane, size);
+            let placed = Placement {
+                plane: &rest,
+                size,
+                centre: Centre::Include,
+            };
+            let share = 1.0 / planes.len() as f64;
+            let mut part = control.part(k as f64 * share, (k + 1) as f64 * share);
+            far.push(kernel_spectrum(
+                &*row_fft,
+                &*full_column,
+                &self.grid,
+                &placed,
+                &mut part,
+            )?);
+        }
+        *self.near.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::new((near, far)));
+        Ok(true)
+    }
+
     /// Each output as one pass over its plane where it takes one kernel
     /// plane; a luminance plane through a coloured kernel as Σ w_k of its
     /// bright part through each plane, plus the light that stays.
@@ -526,6 +674,7 @@ impl Engine for Convolver {
                     plane: s.plane,
                     fractions: s.fractions,
                     kernel_plane: s.terms[0].kernel_plane,
+                    lamps: s.lamps,
                 })
                 .collect();
             return self.convolve_all(&inputs, recycled, control);
@@ -542,6 +691,14 @@ impl Engine for Convolver {
 }
 
 impl Convolver {
+    /// The kernel split for lamps, if one was asked for.
+    fn split(&self) -> Option<Arc<Split>> {
+        self.near
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .clone()
+    }
+
     /// One output of several weighted terms: the bright part goes through
     /// each kernel plane, and what stays is added once.
     fn weighted(
@@ -566,6 +723,7 @@ impl Convolver {
                 plane: source,
                 fractions: None,
                 kernel_plane: term.kernel_plane,
+                lamps: output.lamps,
             })
             .collect();
         let mut parts = self.convolve_all(&inputs, recycled, control)?.into_iter();

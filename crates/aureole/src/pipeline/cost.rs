@@ -38,3 +38,11 @@ pub(super) fn splat(
     };
     (per_add * area as f64 + 2.0 * pixels) * convolutions as f64
 }
+
+/// How many lamps (pixels whose near light is added directly, a window of
+/// (2·`radius` + 1)² pixels each, into `convolutions` planes) fit in
+/// `budget` nanoseconds.
+pub(super) fn lamps_within(budget: f64, radius: usize, convolutions: usize) -> usize {
+    let side = (2 * radius + 1) as f64;
+    (budget / (0.1 * side * side * convolutions.max(1) as f64)) as usize
+}

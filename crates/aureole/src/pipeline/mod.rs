@@ -11,7 +11,7 @@ mod session;
 mod splat;
 mod threshold;
 
-pub use options::{Applied, ApplyOptions, Method};
+pub use options::{Applied, ApplyOptions, Arithmetic, Method};
 pub use plan::Plan;
 pub use precision::f32_round_off;
 pub use session::{Frame, FrameOptions, ScaleSource, Session, Stage};

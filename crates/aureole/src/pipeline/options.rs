@@ -51,6 +51,20 @@ pub struct Applied {
     pub threshold: f64,
     /// How they were spread ([`Method::Fft`] or [`Method::Splat`]).
     pub method: Method,
-    /// Whether the FFT ran in f64 because the scene's range is beyond f32.
-    pub double: bool,
+    /// The arithmetic of the FFT, chosen from the scene's range.
+    pub arithmetic: Arithmetic,
+}
+
+/// The arithmetic an application used (docs/physics.md §8): f32 unless its
+/// round-off would show in the dark pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Arithmetic {
+    /// f32 throughout (or no FFT at all).
+    #[default]
+    Single,
+    /// f32, with the light near the brightest pixels (this many) added
+    /// exactly, so that their round-off stays below the dark pixels.
+    Lamps(usize),
+    /// f64: the scene's range is beyond f32 even with its lamps apart.
+    Double,
 }

@@ -1,18 +1,22 @@
 //! A [`Plan`]: the kernel of an optical chain for one image size, with its
 //! spectrum, applied to any number of images (docs/physics.md §7–8).
 
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock, PoisonError};
 
 use rayon::prelude::*;
 
-use super::options::{Applied, ApplyOptions, Method};
+use super::options::{Applied, ApplyOptions, Arithmetic, Method};
+use super::precision::{Route, Scene};
 use super::splat::{copies, splat};
 use super::threshold::Threshold;
 use super::{cost, precision};
 use crate::config::Config;
 use crate::control::{Cancel, Control};
-use crate::convolve::{engine, Centre, Engine, Precision, Spread, Term};
-use crate::error::{Error, Result};
+use crate::convolve::{engine, split_radii, Centre, Engine, Precision, Spread, Term};
+use crate::error::{Error, Fit, Result};
+
+/// The stage that needs the f64 engine's memory, in words.
+pub(crate) const DOUBLE_STAGE: &str = "convolving in f64 (the scene's range is beyond f32)";
 use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
 use crate::kernel::{Extent, Kernel};
 
@@ -27,6 +31,14 @@ pub struct Plan {
     single: Box<dyn Engine>,
     /// The f64 engine, built the first time a scene's range needs it.
     double: OnceLock<Box<dyn Engine>>,
+    /// Where the kernel can be split for lamps, and the light beyond
+    /// ([`split_radii`]), found the first time a scene has lamps.
+    near: OnceLock<Vec<(usize, f64)>>,
+    /// Held by an application with lamps while it uses the engine's split.
+    split: Mutex<()>,
+    /// Instead of building the f64 engine, which would not fit the memory
+    /// limit: the fields of the [`Error::Memory`] to give.
+    double_refused: Option<(u64, u64, Option<Fit>, bool)>,
 }
 
 impl Plan {
@@ -106,6 +118,9 @@ impl Plan {
                 threshold: 0.0,
                 single,
                 double: OnceLock::new(),
+                near: OnceLock::new(),
+                split: Mutex::new(()),
+                double_refused: None,
             }),
             Err(error) => Err(Box::new((kernel, error))),
         }
@@ -198,15 +213,57 @@ impl Plan {
             Method::Auto => Method::Fft,
             chosen => chosen,
         };
-        let double = survey.spread > 0
-            && method == Method::Fft
-            && precision::beyond_f32(
-                &luminance,
-                pixels,
-                survey.squares,
-                &self.kernel.centre_weights(),
-                self.single.padded_size(),
+        let moved = 1.0
+            - f64::from(
+                self.kernel
+                    .centre_weights()
+                    .into_iter()
+                    .fold(1.0f32, f32::min),
             );
+        let route = if survey.spread > 0 && method == Method::Fft {
+            let padded = self.single.padded_size();
+            let scene = Scene {
+                luminance: &luminance,
+                threshold: &threshold,
+                pixels,
+                squares: survey.squares,
+                moved,
+                padded,
+            };
+            // Lamps may cost two more FFTs: the route stays below the f64
+            // engine's cost, about four.
+            let budget = 2.0 * cost::fft(padded, size, convolutions);
+            precision::route(
+                &scene,
+                || self.near.get_or_init(|| self.split_radii()).clone(),
+                |radius| cost::lamps_within(budget, radius, convolutions),
+            )
+        } else {
+            Route::Single
+        };
+        // The engine keeps one split of the kernel: an application with
+        // lamps holds it from choosing the split to the end of the spread,
+        // so that a concurrent one with another radius cannot swap it.
+        let mut _split = None;
+        let route = match route {
+            Route::Lamps { radius, lamps } => {
+                _split = Some(self.split.lock().unwrap_or_else(PoisonError::into_inner));
+                if self.single.split_near(
+                    &kernel_planes(&self.kernel),
+                    radius,
+                    &mut control.part(0.0, 0.0),
+                )? {
+                    Route::Lamps { radius, lamps }
+                } else {
+                    Route::Double
+                }
+            }
+            other => other,
+        };
+        let lamps: &[usize] = match &route {
+            Route::Lamps { lamps, .. } => lamps,
+            _ => &[],
+        };
         let terms: Vec<Vec<Term>> = (0..image.planes.len())
             .map(|c| terms(image.layout, self.kernel.planes().len(), c))
             .collect();
@@ -236,9 +293,10 @@ impl Plan {
                     plane,
                     fractions: fractions.as_deref(),
                     terms,
+                    lamps,
                 })
                 .collect();
-            let engine = if double {
+            let engine = if route == Route::Double {
                 self.double_engine(control)?
             } else {
                 self.single.as_ref()
@@ -259,14 +317,51 @@ impl Plan {
             spread_pixels: survey.spread,
             threshold: threshold_cd,
             method,
-            double,
+            arithmetic: match route {
+                Route::Single => Arithmetic::Single,
+                Route::Lamps { lamps, .. } => Arithmetic::Lamps(lamps.len()),
+                Route::Double => Arithmetic::Double,
+            },
         })
+    }
+
+    /// Where the kernel can be split for lamps ([`split_radii`]).
+    fn split_radii(&self) -> Vec<(usize, f64)> {
+        split_radii(
+            &kernel_planes(&self.kernel),
+            (self.kernel.width(), self.kernel.height()),
+        )
+    }
+
+    /// The plan, refusing with `error` (an [`Error::Memory`]) a scene that
+    /// needs the f64 engine, which would not fit the memory limit.
+    pub fn refusing_double(mut self, error: Error) -> Plan {
+        if let Error::Memory {
+            needed,
+            limit,
+            fits,
+            built,
+            ..
+        } = error
+        {
+            self.double_refused = Some((needed, limit, fits, built));
+        }
+        self
     }
 
     /// The f64 engine, built on first use.
     fn double_engine(&self, control: &mut Control) -> Result<&dyn Engine> {
         if let Some(built) = self.double.get() {
             return Ok(built.as_ref());
+        }
+        if let Some((needed, limit, fits, built)) = self.double_refused {
+            return Err(Error::Memory {
+                needed,
+                stage: DOUBLE_STAGE,
+                limit,
+                fits,
+                built,
+            });
         }
         let built = engine(
             Precision::Double,

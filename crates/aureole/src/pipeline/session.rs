@@ -277,11 +277,11 @@ impl Session {
     /// The plan for `image`'s size, once its memory is known to fit the
     /// limit; a kernel given is kept when the plan cannot be made.
     fn build_plan(&mut self, image: &Image, progress: &mut dyn FnMut(Stage, f64)) -> Result<Plan> {
-        self.check_memory(image)?;
+        let double = self.check_memory(image)?;
         let (width, height) = (image.width, image.height);
         let mut report = |f| progress(Stage::BuildingKernel, f);
         let mut control = Control::new(&self.cancel, &mut report);
-        match &mut self.lens {
+        let plan = match &mut self.lens {
             Lens::Config(config) => {
                 Plan::build(config, width, height, self.max_extent, &mut control)
             }
@@ -295,7 +295,11 @@ impl Session {
                     error
                 })
             }
-        }
+        }?;
+        Ok(match double {
+            Some(refusal) => plan.refusing_double(refusal),
+            None => plan,
+        })
     }
 
     /// Hands back a result that is no longer needed (written out), so that
@@ -315,10 +319,12 @@ impl Session {
     }
 
     /// Refuses a frame whose run would need more than the memory limit,
-    /// with the estimate and the largest kernel that would fit.
-    fn check_memory(&self, image: &Image) -> Result<()> {
+    /// with the estimate and the largest kernel that would fit; else the
+    /// error for a frame whose range would need the f64 engine beyond the
+    /// limit, if one would.
+    fn check_memory(&self, image: &Image) -> Result<Option<Error>> {
         let Some(limit) = self.memory_limit else {
-            return Ok(());
+            return Ok(None);
         };
         let planes = image.planes.len();
         let alpha = image.alpha.is_some();
@@ -355,7 +361,18 @@ impl Session {
         };
         let needed = workload.estimate(effects);
         if needed.bytes <= limit {
-            return Ok(());
+            let double = needed.bytes + workload.double_extra();
+            return Ok((double > limit).then_some(Error::Memory {
+                needed: double,
+                stage: super::plan::DOUBLE_STAGE,
+                limit,
+                fits: workload.largest_fitting(
+                    effects,
+                    start,
+                    limit - workload.double_extra().min(limit),
+                ),
+                built: !effects.is_empty(),
+            }));
         }
         Err(Error::Memory {
             needed: needed.bytes,

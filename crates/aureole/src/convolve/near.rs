@@ -1,0 +1,133 @@
+//! The near field of the brightest pixels, added exactly (docs/physics.md
+//! §8): an f32 FFT leaves round-off of about u·‖B‖₂ times the light the
+//! kernel moves in every pixel, so a few lamps of 10⁵ cd/m² drown a night
+//! sky of 10⁻³. Their light within a small window goes out by direct sums,
+//! exact in f32; only the kernel beyond the window, which carries a few
+//! thousandths of the light, sees their values in a transform. Everything
+//! else goes through the transform with the whole kernel as before.
+
+use rayon::prelude::*;
+
+use crate::control::Cancel;
+
+/// The kernel split at a radius: a window around its centre, added at the
+/// lamps directly, and the rest, which the engine transforms.
+pub(crate) struct Near {
+    /// Half the window's side, pixels.
+    pub radius: usize,
+    /// Per kernel plane, the (2r + 1)² window around the centre, rows
+    /// downwards as in an image, with the centre weight zero (the engine
+    /// applies it to every pixel).
+    windows: Vec<Vec<f32>>,
+}
+
+impl Near {
+    /// The windows of `planes` (row-major, `size`, centre at the middle) at
+    /// `radius`, which must fit inside the kernel.
+    pub fn new(planes: &[&[f32]], (kw, kh): (usize, usize), radius: usize) -> Near {
+        let (cx, cy) = (kw / 2, kh / 2);
+        let side = 2 * radius + 1;
+        let windows = planes
+            .iter()
+            .map(|plane| {
+                let mut window = Vec::with_capacity(side * side);
+                for j in cy - radius..=cy + radius {
+                    window.extend_from_slice(&plane[j * kw + cx - radius..=j * kw + cx + radius]);
+                }
+                window[radius * side + radius] = 0.0;
+                window
+            })
+            .collect();
+        Near { radius, windows }
+    }
+
+    /// Kernel plane `plane` less its window (and centre): what the
+    /// transform carries for the lamps.
+    pub fn far_plane(&self, plane: &[f32], (kw, kh): (usize, usize)) -> Vec<f32> {
+        let (cx, cy, r) = (kw / 2, kh / 2, self.radius);
+        let mut far = plane.to_vec();
+        for j in cy - r..=cy + r {
+            far[j * kw + cx - r..=j * kw + cx + r]
+                .iter_mut()
+                .for_each(|v| *v = 0.0);
+        }
+        far
+    }
+
+    /// Adds to `out` (row-major, `width` wide) the window of kernel plane
+    /// `plane` at every lamp (row-major indices, ascending), weighted by
+    /// its bright part `bright(i)`. Each output row adds its lamps in index
+    /// order: the same bytes with any number of threads.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add(
+        &self,
+        plane: usize,
+        lamps: &[usize],
+        bright: &(dyn Fn(usize) -> f32 + Sync),
+        out: &mut [f32],
+        width: usize,
+        cancel: &Cancel,
+    ) {
+        let r = self.radius;
+        let side = 2 * r + 1;
+        let window = &self.windows[plane];
+        out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+            if cancel.is_cancelled() {
+                return;
+            }
+            let first = lamps.partition_point(|&i| i / width + r < y);
+            let last = lamps.partition_point(|&i| i / width <= y + r);
+            for &i in &lamps[first..last] {
+                let (lx, ly) = (i % width, i / width);
+                let weights = &window[(y + r - ly) * side..(y + r - ly + 1) * side];
+                let b = bright(i);
+                // Columns lx − r ..= lx + r, clipped to the frame.
+                let skip = r.saturating_sub(lx);
+                let start = lx + skip - r;
+                let end = (lx + r + 1).min(width);
+                for (o, w) in row[start..end].iter_mut().zip(&weights[skip..]) {
+                    *o += b * w;
+                }
+            }
+        });
+    }
+}
+
+/// The near windows a kernel (row-major planes, `size`, centre at the
+/// middle) can be split at, smallest first: radii of 4, 8, … 128 pixels
+/// that fit inside it, each with the light the kernel moves beyond it (the
+/// most of any plane).
+pub fn split_radii(planes: &[&[f32]], (kw, kh): (usize, usize)) -> Vec<(usize, f64)> {
+    let (cx, cy) = (kw / 2, kh / 2);
+    let largest = cx.min(cy).min(kw - 1 - cx).min(kh - 1 - cy);
+    let totals: Vec<f64> = planes
+        .iter()
+        .map(|plane| {
+            // Fixed chunks summed in order: the same total on any number
+            // of threads.
+            let chunks: Vec<f64> = plane
+                .par_chunks(1 << 16)
+                .map(|chunk| chunk.iter().map(|&v| f64::from(v)).sum())
+                .collect();
+            chunks.iter().sum()
+        })
+        .collect();
+    [4usize, 8, 16, 32, 64, 128]
+        .into_iter()
+        .filter(|&r| r <= largest)
+        .map(|r| {
+            let far = planes
+                .iter()
+                .zip(&totals)
+                .map(|(plane, total)| {
+                    let inside: f64 = (cy - r..=cy + r)
+                        .flat_map(|j| &plane[j * kw + cx - r..=j * kw + cx + r])
+                        .map(|&v| f64::from(v))
+                        .sum();
+                    (total - inside).max(0.0)
+                })
+                .fold(0.0, f64::max);
+            (r, far)
+        })
+        .collect()
+}
