@@ -75,14 +75,10 @@ pub struct Args {
     input_scale: Option<f64>,
 
     /// Replace NaN, infinite and negative samples by 0 (with a warning)
-    /// instead of refusing the file.
+    /// instead of refusing the file (NaN, infinite) or passing them
+    /// through (negative samples, with a note).
     #[arg(long)]
     sanitize: bool,
-
-    /// Keep negative samples as they are (they are never spread) instead of
-    /// refusing the file.
-    #[arg(long)]
-    keep_negative: bool,
 
     /// Write only the light the camera adds (result − input), to add over
     /// the original in compositing.
@@ -230,7 +226,6 @@ impl Run<'_> {
         let options = FrameOptions {
             input_scale: args.input_scale,
             sanitize: args.sanitize,
-            keep_negative: args.keep_negative,
         };
         let frame = input::read(
             &job.input,

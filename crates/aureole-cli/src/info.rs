@@ -24,17 +24,24 @@ pub struct Args {
 }
 
 pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
-    // info describes bad pixels instead of refusing them.
     let options = FrameOptions {
         input_scale: args.input_scale,
-        sanitize: true,
-        keep_negative: true,
+        sanitize: false,
     };
     let limits = Limits {
         max_bytes: default_memory_limit(),
     };
-    let loaded = aureole_io::read::read_image(&args.input, limits)?;
+    let mut loaded = aureole_io::read::read_image(&args.input, limits)?;
     let format = loaded.format;
+    // info describes NaN and infinite samples (counted as 0) instead of
+    // refusing the file.
+    let mut non_finite = 0;
+    for v in loaded.image.planes.iter_mut().flatten() {
+        if !v.is_finite() {
+            *v = 0.0;
+            non_finite += 1;
+        }
+    }
     let frame = input::read_loaded(&args.input, loaded, &options, quiet)?;
     let image = frame.image();
     let mut luminance: Vec<f64> = image
@@ -87,6 +94,9 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         );
     }
     text += &format!("negative samples: {negatives}\n");
+    if non_finite > 0 {
+        text += &format!("NaN or infinite samples: {non_finite} (counted as 0)\n");
+    }
     text += &counts.join("\n");
     text.push('\n');
     // A closed pipe (`aureole info … | head`) is not an error worth a message.

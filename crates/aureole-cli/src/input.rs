@@ -53,6 +53,12 @@ pub fn read_loaded(
         );
     }
     let frame = Frame::new(loaded.image, options).map_err(|e| about(path, e))?;
+    if frame.negatives() > 0 {
+        note(&format!(
+            "{} negative samples passed through as they are (--sanitize makes them 0)",
+            frame.negatives()
+        ));
+    }
     if frame.replaced() > 0 {
         eprintln!(
             "aureole: warning: {}: {} NaN, infinite or negative samples replaced by 0 (--sanitize)",

@@ -16,14 +16,7 @@ pub fn library(error: &Error) -> String {
             }
             None => error.to_string(),
         },
-        Error::BadSamples { negative, .. } => format!(
-            "{error}; --sanitize replaces them by 0{}",
-            if *negative {
-                ", --keep-negative keeps them"
-            } else {
-                ""
-            }
-        ),
+        Error::BadSamples { .. } => format!("{error}; --sanitize replaces them by 0"),
         Error::Memory {
             needed,
             stage,

@@ -323,3 +323,39 @@ fn apply_spreads_by_fft_or_splatting_as_asked_and_says_which() {
         .code(2)
         .stderr(predicate::str::contains("wavelet").and(predicate::str::contains("fft")));
 }
+
+#[test]
+fn negative_samples_pass_through_with_a_note_unless_sanitized() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut image = Image::filled(8, 6, Layout::Rgb, 1.0);
+    image.planes[0][2 * 8 + 5] = -0.25;
+    image.planes[2][4 * 8 + 1] = -0.5;
+    let input = dir.path().join("negative.exr");
+    write_linear(&input, &image, LinearOptions::default()).unwrap();
+    let out = dir.path().join("out.exr");
+    aureole()
+        .args(["apply", "--threshold", "100"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains(
+            "negative.exr: 2 negative samples passed through",
+        ));
+    // Below the threshold, nothing is spread: they come back as they were.
+    let written = read_image(&out, Limits::NONE).unwrap().image;
+    assert_eq!(written.planes, image.planes);
+    aureole()
+        .args(["apply", "--threshold", "100", "--sanitize"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains(
+            "2 NaN, infinite or negative samples replaced by 0",
+        ));
+    let written = read_image(&out, Limits::NONE).unwrap().image;
+    assert!(written.planes.iter().flatten().all(|&v| v >= 0.0));
+}

@@ -286,7 +286,7 @@ fn non_finite_pixels_are_counted_and_located() {
     image.planes[2][3 * 5 + 1] = f32::INFINITY;
     let bad = image.non_finite().unwrap();
     assert_eq!((bad.count, bad.first), (2, (3, 2)));
-    assert_eq!(image.sanitize(false), 2);
+    assert_eq!(image.sanitize(), 2);
     assert!(image.non_finite().is_none());
     assert_eq!(image.planes[1][13], 0.0);
 }

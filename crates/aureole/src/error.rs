@@ -105,17 +105,13 @@ pub enum Error {
         error: std::io::Error,
     },
 
-    /// A frame holds samples that are not luminance: NaN or infinite, or
-    /// negative.
-    #[error("{count} {} samples (luminance must be a finite number of at least 0), the first at column {} row {} (from the top)", if *negative { "negative" } else { "NaN or infinite" }, first.0, first.1)]
+    /// A frame holds samples that are not luminance: NaN or infinite.
+    #[error("{count} NaN or infinite samples (luminance must be a finite number), the first at column {} row {} (from the top)", first.0, first.1)]
     BadSamples {
         /// How many samples (over all colour planes).
         count: usize,
         /// Column and row (from the top) of the first.
         first: (usize, usize),
-        /// Whether they are negative (which a caller may choose to keep)
-        /// rather than NaN or infinite.
-        negative: bool,
     },
 
     /// A run would need more memory than its limit.

@@ -190,12 +190,12 @@ impl Image {
         })
     }
 
-    /// Replaces NaN and infinite samples by 0, and negative ones too when
-    /// `negatives` is set; returns how many were replaced.
-    pub fn sanitize(&mut self, negatives: bool) -> usize {
+    /// Replaces NaN, infinite and negative samples by 0; returns how many
+    /// were replaced.
+    pub fn sanitize(&mut self) -> usize {
         let mut count = 0;
         for v in self.planes.iter_mut().flatten() {
-            if !v.is_finite() || (negatives && *v < 0.0) {
+            if !v.is_finite() || *v < 0.0 {
                 *v = 0.0;
                 count += 1;
             }

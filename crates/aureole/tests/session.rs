@@ -88,25 +88,19 @@ fn samples_that_are_not_luminance_are_refused_or_replaced() {
     image.planes[2][9] = -1.0;
     let refused = Frame::new(image.clone(), &FrameOptions::default()).unwrap_err();
     assert!(
-        matches!(
-            refused,
-            Error::BadSamples {
-                negative: false,
-                first: (3, 0),
-                ..
-            }
-        ),
+        matches!(refused, Error::BadSamples { first: (3, 0), .. }),
         "{refused}"
     );
-    let keep = FrameOptions {
-        keep_negative: true,
-        ..FrameOptions::default()
-    };
-    assert!(Frame::new(image.clone(), &keep).is_err());
+    // Negative samples pass through, counted.
     image.planes[1][3] = 0.0;
-    let negative = Frame::new(image.clone(), &FrameOptions::default()).unwrap_err();
-    assert!(matches!(negative, Error::BadSamples { negative: true, .. }));
-    assert!(Frame::new(image.clone(), &keep).is_ok());
+    let frame = Frame::new(image.clone(), &FrameOptions::default()).unwrap();
+    assert_eq!((frame.negatives(), frame.replaced()), (1, 0));
+    assert_eq!(frame.image().planes[2][9], -1.0);
+    let mut session = Session::new(config("paper-fig5-both"));
+    let applied = session
+        .apply(&frame, &ApplyOptions::default(), &mut |_, _| {})
+        .unwrap();
+    assert!(applied.image.planes.iter().flatten().all(|v| v.is_finite()));
     image.planes[0][0] = f32::INFINITY;
     let sanitize = FrameOptions {
         sanitize: true,

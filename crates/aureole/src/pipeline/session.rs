@@ -18,12 +18,9 @@ use crate::optics::Effect;
 pub struct FrameOptions {
     /// cd/m² per file unit; by default the image's `whiteLuminance`, else 1.
     pub input_scale: Option<f64>,
-    /// Replace NaN and infinite samples (and negative ones, unless
-    /// `keep_negative`) by 0 instead of refusing the image.
+    /// Replace NaN, infinite and negative samples by 0 instead of refusing
+    /// the image (NaN, infinite) or passing them through (negative).
     pub sanitize: bool,
-    /// Let negative samples through: they never pass the threshold, so
-    /// they stay where they are.
-    pub keep_negative: bool,
 }
 
 /// Where a frame's luminance scale came from.
@@ -44,33 +41,27 @@ pub struct Frame {
     scale: f64,
     scale_source: ScaleSource,
     replaced: usize,
+    negatives: usize,
 }
 
 impl Frame {
-    /// Takes `image` as luminance: NaN, infinite and (unless kept)
-    /// negative samples are refused, or replaced by 0 with `sanitize`; the
-    /// scale is the one given, else the image's `whiteLuminance`, else 1.
+    /// Takes `image` as luminance: NaN and infinite samples are refused,
+    /// negative ones (a camera's or a colour transform's small negatives)
+    /// pass through as a compositor passes them (they never pass the
+    /// threshold, so they stay where they are); with `sanitize` all of them
+    /// become 0. The scale is the one given, else the image's
+    /// `whiteLuminance`, else 1.
     pub fn new(mut image: Image, options: &FrameOptions) -> Result<Frame> {
-        if !options.sanitize {
+        let (replaced, negatives) = if options.sanitize {
+            (image.sanitize(), 0)
+        } else {
             if let Some(found) = image.non_finite() {
                 return Err(Error::BadSamples {
                     count: found.count,
                     first: found.first,
-                    negative: false,
                 });
             }
-            if let Some(found) = image.negatives().filter(|_| !options.keep_negative) {
-                return Err(Error::BadSamples {
-                    count: found.count,
-                    first: found.first,
-                    negative: true,
-                });
-            }
-        }
-        let replaced = if options.sanitize {
-            image.sanitize(!options.keep_negative)
-        } else {
-            0
+            (0, image.negatives().map_or(0, |found| found.count))
         };
         let (scale, scale_source) = match (options.input_scale, image.white_luminance) {
             (Some(scale), _) => (scale, ScaleSource::Given),
@@ -90,6 +81,7 @@ impl Frame {
             scale,
             scale_source,
             replaced,
+            negatives,
         })
     }
 
@@ -116,6 +108,11 @@ impl Frame {
     /// How many samples `sanitize` replaced by 0.
     pub fn replaced(&self) -> usize {
         self.replaced
+    }
+
+    /// How many negative samples passed through (none with `sanitize`).
+    pub fn negatives(&self) -> usize {
+        self.negatives
     }
 }
 
