@@ -247,6 +247,21 @@ impl Run<'_> {
                 MethodArg::Splat => Method::Splat,
             },
         };
+        if options.method == Method::Splat && !quiet {
+            let costs = self
+                .session
+                .costs(&frame, &options)
+                .map_err(|e| input::about(&job.input, e))?;
+            if costs.splat > 60.0 {
+                eprintln!(
+                    "aureole: warning: {}: splatting {} bright pixels will take about {} (the FFT about {:.1} s: --method auto or fft); Ctrl-C stops it",
+                    job.input.display(),
+                    costs.spread_pixels,
+                    duration(costs.splat),
+                    costs.fft
+                );
+            }
+        }
         let applied = self
             .session
             .apply(&frame, &options, &mut |stage, done| {
@@ -324,5 +339,14 @@ mod tests {
         for bad in ["", "G", "-1G", "4X", "0"] {
             assert!(parse_memory(bad).is_err(), "{bad}");
         }
+    }
+}
+
+/// A long duration in words: minutes, or hours.
+fn duration(seconds: f64) -> String {
+    if seconds < 5400.0 {
+        format!("{:.0} minutes", seconds / 60.0)
+    } else {
+        format!("{:.0} hours", seconds / 3600.0)
     }
 }

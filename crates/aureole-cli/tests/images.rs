@@ -359,3 +359,33 @@ fn negative_samples_pass_through_with_a_note_unless_sanitized() {
     let written = read_image(&out, Limits::NONE).unwrap().image;
     assert!(written.planes.iter().flatten().all(|&v| v >= 0.0));
 }
+
+#[test]
+fn a_splat_estimated_beyond_a_minute_says_so_before_it_starts() {
+    let dir = tempfile::tempdir().unwrap();
+    // Every pixel bright, a full-frame kernel: ~10¹¹ multiply-adds.
+    let input = dir.path().join("bright.exr");
+    write_linear(
+        &input,
+        &Image::filled(800, 600, Layout::Rgb, 1.0),
+        LinearOptions::default(),
+    )
+    .unwrap();
+    let out = dir.path().join("out.exr");
+    let run = aureole()
+        .args(["apply", "--preset", "paper-fig4-bloom", "--threshold", "0"])
+        .args(["--method", "splat"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .timeout(std::time::Duration::from_secs(5))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("bright.exr: splatting 480000 bright pixels will take about")
+            && stderr.contains("--method auto or fft"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+}

@@ -14,5 +14,5 @@ mod threshold;
 pub use options::{Applied, ApplyOptions, Arithmetic, Method};
 pub use plan::Plan;
 pub use precision::f32_round_off;
-pub use session::{Frame, FrameOptions, ScaleSource, Session, Stage};
+pub use session::{Costs, Frame, FrameOptions, ScaleSource, Session, Stage};
 pub use threshold::spread_fraction;

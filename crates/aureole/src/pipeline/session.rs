@@ -3,12 +3,17 @@
 //! user gives, and decides everything else the same way for all of them,
 //! so that every front end gives the same bytes.
 
+use super::cost;
 use super::options::{Applied, ApplyOptions};
 use super::plan::Plan;
+use super::threshold::Threshold;
 use crate::config::Config;
 use crate::control::{Cancel, Control};
+use crate::convolve::padded_size;
 use crate::error::{Error, Result};
 use crate::image::Image;
+use crate::image::{Layout, PixelLuminance};
+use crate::kernel::Extent;
 use crate::kernel::Kernel;
 use crate::memory::Workload;
 use crate::optics::Effect;
@@ -114,6 +119,17 @@ impl Frame {
     pub fn negatives(&self) -> usize {
         self.negatives
     }
+}
+
+/// What an application would cost each way, seconds on two cores.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Costs {
+    /// Splatting the kernel at every bright pixel.
+    pub splat: f64,
+    /// The FFT route (f32; a scene with lamps or beyond f32 costs more).
+    pub fft: f64,
+    /// The pixels above the threshold.
+    pub spread_pixels: usize,
 }
 
 /// The stage of a run that progress is reported for.
@@ -242,6 +258,46 @@ impl Session {
     /// The plan of the last frame's size, if one is built.
     pub fn plan(&self) -> Option<&Plan> {
         self.plan.as_ref()
+    }
+
+    /// What applying `options` to `frame` would cost each way, in seconds
+    /// on two cores (the cost model of docs/physics.md §8), known before
+    /// anything is built: for a front end to say so before a long run.
+    pub fn costs(&self, frame: &Frame, options: &ApplyOptions) -> Result<Costs> {
+        let image = frame.image();
+        let size = (image.width, image.height);
+        let (kernel, kernel_planes, threshold) = match &self.lens {
+            Lens::Config(config) => {
+                let extent = Extent::for_image_within(size.0, size.1, self.max_extent)?;
+                let planes = config.effects.iter().map(Effect::planes).max().unwrap_or(1);
+                ((extent.width, extent.height), planes, config.threshold)
+            }
+            Lens::Kernel(kernel) => {
+                let plan = self.plan.as_ref().map(Plan::kernel);
+                let kernel = kernel.as_ref().or(plan).ok_or(Error::NoEffect)?;
+                (
+                    (kernel.width(), kernel.height()),
+                    kernel.planes().len(),
+                    0.0,
+                )
+            }
+        };
+        let threshold = Threshold {
+            level: options.threshold.unwrap_or(threshold) / frame.scale(),
+            knee: options.knee,
+        };
+        let luminance = PixelLuminance::of(image);
+        let survey = threshold.survey(&luminance, size, kernel, (kernel.0 / 2, kernel.1 / 2));
+        let convolutions = match image.layout {
+            Layout::Rgb => 3,
+            Layout::Luminance => kernel_planes,
+        };
+        let padded = padded_size(kernel.0, kernel.1, size.0, size.1);
+        Ok(Costs {
+            splat: 1e-9 * cost::splat(kernel.0 * kernel.1, survey.splat_area, size, convolutions),
+            fft: 1e-9 * cost::fft(padded, size, convolutions),
+            spread_pixels: survey.spread,
+        })
     }
 
     /// Applies the camera to `frame`; `progress` hears the stage and the
