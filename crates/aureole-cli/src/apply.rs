@@ -326,6 +326,15 @@ enum MethodArg {
     Splat,
 }
 
+/// A long duration in words: minutes, or hours.
+fn duration(seconds: f64) -> String {
+    if seconds < 5400.0 {
+        format!("{:.0} minutes", seconds / 60.0)
+    } else {
+        format!("{:.0} hours", seconds / 3600.0)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -339,14 +348,5 @@ mod tests {
         for bad in ["", "G", "-1G", "4X", "0"] {
             assert!(parse_memory(bad).is_err(), "{bad}");
         }
-    }
-}
-
-/// A long duration in words: minutes, or hours.
-fn duration(seconds: f64) -> String {
-    if seconds < 5400.0 {
-        format!("{:.0} minutes", seconds / 60.0)
-    } else {
-        format!("{:.0} hours", seconds / 3600.0)
     }
 }
