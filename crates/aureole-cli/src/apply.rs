@@ -1,9 +1,11 @@
 //! `aureole apply`: what the camera would have recorded.
 
 use std::path::PathBuf;
+use std::sync::mpsc;
 use std::time::Instant;
 
-use aureole::{ApplyOptions, Arithmetic, FrameOptions, Method, Session};
+use aureole::{Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, Method, Session};
+use aureole_io::compression::Compression;
 use aureole_io::kernel::read_kernel;
 use aureole_io::limits::{default_memory_limit, Limits};
 use clap::ArgMatches;
@@ -95,6 +97,12 @@ pub struct Args {
     #[arg(long)]
     half: bool,
 
+    /// EXR output compression: none, rle, zips, zip, piz, pxr24, b44,
+    /// b44a, dwaa or dwab (the last four lossy). Default: the input's, when
+    /// it is an EXR; else zip.
+    #[arg(long, value_name = "NAME", value_parser = Compression::parse)]
+    compression: Option<Compression>,
+
     /// Cap the kernel's extent in pixels (W or WxH); by default light from
     /// any pixel reaches the whole frame: (2W-1)x(2H-1).
     #[arg(long, value_name = "W[xH]", value_parser = crate::psf::parse_size)]
@@ -162,15 +170,16 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             Session::new(config).with_max_extent(args.max_kernel)
         }
     };
-    let mut run = Run {
-        args,
-        session: session.with_memory_limit(limit),
-        limit,
-        quiet,
-    };
     let done = |job: &batch::Job| args.skip_existing && job.output.is_file();
+    let todo: Vec<&batch::Job> = jobs.iter().filter(|job| !done(job)).collect();
+    // In a batch the next frame is read and the last written meanwhile.
+    let in_flight = if todo.len() > 1 { 2 } else { 0 };
+    let session = session
+        .with_memory_limit(limit)
+        .with_frames_in_flight(in_flight);
+    let skipped = jobs.len() - todo.len();
     if let [job] = jobs.as_slice() {
-        if done(job) {
+        if skipped == 1 {
             if !quiet {
                 eprintln!(
                     "aureole: note: {} exists: skipped (--skip-existing)",
@@ -179,20 +188,19 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             }
             return Ok(());
         }
-        return run.frame(job);
     }
-    let mut failed = 0;
-    let mut skipped = 0;
-    for job in &jobs {
-        if done(job) {
-            skipped += 1;
-            continue;
-        }
-        if let Err(failure) = run.frame(job) {
-            failed += 1;
-            let (Failure::Usage(e) | Failure::Run(e)) = failure;
-            eprintln!("aureole: error: {}", crate::one_line(&e));
-        }
+    let run = Run {
+        args,
+        limit,
+        quiet,
+        batch: jobs.len() > 1,
+        progress: Progress::new(quiet),
+    };
+    let failures = run.all(session, &todo);
+    run.progress.finish();
+    let failed = failures.len();
+    if !run.batch {
+        return failures.into_iter().next().map_or(Ok(()), Err);
     }
     let written = jobs.len() - failed - skipped;
     if !quiet || failed > 0 {
@@ -210,33 +218,116 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     Ok(())
 }
 
-/// A batch: the session that keeps the plan and the spare planes from
-/// frame to frame, and what every frame is read and written with.
+/// What every frame of a batch is read and written with.
 struct Run<'a> {
     args: &'a Args,
-    session: Session,
     limit: u64,
     quiet: bool,
+    /// Several jobs: a frame's failure is said at once and the rest go on.
+    batch: bool,
+    progress: Progress,
+}
+
+/// A frame read, waiting for the camera.
+struct Read<'a> {
+    job: &'a batch::Job,
+    frame: Frame,
+    compression: Option<Compression>,
+    start: Instant,
+}
+
+/// A frame through the camera, waiting to be written.
+struct Result_<'a> {
+    read: Read<'a>,
+    applied: Applied,
+    kernel: (usize, usize),
 }
 
 impl Run<'_> {
-    fn frame(&mut self, job: &batch::Job) -> Result<(), Failure> {
-        let (args, quiet) = (self.args, self.quiet);
+    /// Every job, each frame read while the one before is convolved and
+    /// written while the one after is: the reading and writing threads
+    /// hold one frame each at most, handed over when the next is wanted
+    /// (the session counts them in its memory estimate). Returns the
+    /// failures, in order, each already said.
+    fn all(&self, mut session: Session, jobs: &[&batch::Job]) -> Vec<Failure> {
+        let mut failures = Vec::new();
+        std::thread::scope(|scope| {
+            let (read_tx, reads) = mpsc::sync_channel::<Result<Read, Failure>>(0);
+            let (write_tx, writes) = mpsc::sync_channel::<Result_>(0);
+            let (done_tx, done) = mpsc::channel::<Result<Vec<Vec<f32>>, Failure>>();
+            scope.spawn(move || {
+                for job in jobs {
+                    if read_tx.send(self.read(job)).is_err() {
+                        break;
+                    }
+                }
+            });
+            scope.spawn(move || {
+                for result in writes {
+                    if done_tx.send(self.write(result)).is_err() {
+                        break;
+                    }
+                }
+            });
+            let finished = |outcome: Result<Vec<Vec<f32>>, Failure>,
+                            session: &mut Session,
+                            failures: &mut Vec<Failure>| match outcome {
+                Ok(planes) => session.recycle_planes(planes),
+                Err(failure) => self.failed(failure, failures),
+            };
+            for read in reads {
+                while let Ok(outcome) = done.try_recv() {
+                    finished(outcome, &mut session, &mut failures);
+                }
+                let applied = read.and_then(|read| self.apply(&mut session, read));
+                match applied {
+                    Ok(result) => {
+                        if write_tx.send(result).is_err() {
+                            break;
+                        }
+                    }
+                    Err(failure) => self.failed(failure, &mut failures),
+                }
+            }
+            drop(write_tx);
+            for outcome in done {
+                finished(outcome, &mut session, &mut failures);
+            }
+        });
+        failures
+    }
+
+    /// A failed frame: said at once in a batch, kept for the summary.
+    fn failed(&self, failure: Failure, failures: &mut Vec<Failure>) {
+        if self.batch {
+            let (Failure::Usage(e) | Failure::Run(e)) = &failure;
+            self.progress
+                .println(&format!("aureole: error: {}", crate::one_line(e)));
+        }
+        failures.push(failure);
+    }
+
+    fn read<'j>(&self, job: &'j batch::Job) -> Result<Read<'j>, Failure> {
         let start = Instant::now();
         let options = FrameOptions {
-            input_scale: args.input_scale,
-            sanitize: args.sanitize,
+            input_scale: self.args.input_scale,
+            sanitize: self.args.sanitize,
         };
-        let frame = input::read(
-            &job.input,
-            &options,
-            Limits {
-                max_bytes: self.limit,
-            },
-            quiet,
-        )?;
-        let image = frame.image();
-        let progress = Progress::new(quiet);
+        let limits = Limits {
+            max_bytes: self.limit,
+        };
+        let (frame, compression) = input::read(&job.input, &options, limits, self.quiet)?;
+        Ok(Read {
+            job,
+            frame,
+            compression,
+            start,
+        })
+    }
+
+    fn apply<'j>(&self, session: &mut Session, read: Read<'j>) -> Result<Result_<'j>, Failure> {
+        let args = self.args;
+        let job = read.job;
         let options = ApplyOptions {
             threshold: args.threshold,
             knee: args.knee,
@@ -247,48 +338,65 @@ impl Run<'_> {
                 MethodArg::Splat => Method::Splat,
             },
         };
-        if options.method == Method::Splat && !quiet {
-            let costs = self
-                .session
-                .costs(&frame, &options)
+        if options.method == Method::Splat && !self.quiet {
+            let costs = session
+                .costs(&read.frame, &options)
                 .map_err(|e| input::about(&job.input, e))?;
             if costs.splat > 60.0 {
-                eprintln!(
+                self.progress.println(&format!(
                     "aureole: warning: {}: splatting {} bright pixels will take about {} (the FFT about {:.1} s: --method auto or fft); Ctrl-C stops it",
                     job.input.display(),
                     costs.spread_pixels,
                     duration(costs.splat),
                     costs.fft
-                );
+                ));
             }
         }
-        let applied = self
-            .session
-            .apply(&frame, &options, &mut |stage, done| {
+        let progress = &self.progress;
+        let applied = session
+            .apply(&read.frame, &options, &mut |stage, done| {
                 progress.update(stage, done)
             })
             .map_err(|e| input::about(&job.input, e))?;
-        progress.stage("writing");
+        let kernel = session
+            .plan()
+            .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));
+        Ok(Result_ {
+            read,
+            applied,
+            kernel,
+        })
+    }
+
+    /// Writes a result; hands its planes back for a later frame.
+    fn write(&self, result: Result_) -> Result<Vec<Vec<f32>>, Failure> {
+        let (args, quiet) = (self.args, self.quiet);
+        let Result_ {
+            read,
+            applied,
+            kernel,
+        } = result;
+        let job = read.job;
+        let image = &applied.image;
         let shown = output::write(
             &job.output,
-            &applied.image,
-            frame.scale(),
+            image,
+            read.frame.scale(),
+            &output::Linear {
+                half: args.half,
+                compression: args.compression.or(read.compression),
+            },
             &args.display,
-            args.half,
             quiet,
+            &self.progress,
         )?;
-        progress.finish();
         if !quiet {
-            let kernel = self
-                .session
-                .plan()
-                .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));
             let ratio = if applied.energy_in != 0.0 {
                 format!("{:.4} %", 100.0 * applied.energy_out / applied.energy_in)
             } else {
                 "-".to_string()
             };
-            eprintln!(
+            self.progress.println(&format!(
                 "wrote {}: {}x{} {:?}, kernel {}x{}, {} px above {} cd/m² ({}), energy in {:.6e} out {:.6e} ({ratio}){}, {:.2} s",
                 job.output.display(),
                 image.width,
@@ -311,11 +419,10 @@ impl Run<'_> {
                 applied.energy_in,
                 applied.energy_out,
                 shown.map(|s| format!(", {s}")).unwrap_or_default(),
-                start.elapsed().as_secs_f64()
-            );
+                read.start.elapsed().as_secs_f64()
+            ));
         }
-        self.session.recycle(applied.image);
-        Ok(())
+        Ok(applied.image.planes)
     }
 }
 

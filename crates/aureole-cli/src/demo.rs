@@ -61,9 +61,10 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         &args.output,
         &applied.image,
         1.0,
+        &output::Linear::default(),
         &args.display,
-        false,
         quiet,
+        &progress,
     )?;
     progress.finish();
     if !quiet {

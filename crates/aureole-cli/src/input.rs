@@ -5,20 +5,23 @@
 use std::path::Path;
 
 use aureole::{Frame, FrameOptions, ScaleSource};
+use aureole_io::compression::Compression;
 use aureole_io::limits::Limits;
 use aureole_io::read::{read_image, Loaded};
 
 use crate::Failure;
 
 /// Reads `path` as a frame, saying what the user should know about it and
-/// the luminance scale it takes.
+/// the luminance scale it takes; with its compression, for an EXR.
 pub fn read(
     path: &Path,
     options: &FrameOptions,
     limits: Limits,
     quiet: bool,
-) -> Result<Frame, Failure> {
-    let frame = read_loaded(path, read_image(path, limits)?, options, quiet)?;
+) -> Result<(Frame, Option<Compression>), Failure> {
+    let loaded = read_image(path, limits)?;
+    let compression = loaded.compression;
+    let frame = read_loaded(path, loaded, options, quiet)?;
     if !quiet {
         eprintln!(
             "aureole: note: {}: luminance scale {} cd/m² per unit ({})",
@@ -27,7 +30,7 @@ pub fn read(
             scale_source(frame.scale_source())
         );
     }
-    Ok(frame)
+    Ok((frame, compression))
 }
 
 /// A file read from `path` as a frame, with its notes and warnings.

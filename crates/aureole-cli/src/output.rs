@@ -6,10 +6,12 @@ use std::path::Path;
 use anyhow::anyhow;
 use aureole::Image;
 use aureole_io::atomic::folder_of;
+use aureole_io::compression::Compression;
 use aureole_io::formats::Note;
 use aureole_io::write::{output_format, write_image, LinearOptions, WriteOptions, Written};
 
 use crate::display_args::DisplayArgs;
+use crate::progress::Progress;
 use crate::Failure;
 
 /// Refuses, before any work, an output whose extension we do not write,
@@ -70,18 +72,32 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
+/// How linear output is stored.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Linear {
+    /// EXR: half floats.
+    pub half: bool,
+    /// EXR: the compression (`None`: ZIP).
+    pub compression: Option<Compression>,
+}
+
 /// Writes `image` (`scale` cd/m² per unit) to `path`; returns a
-/// description of the display exposure when it made a picture.
+/// description of the display exposure when it made a picture. Notes go
+/// out through `progress`.
 pub fn write(
     path: &Path,
     image: &Image,
     scale: f64,
+    linear: &Linear,
     display: &DisplayArgs,
-    half: bool,
     quiet: bool,
+    progress: &Progress,
 ) -> Result<Option<String>, Failure> {
     let options = WriteOptions {
-        linear: LinearOptions { half },
+        linear: LinearOptions {
+            half: linear.half,
+            compression: linear.compression,
+        },
         display: display.options(),
         depth: display.depth(),
     };
@@ -96,7 +112,7 @@ pub fn write(
                         Note::ClampedToHalf { .. } => "; drop --half to keep them",
                         _ => "",
                     };
-                    eprintln!("aureole: note: {}: {note}{hint}", path.display());
+                    progress.println(&format!("aureole: note: {}: {note}{hint}", path.display()));
                 }
             }
             Ok(None)

@@ -47,6 +47,11 @@ impl Progress {
             .set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
     }
 
+    /// A line on stderr, the bar out of its way.
+    pub fn println(&self, line: &str) {
+        self.bar.suspend(|| eprintln!("{line}"));
+    }
+
     pub fn finish(&self) {
         self.bar.finish_and_clear();
     }

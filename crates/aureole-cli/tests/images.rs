@@ -389,3 +389,48 @@ fn a_splat_estimated_beyond_a_minute_says_so_before_it_starts() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn exr_output_keeps_the_input_compression_unless_told() {
+    use aureole_io::compression::Compression;
+    let dir = tempfile::tempdir().unwrap();
+    let image = Image::filled(40, 30, Layout::Rgb, 0.5);
+    let compressed = |path: &Path| read_image(path, Limits::NONE).unwrap().compression;
+    let input = dir.path().join("piz.exr");
+    let options = LinearOptions {
+        compression: Some(Compression::Piz),
+        ..LinearOptions::default()
+    };
+    write_linear(&input, &image, options).unwrap();
+    assert_eq!(compressed(&input), Some(Compression::Piz));
+    let pfm = dir.path().join("in.pfm");
+    write_linear(&pfm, &image, LinearOptions::default()).unwrap();
+    let run = |input: &Path, out: &str, extra: &[&str]| {
+        let out = dir.path().join(out);
+        aureole()
+            .args(["apply", "--preset", "paper-fig4-bloom"])
+            .args(extra)
+            .arg(input)
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .success();
+        compressed(&out)
+    };
+    assert_eq!(run(&input, "same.exr", &[]), Some(Compression::Piz));
+    assert_eq!(run(&pfm, "zip.exr", &[]), Some(Compression::Zip));
+    for c in Compression::ALL {
+        let name = format!("out-{c}.exr");
+        let got = run(&input, &name, &["--half", "--compression", c.name()]);
+        assert_eq!(got, Some(c), "{c}");
+    }
+    aureole()
+        .args(["apply", "--compression", "zstd"])
+        .arg(&input)
+        .args(["-o", "x.exr"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "\"zstd\" is not an EXR compression: use one of none, rle",
+        ));
+}

@@ -35,6 +35,7 @@ pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
                 white_luminance: None,
                 primaries: None,
                 half: false,
+                compression: crate::compression::Compression::Zip,
             };
             encode(path, &planes).map(drop)
         }

@@ -34,6 +34,7 @@
 #![warn(missing_docs)]
 
 pub mod atomic;
+pub mod compression;
 pub mod demo;
 pub mod display;
 pub mod error;

@@ -6,6 +6,7 @@ use std::path::Path;
 use aureole::image::Image;
 use aureole::memory::format_bytes;
 
+use crate::compression::Compression;
 use crate::error::{Error, Result};
 use crate::formats::{by_content, readable};
 use crate::limits::Limits;
@@ -22,6 +23,9 @@ pub struct Loaded {
     pub display_referred: bool,
     /// Remarks for the user (ignored channels and layers, …), one line each.
     pub notes: Vec<String>,
+    /// The file's compression, for an EXR (a result is written with the
+    /// same unless told otherwise).
+    pub compression: Option<Compression>,
 }
 
 /// Reads the image at `path`, recognising the format by its content, and
@@ -59,6 +63,7 @@ pub fn decode_image(bytes: &[u8], limits: Limits) -> std::result::Result<Loaded,
                 format: format.name,
                 display_referred: decoded.display_referred,
                 notes: decoded.notes,
+                compression: decoded.compression,
             })
         }
         None if bytes.is_empty() => Err(format!("the file is empty; expected {}", readable())),

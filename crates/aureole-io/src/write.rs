@@ -6,6 +6,7 @@ use std::path::Path;
 
 use aureole::image::{Image, Layout};
 
+use crate::compression::Compression;
 use crate::display::{render, Depth, DisplayOptions, Picture};
 use crate::error::{Error, Result};
 use crate::formats::{
@@ -18,6 +19,9 @@ use crate::formats::{
 pub struct LinearOptions {
     /// EXR only: half floats instead of float32.
     pub half: bool,
+    /// EXR only: the compression; `None`: ZIP, lossless and what
+    /// compositors expect.
+    pub compression: Option<Compression>,
 }
 
 /// How to write an image to whatever format its path names.
@@ -105,6 +109,7 @@ pub fn write_linear(path: &Path, image: &Image, options: LinearOptions) -> Resul
             white_luminance: image.white_luminance,
             primaries: image.primaries,
             half: options.half,
+            compression: options.compression.unwrap_or(Compression::Zip),
         },
     )
 }

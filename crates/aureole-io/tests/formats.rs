@@ -51,7 +51,15 @@ fn exr_half_keeps_half_precision() {
     let dir = tempfile::tempdir().unwrap();
     let image = test_image(Layout::Rgb, false);
     let path = dir.path().join("h.exr");
-    let notes = write_linear(&path, &image, LinearOptions { half: true }).unwrap();
+    let notes = write_linear(
+        &path,
+        &image,
+        LinearOptions {
+            half: true,
+            ..LinearOptions::default()
+        },
+    )
+    .unwrap();
     // 10⁵ cd/m² lamps exceed the half range: clamped, and said so.
     assert!(
         notes.iter().any(|n| n.to_string().contains("65504")),

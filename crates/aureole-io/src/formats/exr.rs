@@ -1,6 +1,7 @@
 //! OpenEXR through the `exr` crate: scanline or tiled, half or float, every
 //! compression it reads; written as float32 (or half) planes named `Y` or
-//! `R`, `G`, `B` (and `A`), ZIP compressed (lossless).
+//! `R`, `G`, `B` (and `A`), in scanlines, with any compression it writes
+//! ([`Compression`]).
 
 use std::io::Cursor;
 use std::path::Path;
@@ -11,6 +12,7 @@ use exr::prelude::{self as x, ReadChannels, ReadLayers};
 
 use super::{Decoded, LinearPlanes, Note, HALF_MAX};
 use crate::atomic::write_atomic;
+use crate::compression::Compression;
 use crate::error::{Error, Result};
 use crate::limits::Limits;
 use crate::read::explain;
@@ -143,6 +145,7 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
         },
         display_referred: false,
         notes,
+        compression: Compression::from_exr(layer.encoding.compression),
     })
 }
 
@@ -203,7 +206,10 @@ pub(crate) fn encode(path: &Path, planes: &LinearPlanes) -> Result<Vec<Note>> {
     let layer = Layer::new(
         (planes.width, planes.height),
         attributes,
-        Encoding::SMALL_LOSSLESS,
+        Encoding {
+            compression: planes.compression.to_exr(),
+            ..Encoding::SMALL_LOSSLESS
+        },
         AnyChannels::sort(list.into_iter().collect()),
     );
     let mut exr_image = exr::prelude::Image::from_layer(layer);

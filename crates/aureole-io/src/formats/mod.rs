@@ -13,6 +13,7 @@ use std::path::Path;
 
 use aureole::image::Primaries;
 
+use crate::compression::Compression;
 use crate::display::Depth;
 use crate::error::Result;
 use crate::limits::Limits;
@@ -81,6 +82,8 @@ pub(crate) struct Decoded {
     /// An 8/16-bit display image, sRGB-decoded: its luminance is relative.
     pub display_referred: bool,
     pub notes: Vec<String>,
+    /// The file's compression, where the format has a choice (EXR).
+    pub compression: Option<Compression>,
 }
 
 /// Linear planes to write, borrowed from an image or a kernel.
@@ -94,6 +97,8 @@ pub(crate) struct LinearPlanes<'a> {
     pub primaries: Option<Primaries>,
     /// Half floats, where the format has them.
     pub half: bool,
+    /// The compression, where the format has a choice (EXR).
+    pub compression: Compression,
 }
 
 /// What a writer could not keep, for the user.

@@ -80,6 +80,7 @@ pub(crate) fn decode_file(bytes: &[u8], limits: Limits) -> std::result::Result<D
         },
         display_referred: false,
         notes: Vec::new(),
+        compression: None,
     })
 }
 
@@ -187,6 +188,7 @@ mod tests {
                 white_luminance: None,
                 primaries: None,
                 half: false,
+                compression: crate::compression::Compression::Zip,
             };
             encode(&path, &borrowed).unwrap();
             let back = decode(&std::fs::read(&path).unwrap()).unwrap();

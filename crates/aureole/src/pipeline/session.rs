@@ -196,6 +196,9 @@ pub struct Session {
     cancel: Cancel,
     plan: Option<Plan>,
     recycled: Vec<Vec<f32>>,
+    /// Frames a front end holds beside the one applied (read ahead, being
+    /// written), counted in the memory estimate.
+    in_flight: usize,
 }
 
 impl Session {
@@ -217,12 +220,21 @@ impl Session {
             cancel: Cancel::new(),
             plan: None,
             recycled: Vec::new(),
+            in_flight: 0,
         }
     }
 
     /// Refuses a frame whose run would need more than `bytes`.
     pub fn with_memory_limit(mut self, bytes: u64) -> Session {
         self.memory_limit = Some(bytes);
+        self
+    }
+
+    /// Counts `frames` more frames of each size in the memory estimate: a
+    /// front end that reads the next frame and writes the last while one is
+    /// applied holds two, each an input or a result.
+    pub fn with_frames_in_flight(mut self, frames: usize) -> Session {
+        self.in_flight = frames;
         self
     }
 
@@ -358,7 +370,12 @@ impl Session {
     /// Hands back a result that is no longer needed (written out), so that
     /// the next frame writes into its memory.
     pub fn recycle(&mut self, image: Image) {
-        self.recycled = image.planes;
+        self.recycle_planes(image.planes);
+    }
+
+    /// [`Session::recycle`], given the planes alone.
+    pub fn recycle_planes(&mut self, planes: Vec<Vec<f32>>) {
+        self.recycled = planes;
     }
 
     /// Drops the plan of another size, keeping a kernel built before.
@@ -412,7 +429,12 @@ impl Session {
                 (workload, &[], kernel)
             }
         };
-        let needed = workload.estimate(effects);
+        let mut needed = workload.estimate(effects);
+        let frame = (image.width * image.height * (planes + usize::from(alpha)) * 4) as u64;
+        let in_flight = self.in_flight as u64 * frame;
+        needed.bytes += in_flight;
+        // What is left for the run once the frames in flight are held.
+        let limit_left = limit.saturating_sub(in_flight);
         if needed.bytes <= limit {
             let double = needed.bytes + workload.double_extra();
             return Ok((double > limit).then_some(Error::Memory {
@@ -422,7 +444,7 @@ impl Session {
                 fits: workload.largest_fitting(
                     effects,
                     start,
-                    limit - workload.double_extra().min(limit),
+                    limit_left.saturating_sub(workload.double_extra()),
                 ),
                 built: !effects.is_empty(),
             }));
@@ -431,7 +453,7 @@ impl Session {
             needed: needed.bytes,
             stage: needed.stage,
             limit,
-            fits: workload.largest_fitting(effects, start, limit),
+            fits: workload.largest_fitting(effects, start, limit_left),
             built: !effects.is_empty(),
         })
     }
