@@ -233,7 +233,8 @@ struct Read<'a> {
     job: &'a batch::Job,
     frame: Frame,
     compression: Option<Compression>,
-    start: Instant,
+    /// Seconds it took to read.
+    reading: f64,
 }
 
 /// A frame through the camera, waiting to be written.
@@ -241,6 +242,8 @@ struct Result_<'a> {
     read: Read<'a>,
     applied: Applied,
     kernel: (usize, usize),
+    /// Seconds the camera took.
+    convolving: f64,
 }
 
 impl Run<'_> {
@@ -321,7 +324,7 @@ impl Run<'_> {
             job,
             frame,
             compression,
-            start,
+            reading: start.elapsed().as_secs_f64(),
         })
     }
 
@@ -353,6 +356,7 @@ impl Run<'_> {
             }
         }
         let progress = &self.progress;
+        let start = Instant::now();
         let applied = session
             .apply(&read.frame, &options, &mut |stage, done| {
                 progress.update(stage, done)
@@ -365,6 +369,7 @@ impl Run<'_> {
             read,
             applied,
             kernel,
+            convolving: start.elapsed().as_secs_f64(),
         })
     }
 
@@ -375,7 +380,9 @@ impl Run<'_> {
             read,
             applied,
             kernel,
+            convolving,
         } = result;
+        let start = Instant::now();
         let job = read.job;
         let image = &applied.image;
         let shown = output::write(
@@ -397,7 +404,7 @@ impl Run<'_> {
                 "-".to_string()
             };
             self.progress.println(&format!(
-                "wrote {}: {}x{} {:?}, kernel {}x{}, {} px above {} cd/m² ({}), energy in {:.6e} out {:.6e} ({ratio}){}, {:.2} s",
+                "wrote {}: {}x{} {:?}, kernel {}x{}, {} px above {} cd/m² ({}), energy in {:.6e} out {:.6e} ({ratio}){}; read {:.2} s, camera {:.2} s, write {:.2} s",
                 job.output.display(),
                 image.width,
                 image.height,
@@ -419,7 +426,9 @@ impl Run<'_> {
                 applied.energy_in,
                 applied.energy_out,
                 shown.map(|s| format!(", {s}")).unwrap_or_default(),
-                read.start.elapsed().as_secs_f64()
+                read.reading,
+                convolving,
+                start.elapsed().as_secs_f64()
             ));
         }
         Ok(applied.image.planes)

@@ -44,7 +44,7 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
             format_bytes(limits.max_bytes)
         ));
     }
-    let image = x::read()
+    let mut image = x::read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
@@ -89,27 +89,14 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
             notes.push(format!("ignored EXR layer {name}"));
         }
     }
-    let layer = &image.layer_data[chosen];
+    let layer = image.layer_data.swap_remove(chosen);
     let (width, height) = (layer.size.0, layer.size.1);
-    let plane = |name: &str| {
-        layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.to_string() == name)
-            .map(|c| c.sample_data.values_as_f32().collect::<Vec<f32>>())
-    };
-    let rgb = has(layer, "R") && has(layer, "G") && has(layer, "B");
+    let rgb = has(&layer, "R") && has(&layer, "G") && has(&layer, "B");
     let (layout, used): (Layout, &[&str]) = if rgb {
         (Layout::Rgb, &["R", "G", "B", "A"])
     } else {
         (Layout::Luminance, &["Y", "A"])
     };
-    let planes: Vec<Vec<f32>> = used
-        .iter()
-        .filter(|n| **n != "A")
-        .filter_map(|n| plane(n))
-        .collect();
     let ignored: Vec<String> = layer
         .channel_data
         .list
@@ -117,13 +104,34 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
         .map(|c| c.name.to_string())
         .filter(|n| !used.contains(&n.as_str()))
         .collect();
-    if !ignored.is_empty() {
-        notes.push(format!("ignored EXR channels {}", ignored.join(", ")));
-    }
+    let compression = Compression::from_exr(layer.encoding.compression);
     let white_luminance = layer
         .attributes
         .white_luminance
         .filter(|w| w.is_finite() && *w > 0.0);
+    // Float samples are moved out, not copied: a 4K frame is 100 MB.
+    let mut channels: Vec<(String, x::FlatSamples)> = layer
+        .channel_data
+        .list
+        .into_iter()
+        .map(|c| (c.name.to_string(), c.sample_data))
+        .collect();
+    let mut plane = |name: &str| {
+        let at = channels.iter().position(|(n, _)| n == name)?;
+        Some(match channels.swap_remove(at).1 {
+            x::FlatSamples::F32(values) => values,
+            other => other.values_as_f32().collect(),
+        })
+    };
+    let planes: Vec<Vec<f32>> = used
+        .iter()
+        .filter(|n| **n != "A")
+        .filter_map(|n| plane(n))
+        .collect();
+    let alpha = plane("A");
+    if !ignored.is_empty() {
+        notes.push(format!("ignored EXR channels {}", ignored.join(", ")));
+    }
     let primaries = image.attributes.chromaticities.map(|c| Primaries {
         red: [c.red.0, c.red.1],
         green: [c.green.0, c.green.1],
@@ -139,13 +147,13 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
             height,
             layout,
             planes,
-            alpha: plane("A"),
+            alpha,
             white_luminance,
             primaries,
         },
         display_referred: false,
         notes,
-        compression: Compression::from_exr(layer.encoding.compression),
+        compression,
     })
 }
 

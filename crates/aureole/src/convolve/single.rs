@@ -13,8 +13,9 @@
 //! [`BLOCK`] at a time, into tiles of [`BLOCK`] rows × [`STRIP`] columns;
 //! each strip of columns gathers its tiles, is transformed (padded,
 //! multiplied by the kernel's spectrum, transformed back and cut to the H
-//! output rows) in cache, and written strip-major; the inverse row
-//! transforms gather their block's tile from each strip.
+//! output rows) in cache, and written back into the same tiles (one
+//! buffer per plane, not two); the inverse row transforms read their
+//! block's tiles, which lie together.
 
 use std::sync::{Arc, Mutex, PoisonError};
 
@@ -31,8 +32,9 @@ use super::{Centre, Engine, Spread};
 use crate::control::{Cancel, Control};
 use crate::error::Result;
 
-/// Row spectra (in tiles) and column results (strip-major) of one plane.
-type Buffers = (Vec<Complex<f32>>, Vec<Complex<f32>>);
+/// The spectra of one plane, in tiles: its row spectra, then, in the same
+/// tiles, its column results (each strip task owns its tiles).
+type Buffers = Vec<Complex<f32>>;
 
 /// Columns transformed together: a strip of them spans two cache lines per
 /// row, and its column transforms fit in the L2 cache.
@@ -61,13 +63,11 @@ struct LampColumn<'a> {
     far: &'a [Complex<f32>],
 }
 
-/// What a strip task reads: strip `index` of `strips`, the row spectra in
-/// tiles, the kernel's spectrum, and the lamps' row spectra with the
-/// spectrum of the kernel beyond its near window, if there are lamps.
+/// What a strip task reads: strip `index`, the kernel's spectrum, and the
+/// lamps' row spectra with the spectrum of the kernel beyond its near
+/// window, if there are lamps.
 struct Strip<'a> {
     index: usize,
-    strips: usize,
-    rows: &'a [Complex<f32>],
     spectrum: &'a [Complex<f32>],
     lamps: Option<(&'a LampRows, &'a [Complex<f32>])>,
 }
@@ -219,11 +219,10 @@ impl Convolver {
         let zero = Complex::new(0.0, 0.0);
         let mut buffers = self.buffers.lease();
         buffers.resize_with(inputs.len(), Default::default);
-        for (rows, results) in buffers.iter_mut() {
-            rows.resize(h.div_ceil(BLOCK) * strips * TILE, zero);
-            results.resize(strips * h * STRIP, zero);
+        for tiles in buffers.iter_mut() {
+            tiles.resize(h.div_ceil(BLOCK) * strips * TILE, zero);
         }
-        for (input, (rows, _)) in inputs.iter().zip(buffers.iter_mut()) {
+        for (input, rows) in inputs.iter().zip(buffers.iter_mut()) {
             self.forward_rows(input, rows, strips, &control.cancel());
         }
         let split = self.split();
@@ -251,7 +250,7 @@ impl Convolver {
             .iter()
             .zip(buffers.iter())
             .zip(recycled)
-            .map(|((input, (_, results)), mut out)| {
+            .map(|((input, results), mut out)| {
                 out.resize(self.width * h, 0.0);
                 self.inverse_rows(input, results, &mut out, strips, &control.cancel());
                 if let (Some(near), false) = (near, input.lamps.is_empty()) {
@@ -345,8 +344,8 @@ impl Convolver {
     }
 
     /// The column transforms of every input, strip by strip: each strip task
-    /// gathers its columns from the row spectra, and writes the H output
-    /// rows of the product's inverse into its own part of the results.
+    /// gathers its columns from its tiles of the row spectra, and writes the
+    /// H output rows of the product's inverse back into the same tiles.
     fn column_pass(
         &self,
         inputs: &[Input],
@@ -359,31 +358,35 @@ impl Convolver {
         let h = self.height;
         let py = self.grid.columns.length();
         let zero = Complex::new(0.0, 0.0);
-        let (rows, mut results): (Vec<&[Complex<f32>]>, Vec<_>) = buffers
-            .iter_mut()
-            .map(|(rows, results)| (rows.as_slice(), results.chunks_mut(h * STRIP)))
-            .unzip();
-        // Strip s of every input, as one task.
-        let tasks: Vec<Vec<&mut [Complex<f32>]>> = (0..strips)
-            .map(|_| results.iter_mut().filter_map(Iterator::next).collect())
+        // Strip s of every input, as one task: tile s of every block.
+        let mut tasks: Vec<Vec<Vec<&mut [Complex<f32>]>>> = (0..strips)
+            .map(|_| (0..inputs.len()).map(|_| Vec::new()).collect())
             .collect();
+        for (i, tiles) in buffers.iter_mut().enumerate() {
+            for (t, tile) in tiles.chunks_mut(TILE).enumerate() {
+                tasks[t % strips][i].push(tile);
+            }
+        }
         let scratch_len = self
             .column_fft
             .get_inplace_scratch_len()
             .max(self.column_ifft.get_inplace_scratch_len());
         tasks.into_par_iter().enumerate().for_each_init(
-            || (vec![zero; py], vec![zero; py], vec![zero; scratch_len]),
-            |(column, extra, scratch), (s, mut outs)| {
-                for (((input, rows), lamps), out) in
-                    inputs.iter().zip(&rows).zip(lamp_rows).zip(outs.iter_mut())
-                {
+            || {
+                (
+                    vec![zero; h * STRIP],
+                    vec![zero; py],
+                    vec![zero; py],
+                    vec![zero; scratch_len],
+                )
+            },
+            |(out, column, extra, scratch), (s, mut tiles)| {
+                for ((input, lamps), tiles) in inputs.iter().zip(lamp_rows).zip(tiles.iter_mut()) {
                     if cancel.is_cancelled() {
                         return;
                     }
                     let strip = Strip {
                         index: s,
-                        strips,
-                        rows,
                         spectrum: &self.spectra[input.kernel_plane],
                         lamps: lamps
                             .as_ref()
@@ -392,20 +395,23 @@ impl Convolver {
                     };
                     super::simd::widest(
                         #[inline(always)]
-                        || self.strip(&strip, out, column, extra, scratch),
+                        || self.strip(&strip, tiles, out, column, extra, scratch),
                     );
                 }
             },
         );
     }
 
-    /// One strip's columns of one input: its tiles of the row spectra into
-    /// `out` (H rows of [`STRIP`] values, in cache from here on), then each
-    /// column through the transforms, in place.
+    /// One strip's columns of one input: its tiles (one per block) of the
+    /// row spectra into `out` (H rows of [`STRIP`] values, in cache from
+    /// here on), each column through the transforms in place, and the
+    /// results back into the tiles.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn strip(
         &self,
         strip: &Strip,
+        tiles: &mut [&mut [Complex<f32>]],
         out: &mut [Complex<f32>],
         column: &mut [Complex<f32>],
         extra: &mut [Complex<f32>],
@@ -416,10 +422,10 @@ impl Convolver {
         let py = self.grid.columns.length();
         let first = strip.index * STRIP;
         let width = STRIP.min(count - first);
-        for (block, tiles) in strip.rows.chunks(strip.strips * TILE).enumerate() {
+        for (block, tile) in tiles.iter().enumerate() {
             let at = block * TILE;
             let n = TILE.min(h * STRIP - at);
-            out[at..at + n].copy_from_slice(&tiles[strip.index * TILE..strip.index * TILE + n]);
+            out[at..at + n].copy_from_slice(&tile[..n]);
         }
         for j in 0..width {
             let u = first + j;
@@ -430,6 +436,11 @@ impl Convolver {
                 far: &far[u * py..(u + 1) * py],
             });
             self.column(out, j, kernel, lamps, column, extra, scratch);
+        }
+        for (block, tile) in tiles.iter_mut().enumerate() {
+            let at = block * TILE;
+            let n = TILE.min(h * STRIP - at);
+            tile[..n].copy_from_slice(&out[at..at + n]);
         }
     }
 
@@ -573,10 +584,9 @@ impl Convolver {
         strips: usize,
         spectra: &mut [Complex<f32>],
     ) {
-        let h = self.height;
         let count = self.grid.spectrum_width();
         for s in 0..strips {
-            let at = s * h * STRIP + block * TILE;
+            let at = (block * strips + s) * TILE;
             let tile = &results[at..at + rows * STRIP];
             let first = s * STRIP;
             let width = STRIP.min(count - first);
