@@ -33,6 +33,8 @@ struct Cumulative {
     step: f64,
     values: Vec<f64>,
     tail: f64,
+    /// Where the table ends.
+    end: f64,
 }
 
 impl Cumulative {
@@ -64,17 +66,18 @@ impl Cumulative {
             last = next;
         }
         let mean_square = light.iter().map(|(l, w)| w * l * l).sum::<f64>() / total;
+        let end = (values.len() - 1) as f64 * step;
         Cumulative {
             step,
             values,
             tail: mean_square / (2.0 * std::f64::consts::PI.powi(2)),
+            end,
         }
     }
 
     /// G(u), odd in u.
     fn at(&self, u: f64) -> f64 {
-        let a = u.abs();
-        let end = (self.values.len() - 1) as f64 * self.step;
+        let (a, end) = (u.abs(), self.end);
         let g = if a >= end {
             self.values[self.values.len() - 1] + self.tail * (1.0 / end - 1.0 / a)
         } else {
@@ -127,11 +130,14 @@ impl FarField {
         }
     }
 
-    /// The light of plane `c` in the pixel at (x, y) mm.
-    pub fn energy(&self, c: usize, x: f64, y: f64, pitch: f64) -> f64 {
+    /// The light of every plane in the pixel at (x, y) mm, each times its
+    /// weight in `weights`, into `out`: the geometry is shared among the
+    /// planes, only the spectrum's tables differ.
+    pub fn energies(&self, x: f64, y: f64, pitch: f64, weights: &[f64], out: &mut [f64]) {
+        const PLANES: usize = 3;
+        let planes = out.len().min(PLANES);
         let r2 = x * x + y * y;
-        let table = &self.tables[c];
-        let mut sum = 0.0;
+        let mut sums = [0.0; PLANES];
         for (l2, n, a, l_over_f) in &self.edges {
             let along = x * n[0] + y * n[1];
             let across = x * a[0] + y * a[1];
@@ -139,18 +145,19 @@ impl FarField {
             // the square's projection).
             let half = 0.5 * pitch * (a[0].abs() + a[1].abs());
             let (u1, u2) = ((across - half) * l_over_f, (across + half) * l_over_f);
-            let mean = (table.at(u2) - table.at(u1)) / (u2 - u1);
-            sum += l2 * along * along * mean;
+            for (sum, table) in sums.iter_mut().zip(&self.tables[..planes]) {
+                let mean = (table.at(u2) - table.at(u1)) / (u2 - u1);
+                *sum += l2 * along * along * mean;
+            }
         }
-        let mut value = sum / (4.0 * std::f64::consts::PI.powi(2) * r2 * r2);
         let r = r2.sqrt();
         let r3 = r2 * r;
-        if !self.fans.is_empty() {
-            // By stationary phase, the points of a curved side whose normal
-            // is ±x/|x| send ρ λ f / (4π² |x|³) there (two such points on a
-            // disc give its ⟨J₁²⟩ term), ρ the radius of curvature; each
-            // piece covers its share of the normal's directions, averaged
-            // over the angle the pixel spans.
+        // By stationary phase, the points of a curved side whose normal is
+        // ±x/|x| send ρ λ f / (4π² |x|³) there (two such points on a disc
+        // give its ⟨J₁²⟩ term), ρ the radius of curvature; each piece
+        // covers its share of the normal's directions, averaged over the
+        // angle the pixel spans.
+        let fanned = (!self.fans.is_empty()).then(|| {
             let phi = y.atan2(x);
             let half = 0.5 * pitch * (x.abs() + y.abs()) / r2;
             let mut covered = 0.0;
@@ -163,19 +170,32 @@ impl FarField {
                     }
                 }
             }
-            value += covered / (2.0 * half) * self.mean_lambda[c] * self.focal
-                / (4.0 * std::f64::consts::PI.powi(2) * r3);
+            covered / (2.0 * half)
+        });
+        for (c, (value_out, sum)) in out.iter_mut().zip(sums).enumerate() {
+            let mut value = sum / (4.0 * std::f64::consts::PI.powi(2) * r2 * r2);
+            if let Some(fanned) = fanned {
+                value += fanned * self.mean_lambda[c] * self.focal
+                    / (4.0 * std::f64::consts::PI.powi(2) * r3);
+            }
+            for radius in &self.discs {
+                value += radius * self.mean_lambda[c] * self.focal
+                    / (2.0 * std::f64::consts::PI.powi(2) * r3);
+            }
+            *value_out = weights[c] * (value / self.area * pitch * pitch);
         }
-        for radius in &self.discs {
-            value += radius * self.mean_lambda[c] * self.focal
-                / (2.0 * std::f64::consts::PI.powi(2) * r3);
-        }
-        value / self.area * pitch * pitch
     }
 }
 
-/// An angle brought into (−π, π].
-fn wrap(angle: f64) -> f64 {
-    let turns = (angle / std::f64::consts::TAU).round();
-    angle - turns * std::f64::consts::TAU
+/// An angle brought into (−π, π]; the angles here lie within a few turns,
+/// and steps of 2π are far cheaper than a rounding division.
+fn wrap(mut angle: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    while angle > PI {
+        angle -= TAU;
+    }
+    while angle <= -PI {
+        angle += TAU;
+    }
+    angle
 }

@@ -21,6 +21,10 @@ use crate::optics::aperture::Optics;
 use far::FarField;
 use near::NearField;
 
+/// Near-field pixels evaluated together: their per-pixel and per-sample
+/// phase factors stay in cache.
+const NEAR_RUN: usize = 32;
+
 /// What light to integrate: (wavelength nm, weight per plane).
 pub(crate) type Spectrum = Vec<(f64, Vec<f64>)>;
 
@@ -68,15 +72,25 @@ fn pattern_with(
         &mut rasterising,
         |j, row| {
             let y = (cy as f64 - j as f64) * pitch_mm;
+            let x = |i: usize| (i as f64 - cx as f64) * pitch_mm;
+            let mut near_pixels = Vec::new();
             for (i, pixel) in row.chunks_mut(planes).enumerate() {
-                let x = (i as f64 - cx as f64) * pitch_mm;
-                if x.hypot(y) >= far_from {
-                    for (c, value) in pixel.iter_mut().enumerate() {
-                        // Weighted like the exact sum, undone below.
-                        *value = weights_total[c] * far.energy(c, x, y, pitch_mm);
-                    }
+                if x(i).hypot(y) >= far_from {
+                    // Weighted like the exact sum, undone below.
+                    far.energies(x(i), y, pitch_mm, &weights_total, pixel);
                 } else {
-                    near.add(x, y, i.abs_diff(cx) <= 1 && j.abs_diff(cy) <= 1, pixel);
+                    let core = i.abs_diff(cx) <= 1 && j.abs_diff(cy) <= 1;
+                    near_pixels.push((i, core));
+                }
+            }
+            // The near pixels of a row lie together, in runs of a few dozen
+            // sharing their sample offsets (the core's, denser, apart).
+            for run in near_pixels.chunk_by(|a, b| b.0 - a.0 == 1 && a.1 == b.1) {
+                for part in run.chunks(NEAR_RUN) {
+                    let xs: Vec<f64> = part.iter().map(|&(i, _)| x(i)).collect();
+                    let at = part[0].0 * planes;
+                    let out = &mut row[at..at + part.len() * planes];
+                    near.add_many(&xs, y, part[0].1, out);
                 }
             }
         },

@@ -4,6 +4,7 @@
 //! wavelength (docs/physics.md §6).
 
 use super::Spectrum;
+use crate::optics::aperture::pupil::Offsets;
 use crate::optics::aperture::Optics;
 
 /// How a pixel of the near field is sampled, for one pupil and light.
@@ -11,10 +12,10 @@ pub(super) struct NearField<'a> {
     optics: &'a Optics,
     spectrum: &'a Spectrum,
     pitch_mm: f64,
-    /// Sample points per axis in most pixels.
-    grid: usize,
     /// Sample points per axis in the centre pixel and its neighbours.
     dense: usize,
+    /// The sample offsets of most pixels, per wavelength.
+    offsets: Vec<Offsets>,
 }
 
 impl<'a> NearField<'a> {
@@ -48,44 +49,73 @@ impl<'a> NearField<'a> {
             optics,
             spectrum,
             pitch_mm,
-            grid,
             dense,
+            offsets: offsets(optics, spectrum, pitch_mm, grid),
         }
     }
+}
 
-    /// Adds the light of the pixel centred at (x, y) mm to `out`, one value
-    /// per plane, each weighted by the plane's sensitivity; `core`: the
-    /// pixel is the centre or one of its neighbours.
-    pub fn add(&self, x: f64, y: f64, core: bool, out: &mut [f64]) {
+impl NearField<'_> {
+    /// [`NearField::add`] for pixels of one row, centred at (`xs`[i], y)
+    /// mm, all in the core or none: `out` holds their values side by side
+    /// (`planes` each). The pixels share their sample offsets, which lets
+    /// the pupil's transform factor them out ([`Pupil::intensity_sums`]).
+    ///
+    /// [`Pupil::intensity_sums`]: crate::optics::aperture::pupil::Pupil::intensity_sums
+    pub fn add_many(&self, xs: &[f64], y: f64, core: bool, out: &mut [f64]) {
         let (f, pitch_mm) = (self.optics.focal_mm, self.pitch_mm);
         let area = self.optics.pupil.area();
-        for (k, (lambda_nm, weights)) in self.spectrum.iter().enumerate() {
-            let lambda = lambda_nm * 1e-6;
-            let scale = 1.0 / (lambda * f);
-            // Sample cells' centres, moved by a different fraction per
-            // wavelength (golden-ratio steps), spread over the pixel.
+        let planes = out.len() / xs.len().max(1);
+        let mut sums = vec![0.0; xs.len()];
+        // The core's many samples are needed for a few pixels only: not
+        // kept.
+        let dense;
+        let offsets = if core {
+            dense = offsets(self.optics, self.spectrum, pitch_mm, self.dense);
+            &dense
+        } else {
+            &self.offsets
+        };
+        for ((lambda_nm, weights), offsets) in self.spectrum.iter().zip(offsets) {
+            let scale = 1.0 / (lambda_nm * 1e-6 * f);
+            let nu_x: Vec<f64> = xs.iter().map(|x| x * scale).collect();
+            self.optics
+                .pupil
+                .intensity_sums(&nu_x, y * scale, offsets, &mut sums);
+            let points = offsets.len() as f64;
+            for (pixel, sum) in out.chunks_mut(planes).zip(&sums) {
+                // Energy in the pixel: mean PSF × pixel area.
+                let energy = sum / points * scale * scale / area * pitch_mm * pitch_mm;
+                for (value, weight) in pixel.iter_mut().zip(weights) {
+                    *value += weight * energy;
+                }
+            }
+        }
+    }
+}
+
+/// The sample offsets of a pixel at `per_axis`² points for each wavelength
+/// of `spectrum`, in cycles/mm: cells' centres moved by a different
+/// fraction per wavelength (golden-ratio steps), spread over the pixel.
+fn offsets(optics: &Optics, spectrum: &Spectrum, pitch_mm: f64, per_axis: usize) -> Vec<Offsets> {
+    spectrum
+        .iter()
+        .enumerate()
+        .map(|(k, (lambda_nm, _))| {
+            let scale = 1.0 / (lambda_nm * 1e-6 * optics.focal_mm);
             let (ox, oy) = (
                 frac(0.5 + 0.618_034 * k as f64),
                 frac(0.5 + 0.754_878 * k as f64),
             );
-            let points = if core {
-                self.dense * self.dense
-            } else {
-                self.grid * self.grid
-            };
-            let mut sum = 0.0;
-            for n in 0..points {
-                let (u, v) = kronecker(n, ox, oy);
-                let (sx, sy) = (x + pitch_mm * (u - 0.5), y + pitch_mm * (v - 0.5));
-                sum += self.optics.pupil.intensity([sx * scale, sy * scale]);
-            }
-            // Energy in the pixel: mean PSF × pixel area.
-            let energy = sum / points as f64 * scale * scale / area * pitch_mm * pitch_mm;
-            for (value, weight) in out.iter_mut().zip(weights) {
-                *value += weight * energy;
-            }
-        }
-    }
+            let (dx, dy) = (0..per_axis * per_axis)
+                .map(|n| {
+                    let (u, v) = kronecker(n, ox, oy);
+                    (pitch_mm * (u - 0.5) * scale, pitch_mm * (v - 0.5) * scale)
+                })
+                .unzip();
+            optics.pupil.offsets(dx, dy)
+        })
+        .collect()
 }
 
 /// Point `n` of the R2 sequence (Roberts 2018, steps 1/g and 1/g², g the

@@ -263,6 +263,153 @@ impl Pupil {
         let [re, im] = self.amplitude(nu);
         re * re + im * im
     }
+
+    /// The offsets δ_k = (`dnu_x`[k], `dnu_y`[k]) (cycles/mm) of the
+    /// samples of a pixel, with their share of every polygon edge's phases,
+    /// for [`Pupil::intensity_sums`]: computed once, used for every pixel.
+    pub fn offsets(&self, dnu_x: Vec<f64>, dnu_y: Vec<f64>) -> Offsets {
+        let phases = self
+            .polygon_edges()
+            .map(|e| {
+                dnu_x
+                    .iter()
+                    .zip(&dnu_y)
+                    .map(|(&x, &y)| edge_phases(e, TAU * x, TAU * y))
+                    .collect()
+            })
+            .collect();
+        Offsets {
+            x: dnu_x,
+            y: dnu_y,
+            phases,
+        }
+    }
+
+    fn polygon_edges(&self) -> impl Iterator<Item = &Edge> {
+        self.elements
+            .iter()
+            .flat_map(|element| match &element.shape {
+                Shape::Polygon { edges, .. } => edges.as_slice(),
+                Shape::Disc { .. } => &[],
+            })
+    }
+
+    /// Σ_k |Â(ν_i + δ_k)|² for every point ν_i = (`nu_x`[i], `nu_y`) of a
+    /// row and the `offsets` δ_k shared by all of them (the samples of a
+    /// pixel), into `out`[i]. The same values as [`Pupil::intensity`], at a
+    /// fraction of the cost for polygons: their edge phases e^(−iq·m) and
+    /// e^(iq·e/2) factor into a part of the point and a part of the offset,
+    /// so that the sines of the inner loop become complex products.
+    pub fn intensity_sums(&self, nu_x: &[f64], nu_y: f64, offsets: &Offsets, out: &mut [f64]) {
+        let (dnu_x, dnu_y) = (&offsets.x, &offsets.y);
+        let (points, count) = (nu_x.len(), dnu_x.len());
+        let q = |i: usize, k: usize| [TAU * (nu_x[i] + dnu_x[k]), TAU * (nu_y + dnu_y[k])];
+        let mut total = vec![[0.0f64; 2]; points * count];
+        // The edge sums, real and imaginary parts apart so that the inner
+        // loop runs in vector registers.
+        let (mut sums_re, mut sums_im) = (vec![0.0; points * count], vec![0.0; points * count]);
+        let mut edge_index = 0;
+        for element in &self.elements {
+            let Shape::Polygon {
+                edges,
+                centroid,
+                reach,
+            } = &element.shape
+            else {
+                let single = Pupil {
+                    elements: vec![element.clone()],
+                };
+                for (at, t) in total.iter_mut().enumerate() {
+                    let (i, k) = (at / count, at % count);
+                    let a = single.amplitude([nu_x[i] + dnu_x[k], nu_y + dnu_y[k]]);
+                    t[0] += a[0];
+                    t[1] += a[1];
+                }
+                continue;
+            };
+            sums_re.iter_mut().for_each(|s| *s = 0.0);
+            sums_im.iter_mut().for_each(|s| *s = 0.0);
+            for e in edges {
+                let by_offset = &offsets.phases[edge_index];
+                edge_index += 1;
+                for (i, &x) in nu_x.iter().enumerate() {
+                    let (phase_i, half_i) = edge_phases(e, TAU * x, TAU * nu_y);
+                    let row = i * count..(i + 1) * count;
+                    let terms = by_offset
+                        .iter()
+                        .zip(dnu_x)
+                        .zip(dnu_y)
+                        .zip(&mut sums_re[row.clone()])
+                        .zip(&mut sums_im[row]);
+                    for (((((phase_k, half_k), dx), dy), re), im) in terms {
+                        let q = [TAU * (x + dx), TAU * (nu_y + dy)];
+                        let z = 0.5 * (q[0] * e.delta[0] + q[1] * e.delta[1]);
+                        let sin_z = half_i[0] * half_k[1] + half_i[1] * half_k[0];
+                        let sinc = if z.abs() < 1e-8 {
+                            1.0 - z * z / 6.0
+                        } else {
+                            sin_z / z
+                        };
+                        let weight = e.length * (q[0] * e.normal[0] + q[1] * e.normal[1]) * sinc;
+                        *re += weight * (phase_i[0] * phase_k[0] - phase_i[1] * phase_k[1]);
+                        *im += weight * (phase_i[0] * phase_k[1] + phase_i[1] * phase_k[0]);
+                    }
+                }
+            }
+            let sums = sums_re.iter().zip(&sums_im);
+            for (at, (t, (s_re, s_im))) in total.iter_mut().zip(sums).enumerate() {
+                let q = q(at / count, at % count);
+                let q2 = q[0] * q[0] + q[1] * q[1];
+                let a = if q2.sqrt() * reach < 1e-4 {
+                    // The edge sum cancels to round-off here.
+                    phase(element.area, q, *centroid)
+                } else {
+                    // Multiply by i/|q|².
+                    [-s_im / q2, s_re / q2]
+                };
+                t[0] += element.sign * a[0];
+                t[1] += element.sign * a[1];
+            }
+        }
+        for (o, point) in out.iter_mut().zip(total.chunks(count)) {
+            *o = point.iter().map(|[re, im]| re * re + im * im).sum();
+        }
+    }
+}
+
+/// The sample offsets of a pixel and their share of each polygon edge's
+/// phases ([`Pupil::offsets`]).
+#[derive(Debug, Clone)]
+pub struct Offsets {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    /// Per polygon edge, per offset, [`edge_phases`].
+    phases: Vec<Vec<EdgePhases>>,
+}
+
+impl Offsets {
+    /// How many offsets.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+}
+
+/// e^(−iq·m) and e^(iq·e/2) of an edge (middle m, vector e) at q, as
+/// (re, im) pairs.
+type EdgePhases = ([f64; 2], [f64; 2]);
+
+fn edge_phases(e: &Edge, qx: f64, qy: f64) -> EdgePhases {
+    let (m, d) = (
+        qx * e.middle[0] + qy * e.middle[1],
+        0.5 * (qx * e.delta[0] + qy * e.delta[1]),
+    );
+    let ((sm, cm), (sd, cd)) = (libm::sincos(m), libm::sincos(d));
+    ([cm, -sm], [cd, sd])
 }
 
 /// magnitude · e^(−i q·c).
