@@ -73,14 +73,15 @@ def run(command):
     return subprocess.run(command, check=True, capture_output=True, text=True)
 
 
-def aureole_batch(aureole, work, kernel, count):
+def aureole_batch(aureole, work, kernel, count, ext="exr"):
     out = os.path.join(work, f"out{count}")
     shutil.rmtree(out, ignore_errors=True)
     os.makedirs(out)
+    half = ["--half"] if ext == "exr" else []
     start = time.perf_counter()
     done = run(["/usr/bin/time", "-f", "peak %M", aureole, "apply",
-                os.path.join(work, "s.%04d.exr"), "--frames", f"1-{count}",
-                "--kernel", kernel, "-o", out + "/", "--half"])
+                os.path.join(work, f"s.%04d.{ext}"), "--frames", f"1-{count}",
+                "--kernel", kernel, "-o", out + "/"] + half)
     wall = time.perf_counter() - start
     stages = [tuple(map(float, m)) for m in re.findall(
         r"read ([\d.]+) s, camera ([\d.]+) s, write ([\d.]+) s", done.stderr)]
@@ -114,6 +115,25 @@ def workload(name, aureole, work, kernel):
     difference = np.linalg.norm(a - b) / np.linalg.norm(a)
     print(f"| {name} | aureole | {per_frame:.2f} s | {read:.2f} s | {camera:.2f} s | {write:.2f} s | {peak:.0f} MB | 1.0 | reference |")
     print(f"| {name} | OpenEXR + scipy fftconvolve (2 workers) | {theirs['frame']:.2f} s | {theirs['read']:.2f} s | {theirs['convolve']:.2f} s | {theirs['write']:.2f} s | {theirs['peak_mb']:.0f} MB | {theirs['frame'] / per_frame:.1f} | {difference:.1e} |")
+
+
+def pfm_batch(name, aureole, work, kernel):
+    """aureole alone, PFM in and out (float32, no compression)."""
+    for n in range(2, FRAMES + 2):
+        shutil.copyfile(os.path.join(work, "s.0001.pfm"), os.path.join(work, f"s.{n:04d}.pfm"))
+    one, _, _, _ = aureole_batch(aureole, work, kernel, 1, "pfm")
+    many, stages, peak, _ = aureole_batch(aureole, work, kernel, FRAMES + 1, "pfm")
+    steady = stages[1:]
+    read, camera, write = (statistics.median(s[i] for s in steady) for i in range(3))
+    print(f"| {name} | aureole | {(many - one) / FRAMES:.2f} s | {read:.2f} s | {camera:.2f} s | {write:.2f} s | {peak:.0f} MB | | |")
+
+
+def write_pfm(path, planes):
+    """Three planes (top row first) as a little-endian PF file."""
+    data = np.stack(planes, axis=-1)[::-1].astype("<f4")
+    with open(path, "wb") as f:
+        f.write(f"PF\n{data.shape[1]} {data.shape[0]}\n-1.0\n".encode())
+        f.write(data.tobytes())
 
 
 def write_exr(path, planes, names):
@@ -150,6 +170,8 @@ def main(aureole, work, workload_dir):
     kernel = os.path.join(dir, "kernel.exr")
     write_exr(kernel, [np.load(os.path.join(workload_dir, "kernel.npy"))], ("Y",))
     workload("issue-5 workload 4K", aureole, dir, kernel)
+    write_pfm(os.path.join(dir, "s.0001.pfm"), list(image))
+    pfm_batch("issue-5 workload 4K, PFM in and out", aureole, dir, kernel)
     print()
 
 

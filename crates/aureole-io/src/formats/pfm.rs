@@ -7,6 +7,7 @@ use std::path::Path;
 
 use aureole::image::{Image, Layout};
 use aureole::memory::format_bytes;
+use rayon::prelude::*;
 
 use super::{Decoded, LinearPlanes, Note};
 use crate::atomic::write_atomic;
@@ -41,15 +42,24 @@ pub(crate) fn encode(path: &Path, image: &LinearPlanes) -> Result<Vec<Note>> {
     write_atomic(path, |out| {
         let io = |e| Error::io(path, e);
         write!(out, "{magic}\n{width} {height}\n-1.0\n").map_err(io)?;
-        let mut row = Vec::with_capacity(width * planes.len() * 4);
-        for y in (0..height).rev() {
-            row.clear();
-            for x in 0..width {
-                for plane in planes {
-                    row.extend_from_slice(&plane[y * width + x].to_le_bytes());
-                }
-            }
-            out.write_all(&row).map_err(io)?;
+        // Blocks of rows turned into bytes in parallel, written in order.
+        const ROWS: usize = 64;
+        let row_bytes = width * planes.len() * 4;
+        let mut block = vec![0u8; ROWS * row_bytes];
+        let rows: Vec<usize> = (0..height).rev().collect();
+        for part in rows.chunks(ROWS) {
+            let bytes = &mut block[..part.len() * row_bytes];
+            bytes
+                .par_chunks_mut(row_bytes)
+                .zip(part)
+                .for_each(|(out, &y)| {
+                    for (x, pixel) in out.chunks_exact_mut(planes.len() * 4).enumerate() {
+                        for (value, plane) in pixel.chunks_exact_mut(4).zip(planes) {
+                            value.copy_from_slice(&plane[y * width + x].to_le_bytes());
+                        }
+                    }
+                });
+            out.write_all(bytes).map_err(io)?;
         }
         Ok(())
     })?;
@@ -149,18 +159,33 @@ pub fn decode_limited(bytes: &[u8], max_bytes: u64) -> std::result::Result<Pfm, 
         ));
     }
     let little = scale < 0.0;
-    let mut planes = vec![vec![0f32; width * height]; channels];
-    for (i, chunk) in data[..needed].chunks_exact(4).enumerate() {
-        let raw = [chunk[0], chunk[1], chunk[2], chunk[3]];
-        let value = if little {
+    let read = |raw: &[u8]| {
+        let raw = [raw[0], raw[1], raw[2], raw[3]];
+        if little {
             f32::from_le_bytes(raw)
         } else {
             f32::from_be_bytes(raw)
-        };
-        let pixel = i / channels;
-        let (x, row_from_bottom) = (pixel % width, pixel / width);
-        planes[i % channels][(height - 1 - row_from_bottom) * width + x] = value;
-    }
+        }
+    };
+    // Row by row in parallel, each plane's row gathered from its source
+    // row (rows run from the bottom of the image in the file).
+    let row_bytes = width * channels * 4;
+    let planes = (0..channels)
+        .map(|c| {
+            let mut plane = vec![0f32; width * height];
+            plane
+                .par_chunks_mut(width)
+                .enumerate()
+                .for_each(|(y, row)| {
+                    let from = (height - 1 - y) * row_bytes;
+                    let source = &data[from..from + row_bytes];
+                    for (value, raw) in row.iter_mut().zip(source.chunks_exact(4 * channels)) {
+                        *value = read(&raw[4 * c..4 * c + 4]);
+                    }
+                });
+            plane
+        })
+        .collect();
     Ok(Pfm {
         width,
         height,

@@ -22,10 +22,13 @@ pub(super) fn fft(
 
 /// Nanoseconds splatting takes: every bright pixel adds the part of a
 /// `kernel_pixels` kernel that falls inside the frame (`area` output pixels
-/// in all) to every output plane, after a pass over the planes.
+/// in all, over `rows` visits of an output row to a bright pixel, ~5 ns
+/// each: small kernels at many bright pixels are bound by them) to every
+/// output plane, after a pass over the planes.
 pub(super) fn splat(
     kernel_pixels: usize,
     area: usize,
+    rows: usize,
     (width, height): (usize, usize),
     convolutions: usize,
 ) -> f64 {
@@ -36,7 +39,7 @@ pub(super) fn splat(
     } else {
         0.19
     };
-    (per_add * area as f64 + 2.0 * pixels) * convolutions as f64
+    (per_add * area as f64 + 5.0 * rows as f64 + 2.0 * pixels) * convolutions as f64
 }
 
 /// How many lamps (pixels whose near light is added directly, a window of

@@ -204,6 +204,7 @@ impl Plan {
                 if cost::splat(
                     kernel_size.0 * kernel_size.1,
                     survey.splat_area,
+                    survey.splat_rows,
                     size,
                     convolutions,
                 ) < cost::fft(self.single.padded_size(), size, convolutions) =>

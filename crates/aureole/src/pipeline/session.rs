@@ -306,7 +306,14 @@ impl Session {
         };
         let padded = padded_size(kernel.0, kernel.1, size.0, size.1);
         Ok(Costs {
-            splat: 1e-9 * cost::splat(kernel.0 * kernel.1, survey.splat_area, size, convolutions),
+            splat: 1e-9
+                * cost::splat(
+                    kernel.0 * kernel.1,
+                    survey.splat_area,
+                    survey.splat_rows,
+                    size,
+                    convolutions,
+                ),
             fft: 1e-9 * cost::fft(padded, size, convolutions),
             spread_pixels: survey.spread,
         })

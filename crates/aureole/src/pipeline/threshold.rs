@@ -34,6 +34,9 @@ pub(super) struct Survey {
     /// kernel's reach is a rectangle: row sums of its widths times its
     /// height on that row), for the cost of splatting.
     pub splat_area: usize,
+    /// Σ over spread pixels of the output rows their kernel reaches: the
+    /// visits splatting by rows makes.
+    pub splat_rows: usize,
 }
 
 impl Survey {
@@ -43,6 +46,7 @@ impl Survey {
             full: self.full + other.full,
             squares: self.squares + other.squares,
             splat_area: self.splat_area + other.splat_area,
+            splat_rows: self.splat_rows + other.splat_rows,
         }
     }
 }
@@ -86,7 +90,9 @@ impl Threshold {
                         row.splat_area += covered(x, kw, cx, w);
                     }
                 }
-                row.splat_area *= covered(y, kh, cy, h);
+                let rows = covered(y, kh, cy, h);
+                row.splat_area *= rows;
+                row.splat_rows = row.spread * rows;
                 row
             })
             .collect::<Vec<Survey>>()
