@@ -8,6 +8,7 @@ use std::path::Path;
 use aureole::image::{Image, Layout};
 use aureole::memory::format_bytes;
 use image::{ImageBuffer, ImageFormat, Rgb};
+use rayon::prelude::*;
 
 use super::Decoded;
 use crate::atomic::write_atomic;
@@ -55,16 +56,25 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
         D::ImageLuma8(_) | D::ImageLumaA8(_) | D::ImageLuma16(_) | D::ImageLumaA16(_)
     );
     let has_alpha = decoded.color().has_alpha();
-    let rgba = decoded.into_rgba32f();
-    let pixels = rgba.as_raw();
+    // Radiance (and float RGB TIFF) arrive as RGB f32: taken apart as they
+    // are, without an RGBA copy; the rest through RGBA f32.
+    let (pixels, stride) = match decoded {
+        D::ImageRgb32F(rgb) => (rgb.into_raw(), 3),
+        other => (other.into_rgba32f().into_raw(), 4),
+    };
     let decode = |v: f32| if float { v } else { srgb_to_linear(v) };
-    let channel = |c: usize| -> Vec<f32> { pixels.chunks_exact(4).map(|p| decode(p[c])).collect() };
+    let channel = |c: usize| -> Vec<f32> {
+        pixels
+            .par_chunks_exact(stride)
+            .map(|p| decode(p[c]))
+            .collect()
+    };
     let (layout, planes) = if grey {
         (Layout::Luminance, vec![channel(0)])
     } else {
         (Layout::Rgb, vec![channel(0), channel(1), channel(2)])
     };
-    let alpha = has_alpha.then(|| pixels.chunks_exact(4).map(|p| p[3]).collect());
+    let alpha = has_alpha.then(|| pixels.par_chunks_exact(stride).map(|p| p[3]).collect());
     Ok(Decoded {
         image: Image {
             width,
