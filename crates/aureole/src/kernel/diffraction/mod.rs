@@ -20,6 +20,7 @@ use crate::optics::aperture::spectrum::Light;
 use crate::optics::aperture::Optics;
 use far::FarField;
 use near::NearField;
+use rayon::prelude::*;
 
 /// Near-field pixels evaluated together: their per-pixel and per-sample
 /// phase factors stay in cache.
@@ -98,10 +99,8 @@ fn pattern_with(
     let mut result: Vec<Vec<f64>> = (0..planes)
         .map(|c| {
             interleaved
-                .iter()
-                .skip(c)
-                .step_by(planes)
-                .map(|v| v / weights_total[c])
+                .par_chunks_exact(planes)
+                .map(|pixel| pixel[c] / weights_total[c])
                 .collect()
         })
         .collect();
