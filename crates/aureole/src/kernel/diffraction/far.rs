@@ -14,10 +14,8 @@ use crate::optics::aperture::Optics;
 pub(super) struct FarField {
     /// (L², normal, unit direction along, L/f) per straight edge.
     edges: Vec<(f64, [f64; 2], [f64; 2], f64)>,
-    /// Pieces of curved sides: the curve's radius of curvature there
-    /// (L / the normal's turn, mm), the normal's angle and the turn before
-    /// and after it (rad).
-    fans: Vec<(f64, f64, [f64; 2])>,
+    /// Pieces of curved sides: the light they fan out, by direction.
+    fans: Fans,
     discs: Vec<f64>,
     /// Per plane: the spectrum-averaged ∫₀ᵘ sinc²(πu'/λ) du'.
     tables: Vec<Cumulative>,
@@ -105,19 +103,16 @@ impl FarField {
                 .into_iter()
                 .map(|e| (e.length * e.length, e.normal, e.along, e.length / f))
                 .collect(),
-            fans: curved
-                .into_iter()
-                .filter_map(|e| {
-                    let [before, after] = e.fan?;
-                    (before + after > 0.0).then(|| {
-                        (
-                            e.length / (before + after),
-                            e.normal[1].atan2(e.normal[0]),
-                            [before, after],
-                        )
-                    })
+            fans: Fans::new(curved.into_iter().filter_map(|e| {
+                let [before, after] = e.fan?;
+                (before + after > 0.0).then(|| {
+                    (
+                        e.length / (before + after),
+                        e.normal[1].atan2(e.normal[0]),
+                        [before, after],
+                    )
                 })
-                .collect(),
+            })),
             discs,
             tables: (0..planes).map(|c| Cumulative::new(&light(c))).collect(),
             mean_lambda: (0..planes)
@@ -160,17 +155,7 @@ impl FarField {
         let fanned = (!self.fans.is_empty()).then(|| {
             let phi = y.atan2(x);
             let half = 0.5 * pitch * (x.abs() + y.abs()) / r2;
-            let mut covered = 0.0;
-            for (rho, normal, [before, after]) in &self.fans {
-                for side in [0.0, std::f64::consts::PI] {
-                    let offset = wrap(phi - normal - side);
-                    let overlap = (offset + half).min(*after) - (offset - half).max(-before);
-                    if overlap > 0.0 {
-                        covered += rho * overlap;
-                    }
-                }
-            }
-            covered / (2.0 * half)
+            self.fans.between(phi - half, phi + half) / (2.0 * half)
         });
         for (c, (value_out, sum)) in out.iter_mut().zip(sums).enumerate() {
             let mut value = sum / (4.0 * std::f64::consts::PI.powi(2) * r2 * r2);
@@ -184,6 +169,78 @@ impl FarField {
             }
             *value_out = weights[c] * (value / self.area * pitch * pitch);
         }
+    }
+}
+
+/// The light the pieces of curved sides fan out, as a density over the
+/// direction θ of the normal: each piece (ρ its radius of curvature, its
+/// normal's angle, the turn [before, after] it covers) adds ρ over its
+/// range of directions, and again half a turn on (a side sends light both
+/// ways). A pixel's share is the integral over the angle it spans, which
+/// the cumulative integral gives with two lookups whatever the number of
+/// pieces.
+struct Fans {
+    /// Breakpoints in [−π, π), ascending, with the integral from −π up to
+    /// each and the density after it.
+    points: Vec<(f64, f64, f64)>,
+    /// The integral over a whole turn.
+    turn: f64,
+}
+
+impl Fans {
+    fn new(pieces: impl Iterator<Item = (f64, f64, [f64; 2])>) -> Fans {
+        use std::f64::consts::{PI, TAU};
+        // Density steps (angle, change), each range split where it wraps.
+        let mut steps: Vec<(f64, f64)> = Vec::new();
+        for (rho, normal, [before, after]) in pieces {
+            for side in [0.0, PI] {
+                let start = wrap(normal + side - before);
+                let end = start + before + after;
+                if end <= PI {
+                    steps.extend([(start, rho), (end, -rho)]);
+                } else {
+                    steps.extend([(start, rho), (PI, -rho), (-PI, rho), (end - TAU, -rho)]);
+                }
+            }
+        }
+        steps.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut points = Vec::with_capacity(steps.len() + 1);
+        let (mut at, mut integral, mut density) = (-PI, 0.0, 0.0);
+        points.push((at, integral, density));
+        for (angle, change) in steps {
+            integral += density * (angle - at);
+            density += change;
+            at = angle;
+            points.push((at, integral, density));
+        }
+        let turn = integral + density * (PI - at);
+        Fans { points, turn }
+    }
+
+    fn is_empty(&self) -> bool {
+        self.turn == 0.0
+    }
+
+    /// ∫ of the density from `from` to `to`: what the cumulative integral
+    /// leaves of a range no piece covers is round-off, and 0.
+    fn between(&self, from: f64, to: f64) -> f64 {
+        let covered = self.integral(to) - self.integral(from);
+        if covered > 1e-12 * self.turn {
+            covered
+        } else {
+            0.0
+        }
+    }
+
+    /// ∫ of the density from −π to `angle` (any angle, whole turns
+    /// counted).
+    fn integral(&self, angle: f64) -> f64 {
+        use std::f64::consts::{PI, TAU};
+        let turns = ((angle + PI) / TAU).floor();
+        let a = angle - turns * TAU;
+        let k = self.points.partition_point(|p| p.0 <= a).max(1) - 1;
+        let (start, integral, density) = self.points[k];
+        turns * self.turn + integral + density * (a - start)
     }
 }
 
