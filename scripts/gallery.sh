@@ -103,7 +103,7 @@ if [ -d "$data" ]; then
   photo goldengate GoldenGate.exr 10 830,380,280,140 --white 1
   photo dikhololo dikhololo_night_1k.hdr 5 - --white 1
   photo fog Fog.exr 5 -
-  photo candleglass CandleGlass.exr 10 - --keep-negative
+  photo candleglass CandleGlass.exr 10 -
   # Day: a sky of 10^3-10^4 cd/m² behind a tree (calibrated: whiteLuminance).
   photo tree Tree.exr 3000 -
 
@@ -124,7 +124,7 @@ if [ -d "$data" ]; then
   # The 401-px square centred on the light.
   square=$(awk -F'[(), ]+' '/light at/ { for (i = 1; i < NF; i++) if ($i == "at") \
     printf "%d,%d,401,401", $(i+1) - 200 + 0.5, $(i+2) - 200 + 0.5 }' "$out/candleglass-rays.txt")
-  "$aureole" apply -q "$data/CandleGlass.exr" --keep-negative --threshold 1e12 --white 0.05 \
+  "$aureole" apply -q "$data/CandleGlass.exr" --threshold 1e12 --white 0.05 \
     -o "$work/candle-photo.png"
   "$montage" "$work/candle-crop.png" --gap 0 --crop "$square" "$work/candle-photo.png"
   # A point light of the flame's luminance × area through the lens we read
@@ -145,7 +145,7 @@ if [ -d "$data" ]; then
 
   # Recipes of the guide (configs/) on scenes that suit them.
   "$aureole" apply -q "$work/demo.exr" --config configs/night-street.toml --white 6 -o "$work/r1.png"
-  "$aureole" apply -q "$data/CandleGlass.exr" --keep-negative --config configs/candle-interior.toml \
+  "$aureole" apply -q "$data/CandleGlass.exr" --config configs/candle-interior.toml \
     -o "$work/r2.png"
   "$aureole" apply -q "$data/dikhololo_night_1k.hdr" --config configs/astro-spikes.toml --white 1 \
     -o "$work/r3.png"

@@ -102,7 +102,8 @@ pub trait Engine: Send + Sync {
     /// Prepares to take lamps ([`Spread::lamps`]): the kernel (the planes
     /// it was built from) split at `radius`, its part beyond transformed.
     /// Kept until a call asks for another radius. `false`: this engine
-    /// cannot.
+    /// cannot, or the window does not fit in the kernel, or the planes are
+    /// not the kernel's.
     fn split_near(
         &self,
         _planes: &[&[f32]],

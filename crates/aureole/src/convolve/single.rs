@@ -642,6 +642,13 @@ impl Engine for Convolver {
             return Ok(true);
         }
         let size = self.kernel_size;
+        let (cx, cy) = (size.0 / 2, size.1 / 2);
+        let fits = radius <= cx.min(cy).min(size.0 - 1 - cx).min(size.1 - 1 - cy);
+        let shaped =
+            planes.len() == self.spectra.len() && planes.iter().all(|p| p.len() == size.0 * size.1);
+        if !fits || !shaped {
+            return Ok(false);
+        }
         let near = Near::new(planes, size, radius);
         let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(self.grid.px);
         let full_column = FftPlanner::<f32>::new().plan_fft_forward(self.grid.columns.length());

@@ -14,11 +14,11 @@ use crate::config::Config;
 use crate::control::{Cancel, Control};
 use crate::convolve::{engine, split_radii, Centre, Engine, Precision, Spread, Term};
 use crate::error::{Error, Fit, Result};
+use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
+use crate::kernel::{Extent, Kernel};
 
 /// The stage that needs the f64 engine's memory, in words.
 pub(crate) const DOUBLE_STAGE: &str = "convolving in f64 (the scene's range is beyond f32)";
-use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
-use crate::kernel::{Extent, Kernel};
 
 /// The kernel of an optical chain for one image size, with its spectrum.
 pub struct Plan {
@@ -245,10 +245,10 @@ impl Plan {
         // The engine keeps one split of the kernel: an application with
         // lamps holds it from choosing the split to the end of the spread,
         // so that a concurrent one with another radius cannot swap it.
-        let mut _split = None;
+        let mut _holding_split = None;
         let route = match route {
             Route::Lamps { radius, lamps } => {
-                _split = Some(self.split.lock().unwrap_or_else(PoisonError::into_inner));
+                _holding_split = Some(self.split.lock().unwrap_or_else(PoisonError::into_inner));
                 if self.single.split_near(
                     &kernel_planes(&self.kernel),
                     radius,
@@ -336,7 +336,7 @@ impl Plan {
 
     /// The plan, refusing with `error` (an [`Error::Memory`]) a scene that
     /// needs the f64 engine, which would not fit the memory limit.
-    pub fn refusing_double(mut self, error: Error) -> Plan {
+    pub(crate) fn refusing_double(mut self, error: Error) -> Plan {
         if let Error::Memory {
             needed,
             limit,
