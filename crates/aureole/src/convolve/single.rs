@@ -694,7 +694,24 @@ impl Engine for Convolver {
                     lamps: s.lamps,
                 })
                 .collect();
-            return self.convolve_all(&inputs, recycled, control);
+            // Planes that share a kernel plane go through the passes
+            // together, reading its spectrum once; planes with a kernel
+            // plane each go one at a time, holding one plane's spectra
+            // (66 MB at 4K) instead of all of theirs.
+            let mut kernel_planes: Vec<usize> = inputs.iter().map(|i| i.kernel_plane).collect();
+            kernel_planes.sort_unstable();
+            kernel_planes.dedup();
+            if kernel_planes.len() < inputs.len() {
+                return self.convolve_all(&inputs, recycled, control);
+            }
+            let mut planes = Vec::with_capacity(inputs.len());
+            let share = 1.0 / inputs.len() as f64;
+            for (i, input) in inputs.iter().enumerate() {
+                let mut part = control.part(i as f64 * share, (i + 1) as f64 * share);
+                let spare: Vec<Vec<f32>> = recycled.drain(..recycled.len().min(1)).collect();
+                planes.extend(self.convolve_all(std::slice::from_ref(input), spare, &mut part)?);
+            }
+            return Ok(planes);
         }
         let mut planes = Vec::with_capacity(outputs.len());
         let share = 1.0 / outputs.len() as f64;
