@@ -749,3 +749,47 @@ fn a_night_street_sets_its_lamps_apart_and_keeps_its_dark_pixels_within_one_perc
     assert_eq!(run(1).image.planes, run(3).image.planes);
     assert_eq!(run(2).image.planes, applied.image.planes);
 }
+
+#[test]
+fn a_luminance_night_street_through_a_coloured_kernel_keeps_its_dark_pixels_too() {
+    // Y = Σ w_k K_k ⊛ Y: each kernel plane takes the lamps apart.
+    let (w, h) = (240, 135);
+    let street = night_street(w, h);
+    let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
+    image.planes[0] = street.luminance();
+    let mut config = Config::default();
+    config.apply(
+        aureole::presets::find("camera-f8-7blade")
+            .unwrap()
+            .config()
+            .unwrap(),
+    );
+    let plan = Plan::for_image(&config, w, h, None).unwrap();
+    let kernel = plan.kernel();
+    assert_eq!(kernel.planes().len(), 3);
+    let options = ApplyOptions {
+        threshold: Some(0.0),
+        method: Method::Fft,
+        ..ApplyOptions::default()
+    };
+    let applied = plan.apply(&image, 1.0, &options, &mut |_| {}).unwrap();
+    assert!(
+        matches!(applied.arithmetic, Arithmetic::Lamps(_)),
+        "{:?}",
+        applied.arithmetic
+    );
+    let plane = &image.planes[0];
+    let mut worst = 0.0f64;
+    for i in (0..w * h).step_by(41).filter(|&i| plane[i] < 1.0) {
+        let (x, y) = ((i % w) as i64, (i / w) as i64);
+        let mut sum = 0.0f64;
+        for (k, weight) in aureole::image::REC709_LUMINANCE.iter().enumerate() {
+            for (p, &v) in plane.iter().enumerate() {
+                let (px, py) = ((p % w) as i64, (p / w) as i64);
+                sum += f64::from(*weight) * f64::from(v) * f64::from(kernel.at(k, x - px, py - y));
+            }
+        }
+        worst = worst.max((f64::from(applied.image.planes[0][i]) - sum).abs() / sum);
+    }
+    assert!(worst < 0.01, "dark pixels off by {:.3} %", 100.0 * worst);
+}
