@@ -31,8 +31,9 @@ struct Cumulative {
     step: f64,
     values: Vec<f64>,
     tail: f64,
-    /// Where the table ends.
+    /// Where the table ends, and 1 over it.
     end: f64,
+    inverse_end: f64,
 }
 
 impl Cumulative {
@@ -70,14 +71,16 @@ impl Cumulative {
             values,
             tail: mean_square / (2.0 * std::f64::consts::PI.powi(2)),
             end,
+            inverse_end: 1.0 / end,
         }
     }
 
-    /// G(u), odd in u.
-    fn at(&self, u: f64) -> f64 {
-        let (a, end) = (u.abs(), self.end);
-        let g = if a >= end {
-            self.values[self.values.len() - 1] + self.tail * (1.0 / end - 1.0 / a)
+    /// G(u), odd in u, given a = |u| and 1/a, which a caller with several
+    /// tables divides once for all of them.
+    #[inline]
+    fn at(&self, u: f64, a: f64, inverse: f64) -> f64 {
+        let g = if a >= self.end {
+            self.values[self.values.len() - 1] + self.tail * (self.inverse_end - inverse)
         } else {
             let position = a / self.step;
             let k = position as usize;
@@ -140,8 +143,10 @@ impl FarField {
             // the square's projection).
             let half = 0.5 * pitch * (a[0].abs() + a[1].abs());
             let (u1, u2) = ((across - half) * l_over_f, (across + half) * l_over_f);
+            let (a1, a2) = (u1.abs(), u2.abs());
+            let (i1, i2) = (1.0 / a1, 1.0 / a2);
             for (sum, table) in sums.iter_mut().zip(&self.tables[..planes]) {
-                let mean = (table.at(u2) - table.at(u1)) / (u2 - u1);
+                let mean = (table.at(u2, a2, i2) - table.at(u1, a1, i1)) / (u2 - u1);
                 *sum += l2 * along * along * mean;
             }
         }
