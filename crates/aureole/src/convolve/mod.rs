@@ -113,6 +113,11 @@ pub trait Engine: Send + Sync {
         Ok(false)
     }
 
+    /// Whether the kernel is split at `radius` already.
+    fn has_split(&self, _radius: usize) -> bool {
+        false
+    }
+
     /// Every output of `outputs`, written into the planes of `recycled`
     /// where there are some (memory already mapped); `control` hears the
     /// fraction done and may cancel.

@@ -637,8 +637,12 @@ impl Engine for Convolver {
         self.spectra.len()
     }
 
+    fn has_split(&self, radius: usize) -> bool {
+        self.split().is_some_and(|split| split.0.radius == radius)
+    }
+
     fn split_near(&self, planes: &[&[f32]], radius: usize, control: &mut Control) -> Result<bool> {
-        if self.split().is_some_and(|split| split.0.radius == radius) {
+        if self.has_split(radius) {
             return Ok(true);
         }
         let size = self.kernel_size;

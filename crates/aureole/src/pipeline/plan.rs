@@ -246,13 +246,19 @@ impl Plan {
         // lamps holds it from choosing the split to the end of the spread,
         // so that a concurrent one with another radius cannot swap it.
         let mut _holding_split = None;
+        // Splitting the kernel (the first frame with lamps) takes about as
+        // long as the spread: half of the progress.
+        let mut spread_from = 0.0;
         let route = match route {
             Route::Lamps { radius, lamps } => {
                 _holding_split = Some(self.split.lock().unwrap_or_else(PoisonError::into_inner));
+                if !self.single.has_split(radius) {
+                    spread_from = 0.5;
+                }
                 if self.single.split_near(
                     &kernel_planes(&self.kernel),
                     radius,
-                    &mut control.part(0.0, 0.0),
+                    &mut control.part(0.0, spread_from),
                 )? {
                     Route::Lamps { radius, lamps }
                 } else {
@@ -302,7 +308,7 @@ impl Plan {
             } else {
                 self.single.as_ref()
             };
-            engine.spread(&spreads, recycled, control)?
+            engine.spread(&spreads, recycled, &mut control.part(spread_from, 1.0))?
         };
         control.report(1.0);
         let energy_out = output.total_luminance();
