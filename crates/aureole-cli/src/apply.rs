@@ -8,6 +8,7 @@ use aureole::{Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, Method, Se
 use aureole_io::compression::Compression;
 use aureole_io::kernel::read_kernel;
 use aureole_io::limits::{default_memory_limit, Limits};
+use aureole_io::write::LinearOptions;
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
@@ -238,7 +239,7 @@ struct Read<'a> {
 }
 
 /// A frame through the camera, waiting to be written.
-struct Result_<'a> {
+struct Convolved<'a> {
     read: Read<'a>,
     applied: Applied,
     kernel: (usize, usize),
@@ -256,7 +257,7 @@ impl Run<'_> {
         let mut failures = Vec::new();
         std::thread::scope(|scope| {
             let (read_tx, reads) = mpsc::sync_channel::<Result<Read, Failure>>(0);
-            let (write_tx, writes) = mpsc::sync_channel::<Result_>(0);
+            let (write_tx, writes) = mpsc::sync_channel::<Convolved>(0);
             let (done_tx, done) = mpsc::channel::<Result<Vec<Vec<f32>>, Failure>>();
             scope.spawn(move || {
                 for job in jobs {
@@ -328,7 +329,7 @@ impl Run<'_> {
         })
     }
 
-    fn apply<'j>(&self, session: &mut Session, read: Read<'j>) -> Result<Result_<'j>, Failure> {
+    fn apply<'j>(&self, session: &mut Session, read: Read<'j>) -> Result<Convolved<'j>, Failure> {
         let args = self.args;
         let job = read.job;
         let options = ApplyOptions {
@@ -365,7 +366,7 @@ impl Run<'_> {
         let kernel = session
             .plan()
             .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));
-        Ok(Result_ {
+        Ok(Convolved {
             read,
             applied,
             kernel,
@@ -374,9 +375,9 @@ impl Run<'_> {
     }
 
     /// Writes a result; hands its planes back for a later frame.
-    fn write(&self, result: Result_) -> Result<Vec<Vec<f32>>, Failure> {
+    fn write(&self, result: Convolved) -> Result<Vec<Vec<f32>>, Failure> {
         let (args, quiet) = (self.args, self.quiet);
-        let Result_ {
+        let Convolved {
             read,
             applied,
             kernel,
@@ -389,7 +390,7 @@ impl Run<'_> {
             &job.output,
             image,
             read.frame.scale(),
-            &output::Linear {
+            LinearOptions {
                 half: args.half,
                 compression: args.compression.or(read.compression),
             },

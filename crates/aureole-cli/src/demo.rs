@@ -61,7 +61,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         &args.output,
         &applied.image,
         1.0,
-        &output::Linear::default(),
+        LinearOptions::default(),
         &args.display,
         quiet,
         &progress,

@@ -6,7 +6,6 @@ use std::path::Path;
 use anyhow::anyhow;
 use aureole::Image;
 use aureole_io::atomic::folder_of;
-use aureole_io::compression::Compression;
 use aureole_io::formats::Note;
 use aureole_io::write::{output_format, write_image, LinearOptions, WriteOptions, Written};
 
@@ -72,15 +71,6 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// How linear output is stored.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Linear {
-    /// EXR: half floats.
-    pub half: bool,
-    /// EXR: the compression (`None`: ZIP).
-    pub compression: Option<Compression>,
-}
-
 /// Writes `image` (`scale` cd/m² per unit) to `path`; returns a
 /// description of the display exposure when it made a picture. Notes go
 /// out through `progress`.
@@ -88,16 +78,13 @@ pub fn write(
     path: &Path,
     image: &Image,
     scale: f64,
-    linear: &Linear,
+    linear: LinearOptions,
     display: &DisplayArgs,
     quiet: bool,
     progress: &Progress,
 ) -> Result<Option<String>, Failure> {
     let options = WriteOptions {
-        linear: LinearOptions {
-            half: linear.half,
-            compression: linear.compression,
-        },
+        linear,
         display: display.options(),
         depth: display.depth(),
     };

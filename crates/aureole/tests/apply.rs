@@ -176,15 +176,14 @@ fn bloom_config(epsilon: f64, beta: f64, radius: f64) -> Config {
     }
 }
 
-fn paper_config() -> Config {
+fn preset_config(name: &str) -> Config {
     let mut config = Config::default();
-    config.apply(
-        aureole::presets::find("paper-fig5-both")
-            .unwrap()
-            .config()
-            .unwrap(),
-    );
+    config.apply(aureole::presets::find(name).unwrap().config().unwrap());
     config
+}
+
+fn paper_config() -> Config {
+    preset_config("paper-fig5-both")
 }
 
 #[test]
@@ -681,14 +680,7 @@ fn night_street(w: usize, h: usize) -> Image {
 fn a_night_street_sets_its_lamps_apart_and_keeps_its_dark_pixels_within_one_percent() {
     let (w, h) = (240, 135);
     let image = night_street(w, h);
-    let mut config = Config::default();
-    config.apply(
-        aureole::presets::find("camera-f8-7blade")
-            .unwrap()
-            .config()
-            .unwrap(),
-    );
-    let plan = Plan::for_image(&config, w, h, None).unwrap();
+    let plan = Plan::for_image(&preset_config("camera-f8-7blade"), w, h, None).unwrap();
     let options = ApplyOptions {
         threshold: Some(0.0),
         method: Method::Fft,
@@ -757,14 +749,7 @@ fn a_luminance_night_street_through_a_coloured_kernel_keeps_its_dark_pixels_too(
     let street = night_street(w, h);
     let mut image = Image::filled(w, h, Layout::Luminance, 0.0);
     image.planes[0] = street.luminance();
-    let mut config = Config::default();
-    config.apply(
-        aureole::presets::find("camera-f8-7blade")
-            .unwrap()
-            .config()
-            .unwrap(),
-    );
-    let plan = Plan::for_image(&config, w, h, None).unwrap();
+    let plan = Plan::for_image(&preset_config("camera-f8-7blade"), w, h, None).unwrap();
     let kernel = plan.kernel();
     assert_eq!(kernel.planes().len(), 3);
     let options = ApplyOptions {

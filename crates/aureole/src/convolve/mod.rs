@@ -15,7 +15,6 @@ mod simd;
 pub mod single;
 
 pub use grid::{fast_size, padded_size};
-pub use near::split_radii;
 
 use crate::control::Control;
 use crate::error::Result;

@@ -86,6 +86,13 @@ struct Input<'a> {
     lamps: &'a [usize],
 }
 
+impl Input<'_> {
+    /// The light of pixel `i` that is spread.
+    fn bright(&self, i: usize) -> f32 {
+        self.plane[i] * self.fractions.map_or(1.0, |f| f[i])
+    }
+}
+
 /// The lamps of row `y` of a plane `w` wide, from ascending indices.
 fn lamps_in_row(lamps: &[usize], y: usize, w: usize) -> &[usize] {
     let first = lamps.partition_point(|&i| i < y * w);
@@ -254,11 +261,10 @@ impl Convolver {
                 out.resize(self.width * h, 0.0);
                 self.inverse_rows(input, results, &mut out, strips, &control.cancel());
                 if let (Some(near), false) = (near, input.lamps.is_empty()) {
-                    let bright = |i: usize| input.plane[i] * input.fractions.map_or(1.0, |f| f[i]);
                     near.add(
                         input.kernel_plane,
                         input.lamps,
-                        &bright,
+                        &|i| input.bright(i),
                         &mut out,
                         self.width,
                         &control.cancel(),
@@ -334,7 +340,7 @@ impl Convolver {
             .map(|y| {
                 let mut padded = self.row_fft.make_input_vec();
                 for &i in lamps_in_row(input.lamps, y, w) {
-                    padded[i % w] = input.plane[i] * input.fractions.map_or(1.0, |f| f[i]);
+                    padded[i % w] = input.bright(i);
                 }
                 let mut spectrum = self.row_fft.make_output_vec();
                 let _ = self.row_fft.process(&mut padded, &mut spectrum);

@@ -198,6 +198,24 @@ impl Kernel {
     pub fn sum(&self, plane: usize) -> f64 {
         self.planes[plane].iter().map(|&v| f64::from(v)).sum()
     }
+
+    /// The light beyond the (2r + 1)² window around the centre, the most of
+    /// any plane; `None` when the window does not fit in the kernel.
+    pub fn beyond(&self, r: usize) -> Option<f64> {
+        let (w, h) = (self.width, self.height);
+        let (cx, cy) = self.centre();
+        if r > cx.min(cy).min(w - 1 - cx).min(h - 1 - cy) {
+            return None;
+        }
+        let beyond = (0..self.planes.len()).map(|c| {
+            let inside: f64 = (cy - r..=cy + r)
+                .flat_map(|j| &self.planes[c][j * w + cx - r..=j * w + cx + r])
+                .map(|&v| f64::from(v))
+                .sum();
+            (self.sum(c) - inside).max(0.0)
+        });
+        Some(beyond.fold(0.0, f64::max))
+    }
 }
 
 /// Builds the kernel of the optical chain `effects`, in order, at `extent`;

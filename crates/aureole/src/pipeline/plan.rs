@@ -12,13 +12,34 @@ use super::threshold::Threshold;
 use super::{cost, precision};
 use crate::config::Config;
 use crate::control::{Cancel, Control};
-use crate::convolve::{engine, split_radii, Centre, Engine, Precision, Spread, Term};
+use crate::convolve::{engine, Centre, Engine, Precision, Spread, Term};
 use crate::error::{Error, Fit, Result};
 use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
 use crate::kernel::{Extent, Kernel};
 
-/// The stage that needs the f64 engine's memory, in words.
-pub(crate) const DOUBLE_STAGE: &str = "convolving in f64 (the scene's range is beyond f32)";
+/// Why a plan does not build its f64 engine: it would need more memory
+/// than the limit (a session's estimate).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct DoubleRefused {
+    pub needed: u64,
+    pub limit: u64,
+    /// The largest kernel with which it would fit.
+    pub fits: Option<Fit>,
+    /// Whether the kernel is built here rather than given.
+    pub built: bool,
+}
+
+impl DoubleRefused {
+    fn error(self) -> Error {
+        Error::Memory {
+            needed: self.needed,
+            stage: "convolving in f64 (the scene's range is beyond f32)",
+            limit: self.limit,
+            fits: self.fits,
+            built: self.built,
+        }
+    }
+}
 
 /// The kernel of an optical chain for one image size, with its spectrum.
 pub struct Plan {
@@ -32,13 +53,13 @@ pub struct Plan {
     /// The f64 engine, built the first time a scene's range needs it.
     double: OnceLock<Box<dyn Engine>>,
     /// Where the kernel can be split for lamps, and the light beyond
-    /// ([`split_radii`]), found the first time a scene has lamps.
+    /// ([`precision::split_radii`]), found the first time a scene has
+    /// lamps.
     near: OnceLock<Vec<(usize, f64)>>,
     /// Held by an application with lamps while it uses the engine's split.
     split: Mutex<()>,
-    /// Instead of building the f64 engine, which would not fit the memory
-    /// limit: the fields of the [`Error::Memory`] to give.
-    double_refused: Option<(u64, u64, Option<Fit>, bool)>,
+    /// Set when the f64 engine would not fit the memory limit.
+    double_refused: Option<DoubleRefused>,
 }
 
 impl Plan {
@@ -236,7 +257,11 @@ impl Plan {
             let budget = 2.0 * cost::fft(padded, size, convolutions);
             precision::route(
                 &scene,
-                || self.near.get_or_init(|| self.split_radii()).clone(),
+                || {
+                    self.near
+                        .get_or_init(|| precision::split_radii(&self.kernel))
+                        .clone()
+                },
                 |radius| cost::lamps_within(budget, radius, convolutions),
             )
         } else {
@@ -332,27 +357,10 @@ impl Plan {
         })
     }
 
-    /// Where the kernel can be split for lamps ([`split_radii`]).
-    fn split_radii(&self) -> Vec<(usize, f64)> {
-        split_radii(
-            &kernel_planes(&self.kernel),
-            (self.kernel.width(), self.kernel.height()),
-        )
-    }
-
-    /// The plan, refusing with `error` (an [`Error::Memory`]) a scene that
-    /// needs the f64 engine, which would not fit the memory limit.
-    pub(crate) fn refusing_double(mut self, error: Error) -> Plan {
-        if let Error::Memory {
-            needed,
-            limit,
-            fits,
-            built,
-            ..
-        } = error
-        {
-            self.double_refused = Some((needed, limit, fits, built));
-        }
+    /// The plan, refusing a scene that needs the f64 engine, which would
+    /// not fit the memory limit.
+    pub(crate) fn refusing_double(mut self, refused: DoubleRefused) -> Plan {
+        self.double_refused = Some(refused);
         self
     }
 
@@ -361,14 +369,8 @@ impl Plan {
         if let Some(built) = self.double.get() {
             return Ok(built.as_ref());
         }
-        if let Some((needed, limit, fits, built)) = self.double_refused {
-            return Err(Error::Memory {
-                needed,
-                stage: DOUBLE_STAGE,
-                limit,
-                fits,
-                built,
-            });
+        if let Some(refused) = self.double_refused {
+            return Err(refused.error());
         }
         let built = engine(
             Precision::Double,

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use super::threshold::Threshold;
 use crate::image::PixelLuminance;
+use crate::kernel::Kernel;
 
 /// The share of the dark level the round-off may reach before f64 is used:
 /// a tenth of the 1 % that a user could see.
@@ -99,7 +100,7 @@ pub(super) fn route(
         }
         below += squares;
     }
-    let count: usize = histogram[first.min(BINS)..].iter().map(|(n, _)| n).sum();
+    let count: usize = histogram[first..].iter().map(|(n, _)| n).sum();
     if count > max_lamps(radius) {
         return Route::Double;
     }
@@ -162,4 +163,14 @@ fn dark_level(luminance: &PixelLuminance, pixels: usize) -> Option<f64> {
     let at = sample.len() / 100;
     let (_, dark, _) = sample.select_nth_unstable_by(at, f32::total_cmp);
     Some(f64::from(*dark))
+}
+
+/// The near windows `kernel` can be split at, smallest first: radii of 4,
+/// 8, … 128 pixels that fit inside it, each with the light the kernel moves
+/// beyond it.
+pub(super) fn split_radii(kernel: &Kernel) -> Vec<(usize, f64)> {
+    [4usize, 8, 16, 32, 64, 128]
+        .into_iter()
+        .map_while(|r| Some((r, kernel.beyond(r)?)))
+        .collect()
 }

@@ -5,7 +5,7 @@
 
 use super::cost;
 use super::options::{Applied, ApplyOptions};
-use super::plan::Plan;
+use super::plan::{DoubleRefused, Plan};
 use super::threshold::Threshold;
 use crate::config::Config;
 use crate::control::{Cancel, Control};
@@ -13,7 +13,6 @@ use crate::convolve::padded_size;
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::image::{Layout, PixelLuminance};
-use crate::kernel::Extent;
 use crate::kernel::Kernel;
 use crate::memory::Workload;
 use crate::optics::Effect;
@@ -278,24 +277,11 @@ impl Session {
     pub fn costs(&self, frame: &Frame, options: &ApplyOptions) -> Result<Costs> {
         let image = frame.image();
         let size = (image.width, image.height);
-        let (kernel, kernel_planes, threshold) = match &self.lens {
-            Lens::Config(config) => {
-                let extent = Extent::for_image_within(size.0, size.1, self.max_extent)?;
-                let planes = config.effects.iter().map(Effect::planes).max().unwrap_or(1);
-                ((extent.width, extent.height), planes, config.threshold)
-            }
-            Lens::Kernel(kernel) => {
-                let plan = self.plan.as_ref().map(Plan::kernel);
-                let kernel = kernel.as_ref().or(plan).ok_or(Error::NoEffect)?;
-                (
-                    (kernel.width(), kernel.height()),
-                    kernel.planes().len(),
-                    0.0,
-                )
-            }
-        };
+        let (workload, _) = self.workload(image)?;
+        let (kernel, kernel_planes) = (workload.kernel, workload.kernel_planes);
+        let default = self.config().map_or(0.0, |config| config.threshold);
         let threshold = Threshold {
-            level: options.threshold.unwrap_or(threshold) / frame.scale(),
+            level: options.threshold.unwrap_or(default) / frame.scale(),
             knee: options.knee,
         };
         let luminance = PixelLuminance::of(image);
@@ -395,17 +381,11 @@ impl Session {
         }
     }
 
-    /// Refuses a frame whose run would need more than the memory limit,
-    /// with the estimate and the largest kernel that would fit; else the
-    /// error for a frame whose range would need the f64 engine beyond the
-    /// limit, if one would.
-    fn check_memory(&self, image: &Image) -> Result<Option<Error>> {
-        let Some(limit) = self.memory_limit else {
-            return Ok(None);
-        };
-        let planes = image.planes.len();
-        let alpha = image.alpha.is_some();
-        let (workload, effects, start): (Workload, &[Effect], (usize, usize)) = match &self.lens {
+    /// What a run on `image` works on, and the effects it builds (none for
+    /// a kernel given ready-made, held by the session or its plan).
+    fn workload(&self, image: &Image) -> Result<(Workload, &[Effect])> {
+        let (planes, alpha) = (image.planes.len(), image.alpha.is_some());
+        match &self.lens {
             Lens::Config(config) => {
                 let workload = Workload::of_config(
                     config,
@@ -415,38 +395,48 @@ impl Session {
                     alpha,
                     self.max_extent,
                 )?;
-                (
-                    workload,
-                    &config.effects,
-                    self.max_extent.unwrap_or(workload.kernel),
-                )
+                Ok((workload, &config.effects))
             }
             Lens::Kernel(kernel) => {
-                let (kernel, kernel_planes) = kernel
-                    .as_ref()
-                    .map_or(((1, 1), 1), |k| ((k.width(), k.height()), k.planes().len()));
+                let plan = self.plan.as_ref().map(Plan::kernel);
+                let kernel = kernel.as_ref().or(plan).ok_or(Error::NoEffect)?;
                 let workload = Workload {
                     width: image.width,
                     height: image.height,
                     planes,
                     alpha,
-                    kernel,
-                    kernel_planes,
+                    kernel: (kernel.width(), kernel.height()),
+                    kernel_planes: kernel.planes().len(),
                 };
-                (workload, &[], kernel)
+                Ok((workload, &[]))
             }
+        }
+    }
+
+    /// Refuses a frame whose run would need more than the memory limit,
+    /// with the estimate and the largest kernel that would fit; else says
+    /// whether the f64 engine, which a scene's range may need, would not.
+    fn check_memory(&self, image: &Image) -> Result<Option<DoubleRefused>> {
+        let Some(limit) = self.memory_limit else {
+            return Ok(None);
+        };
+        let (workload, effects) = self.workload(image)?;
+        // A kernel built here may be capped from the largest asked for.
+        let start = match &self.lens {
+            Lens::Config(_) => self.max_extent.unwrap_or(workload.kernel),
+            Lens::Kernel(_) => workload.kernel,
         };
         let mut needed = workload.estimate(effects);
-        let frame = (image.width * image.height * (planes + usize::from(alpha)) * 4) as u64;
+        let planes = workload.planes + usize::from(workload.alpha);
+        let frame = (image.width * image.height * planes * 4) as u64;
         let in_flight = self.in_flight as u64 * frame;
         needed.bytes += in_flight;
         // What is left for the run once the frames in flight are held.
         let limit_left = limit.saturating_sub(in_flight);
         if needed.bytes <= limit {
             let double = needed.bytes + workload.double_extra();
-            return Ok((double > limit).then_some(Error::Memory {
+            return Ok((double > limit).then_some(DoubleRefused {
                 needed: double,
-                stage: super::plan::DOUBLE_STAGE,
                 limit,
                 fits: workload.largest_fitting(
                     effects,

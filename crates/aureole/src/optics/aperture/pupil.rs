@@ -196,37 +196,23 @@ impl Pupil {
         let mut sum = [0.0, 0.0];
         for element in &self.elements {
             let a = match &element.shape {
-                Shape::Disc { centre, radius } => {
-                    let x = q2.sqrt() * radius;
-                    let magnitude = if x < 1e-6 {
-                        element.area
-                    } else {
-                        TAU * radius * radius * libm::j1(x) / x
-                    };
-                    phase(magnitude, q, *centre)
-                }
+                Shape::Disc { centre, radius } => disc(element.area, *centre, *radius, q, q2),
                 Shape::Polygon {
                     edges,
                     centroid,
                     reach,
-                } => {
-                    if q2.sqrt() * reach < 1e-4 {
-                        // The edge sum cancels to round-off here.
-                        phase(element.area, q, *centroid)
-                    } else {
-                        let mut s = [0.0, 0.0];
-                        for e in edges {
-                            let weight = e.length
-                                * (q[0] * e.normal[0] + q[1] * e.normal[1])
-                                * sinc(0.5 * (q[0] * e.delta[0] + q[1] * e.delta[1]));
-                            let (sin, cos) = libm::sincos(q[0] * e.middle[0] + q[1] * e.middle[1]);
-                            s[0] += weight * cos;
-                            s[1] -= weight * sin;
-                        }
-                        // Multiply by i/|q|².
-                        [-s[1] / q2, s[0] / q2]
+                } => polygon(element.area, *centroid, *reach, q, q2, || {
+                    let mut s = [0.0, 0.0];
+                    for e in edges {
+                        let weight = e.length
+                            * (q[0] * e.normal[0] + q[1] * e.normal[1])
+                            * sinc(0.5 * (q[0] * e.delta[0] + q[1] * e.delta[1]));
+                        let (sin, cos) = libm::sincos(q[0] * e.middle[0] + q[1] * e.middle[1]);
+                        s[0] += weight * cos;
+                        s[1] -= weight * sin;
                     }
-                }
+                    s
+                }),
             };
             sum[0] += element.sign * a[0];
             sum[1] += element.sign * a[1];
@@ -310,22 +296,22 @@ impl Pupil {
         let (mut sums_re, mut sums_im) = (vec![0.0; points * count], vec![0.0; points * count]);
         let mut edge_index = 0;
         for element in &self.elements {
-            let Shape::Polygon {
-                edges,
-                centroid,
-                reach,
-            } = &element.shape
-            else {
-                let single = Pupil {
-                    elements: vec![element.clone()],
-                };
-                for (at, t) in total.iter_mut().enumerate() {
-                    let (i, k) = (at / count, at % count);
-                    let a = single.amplitude([nu_x[i] + dnu_x[k], nu_y + dnu_y[k]]);
-                    t[0] += a[0];
-                    t[1] += a[1];
+            let (edges, centroid, reach) = match &element.shape {
+                Shape::Polygon {
+                    edges,
+                    centroid,
+                    reach,
+                } => (edges, *centroid, *reach),
+                Shape::Disc { centre, radius } => {
+                    for (at, t) in total.iter_mut().enumerate() {
+                        let q = q(at / count, at % count);
+                        let q2 = q[0] * q[0] + q[1] * q[1];
+                        let a = disc(element.area, *centre, *radius, q, q2);
+                        t[0] += element.sign * a[0];
+                        t[1] += element.sign * a[1];
+                    }
+                    continue;
                 }
-                continue;
             };
             sums_re.iter_mut().for_each(|s| *s = 0.0);
             sums_im.iter_mut().for_each(|s| *s = 0.0);
@@ -360,13 +346,7 @@ impl Pupil {
             for (at, (t, (s_re, s_im))) in total.iter_mut().zip(sums).enumerate() {
                 let q = q(at / count, at % count);
                 let q2 = q[0] * q[0] + q[1] * q[1];
-                let a = if q2.sqrt() * reach < 1e-4 {
-                    // The edge sum cancels to round-off here.
-                    phase(element.area, q, *centroid)
-                } else {
-                    // Multiply by i/|q|².
-                    [-s_im / q2, s_re / q2]
-                };
+                let a = polygon(element.area, centroid, reach, q, q2, || [*s_re, *s_im]);
                 t[0] += element.sign * a[0];
                 t[1] += element.sign * a[1];
             }
@@ -410,6 +390,37 @@ fn edge_phases(e: &Edge, qx: f64, qy: f64) -> EdgePhases {
     );
     let ((sm, cm), (sd, cd)) = (libm::sincos(m), libm::sincos(d));
     ([cm, -sm], [cd, sd])
+}
+
+/// Â of a disc of `radius` at `centre` (its `area`), at q, |q|² = `q2`.
+fn disc(area: f64, centre: [f64; 2], radius: f64, q: [f64; 2], q2: f64) -> Amplitude {
+    let x = q2.sqrt() * radius;
+    let magnitude = if x < 1e-6 {
+        area
+    } else {
+        TAU * radius * radius * libm::j1(x) / x
+    };
+    phase(magnitude, q, centre)
+}
+
+/// Â of a polygon (its `area`, `centroid`, `reach`) at q, |q|² = `q2`,
+/// from its edge sum s = Σ L (q·n̂) e^(−iq·m) sinc(q·e/2): i·s/|q|², or
+/// near q = 0, where the edge sum cancels to round-off, the area at the
+/// centroid.
+fn polygon(
+    area: f64,
+    centroid: [f64; 2],
+    reach: f64,
+    q: [f64; 2],
+    q2: f64,
+    edge_sum: impl FnOnce() -> [f64; 2],
+) -> Amplitude {
+    if q2.sqrt() * reach < 1e-4 {
+        phase(area, q, centroid)
+    } else {
+        let s = edge_sum();
+        [-s[1] / q2, s[0] / q2]
+    }
 }
 
 /// magnitude · e^(−i q·c).
