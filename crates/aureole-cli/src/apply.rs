@@ -6,8 +6,10 @@ use std::time::Instant;
 
 use aureole::{Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, Method, Session};
 use aureole_io::compression::Compression;
+use aureole_io::formats::{Original, Samples};
 use aureole_io::kernel::read_kernel;
 use aureole_io::limits::{default_memory_limit, Limits};
+use aureole_io::read::Choice;
 use aureole_io::write::LinearOptions;
 use clap::ArgMatches;
 
@@ -94,9 +96,26 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "auto")]
     method: MethodArg,
 
-    /// Store EXR output as half floats instead of float32.
-    #[arg(long)]
+    /// Store EXR output as half floats. Default: each channel as the input
+    /// EXR stores it, else float32.
+    #[arg(long, conflicts_with = "float")]
     half: bool,
+
+    /// Store EXR output as float32 (see --half).
+    #[arg(long)]
+    float: bool,
+
+    /// The layer of a multi-layer EXR to spread, by its name (the channel
+    /// prefix: ViewLayer.Combined for ViewLayer.Combined.R …). Default:
+    /// the unprefixed R, G, B, else the only colour layer, else Blender's
+    /// Combined. The other layers go back into an EXR output unchanged.
+    #[arg(long, value_name = "NAME")]
+    layer: Option<String>,
+
+    /// The part of a multi-part EXR to read the layer from, by index (from
+    /// 0) or name.
+    #[arg(long, value_name = "PART")]
+    part: Option<String>,
 
     /// EXR output compression: none, rle, zips, zip, piz, pxr24, b44,
     /// b44a, dwaa or dwab (the last four lossy). Default: the input's, when
@@ -233,7 +252,7 @@ struct Run<'a> {
 struct Read<'a> {
     job: &'a batch::Job,
     frame: Frame,
-    compression: Option<Compression>,
+    original: Original,
     /// Seconds it took to read.
     reading: f64,
 }
@@ -320,11 +339,15 @@ impl Run<'_> {
         let limits = Limits {
             max_bytes: self.limit,
         };
-        let (frame, compression) = input::read(&job.input, &options, limits, self.quiet)?;
+        let choice = Choice {
+            layer: self.args.layer.clone(),
+            part: self.args.part.clone(),
+        };
+        let (frame, original) = input::read(&job.input, &options, (limits, &choice), self.quiet)?;
         Ok(Read {
             job,
             frame,
-            compression,
+            original,
             reading: start.elapsed().as_secs_f64(),
         })
     }
@@ -386,16 +409,21 @@ impl Run<'_> {
         let start = Instant::now();
         let job = read.job;
         let image = &applied.image;
+        let samples = match (args.half, args.float) {
+            (true, _) => Some(Samples::Half),
+            (_, true) => Some(Samples::Float),
+            _ => None,
+        };
+        let linear = LinearOptions {
+            samples,
+            compression: args.compression,
+        };
         let shown = output::write(
             &job.output,
             image,
             read.frame.scale(),
-            LinearOptions {
-                half: args.half,
-                compression: args.compression.or(read.compression),
-            },
+            (linear, read.original),
             &args.display,
-            quiet,
             &self.progress,
         )?;
         if !quiet {

@@ -61,9 +61,8 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         &args.output,
         &applied.image,
         1.0,
-        LinearOptions::default(),
+        (LinearOptions::default(), Default::default()),
         &args.display,
-        quiet,
         &progress,
     )?;
     progress.finish();

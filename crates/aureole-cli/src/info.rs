@@ -21,6 +21,14 @@ pub struct Args {
     /// cd/m² per file unit (default: whiteLuminance, else 1).
     #[arg(long, value_name = "X", value_parser = parse_positive)]
     input_scale: Option<f64>,
+
+    /// The layer of a multi-layer EXR to describe (as `apply --layer`).
+    #[arg(long, value_name = "NAME")]
+    layer: Option<String>,
+
+    /// The part of a multi-part EXR (as `apply --part`).
+    #[arg(long, value_name = "PART")]
+    part: Option<String>,
 }
 
 pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
@@ -31,8 +39,13 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     let limits = Limits {
         max_bytes: default_memory_limit(),
     };
-    let mut loaded = aureole_io::read::read_image(&args.input, limits)?;
+    let choice = aureole_io::read::Choice {
+        layer: args.layer.clone(),
+        part: args.part.clone(),
+    };
+    let mut loaded = aureole_io::read::read_image_with(&args.input, limits, &choice)?;
     let format = loaded.format;
+    let structure = loaded.original.describe();
     // info describes NaN and infinite samples (counted as 0) instead of
     // refusing the file.
     let mut non_finite = 0;
@@ -73,6 +86,10 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
             ""
         }
     );
+    for line in structure {
+        text += &line;
+        text.push('\n');
+    }
     text += &format!(
         "scale: {} cd/m² per unit ({})\n",
         frame.scale(),

@@ -5,22 +5,23 @@
 use std::path::Path;
 
 use aureole::{Frame, FrameOptions, ScaleSource};
-use aureole_io::compression::Compression;
+use aureole_io::formats::Original;
 use aureole_io::limits::Limits;
-use aureole_io::read::{read_image, Loaded};
+use aureole_io::read::{read_image_with, Choice, Loaded};
 
 use crate::Failure;
 
-/// Reads `path` as a frame, saying what the user should know about it and
-/// the luminance scale it takes; with its compression, for an EXR.
+/// Reads `path` (the layer `choice` names) as a frame, saying what the
+/// user should know about it and the luminance scale it takes; with the
+/// rest of the file, for writing the result back into it.
 pub fn read(
     path: &Path,
     options: &FrameOptions,
-    limits: Limits,
+    (limits, choice): (Limits, &Choice),
     quiet: bool,
-) -> Result<(Frame, Option<Compression>), Failure> {
-    let loaded = read_image(path, limits)?;
-    let compression = loaded.compression;
+) -> Result<(Frame, Original), Failure> {
+    let mut loaded = read_image_with(path, limits, choice)?;
+    let original = std::mem::take(&mut loaded.original);
     let frame = read_loaded(path, loaded, options, quiet)?;
     if !quiet {
         eprintln!(
@@ -30,7 +31,7 @@ pub fn read(
             scale_source(frame.scale_source())
         );
     }
-    Ok((frame, compression))
+    Ok((frame, original))
 }
 
 /// A file read from `path` as a frame, with its notes and warnings.

@@ -6,8 +6,8 @@ use std::path::Path;
 use anyhow::anyhow;
 use aureole::Image;
 use aureole_io::atomic::folder_of;
-use aureole_io::formats::Note;
-use aureole_io::write::{output_format, write_image, LinearOptions, WriteOptions, Written};
+use aureole_io::formats::{Note, Original};
+use aureole_io::write::{output_format, write_image_into, LinearOptions, WriteOptions, Written};
 
 use crate::display_args::DisplayArgs;
 use crate::progress::Progress;
@@ -71,16 +71,15 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// Writes `image` (`scale` cd/m² per unit) to `path`; returns a
-/// description of the display exposure when it made a picture. Notes go
-/// out through `progress`.
+/// Writes `image` (`scale` cd/m² per unit) to `path`, an EXR into the
+/// `original` it was read from; returns a description of the display
+/// exposure when it made a picture. Notes go out through `progress`.
 pub fn write(
     path: &Path,
     image: &Image,
     scale: f64,
-    linear: LinearOptions,
+    (linear, original): (LinearOptions, Original),
     display: &DisplayArgs,
-    quiet: bool,
     progress: &Progress,
 ) -> Result<Option<String>, Failure> {
     let options = WriteOptions {
@@ -88,19 +87,17 @@ pub fn write(
         display: display.options(),
         depth: display.depth(),
     };
-    match crate::interrupt::writing(|| write_image(path, image, scale, &options))? {
+    match crate::interrupt::writing(|| write_image_into(path, image, scale, &options, original))? {
         Written::Picture { white, ev100 } => {
             Ok(Some(format!("white {white:.4} cd/m² (EV100 {ev100:.1})")))
         }
         Written::Linear(notes) => {
             for note in notes {
-                if !quiet {
-                    let hint = match note {
-                        Note::ClampedToHalf { .. } => "; drop --half to keep them",
-                        _ => "",
-                    };
-                    progress.println(&format!("aureole: note: {}: {note}{hint}", path.display()));
-                }
+                let hint = match note {
+                    Note::ClampedToHalf { .. } => "; --float keeps them",
+                    _ => "",
+                };
+                progress.note(&format!("aureole: note: {}: {note}{hint}", path.display()));
             }
             Ok(None)
         }

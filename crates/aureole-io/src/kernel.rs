@@ -34,10 +34,11 @@ pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
                 alpha: None,
                 white_luminance: None,
                 primaries: None,
-                half: false,
-                compression: crate::compression::Compression::Zip,
+                samples: Some(crate::formats::Samples::Float),
+                compression: None,
+                original: Default::default(),
             };
-            encode(path, &planes).map(drop)
+            encode(path, planes).map(drop)
         }
         (KernelStorage::LogPicture, Encoder::Picture(encoding)) => picture::encode_samples(
             path,

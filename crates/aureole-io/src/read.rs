@@ -8,7 +8,7 @@ use aureole::memory::format_bytes;
 
 use crate::compression::Compression;
 use crate::error::{Error, Result};
-use crate::formats::{by_content, readable};
+use crate::formats::{by_content, readable, Original};
 use crate::limits::Limits;
 
 /// A decoded file and what the user should know about how it was read.
@@ -26,11 +26,37 @@ pub struct Loaded {
     /// The file's compression, for an EXR (a result is written with the
     /// same unless told otherwise).
     pub compression: Option<Compression>,
+    /// The rest of the file (an EXR's other layers, parts, windows and
+    /// attributes), for writing the result back into it.
+    pub original: Original,
+}
+
+/// Which of a file's layers and parts to read (OpenEXR); by default the
+/// beauty, as compositors find it.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Choice {
+    /// The layer, by its channel-name prefix (`ViewLayer.Combined` for
+    /// `ViewLayer.Combined.R`, …).
+    pub layer: Option<String>,
+    /// The part, by its index (from 0) or name.
+    pub part: Option<String>,
+}
+
+impl Choice {
+    /// Whether anything is chosen.
+    pub fn is_some(&self) -> bool {
+        self.layer.is_some() || self.part.is_some()
+    }
 }
 
 /// Reads the image at `path`, recognising the format by its content, and
 /// refusing a file whose decoding would need more than `limits` allows.
 pub fn read_image(path: &Path, limits: Limits) -> Result<Loaded> {
+    read_image_with(path, limits, &Choice::default())
+}
+
+/// As [`read_image`], reading the layer and part `choice` names.
+pub fn read_image_with(path: &Path, limits: Limits, choice: &Choice) -> Result<Loaded> {
     let metadata = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     // Every format we read stores at least a byte per pixel's worth of
     // data for its planes, so a file larger than the bound cannot fit.
@@ -45,7 +71,7 @@ pub fn read_image(path: &Path, limits: Limits) -> Result<Loaded> {
         });
     }
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    decode_image(&bytes, limits).map_err(|message| Error::Decode {
+    decode_image_with(&bytes, limits, choice).map_err(|message| Error::Decode {
         path: path.to_path_buf(),
         message,
     })
@@ -54,16 +80,30 @@ pub fn read_image(path: &Path, limits: Limits) -> Result<Loaded> {
 /// Decodes an image file held in memory, recognising the format by its
 /// content. The error is one line saying what is wrong.
 pub fn decode_image(bytes: &[u8], limits: Limits) -> std::result::Result<Loaded, String> {
+    decode_image_with(bytes, limits, &Choice::default())
+}
+
+/// As [`decode_image`], decoding the layer and part `choice` names.
+pub fn decode_image_with(
+    bytes: &[u8],
+    limits: Limits,
+    choice: &Choice,
+) -> std::result::Result<Loaded, String> {
     let head = &bytes[..bytes.len().min(16)];
     match by_content(head) {
+        Some(format) if choice.is_some() && format.name != "OpenEXR" => Err(format!(
+            "a {} file has one layer: a layer or part can be chosen in an OpenEXR file only",
+            format.name
+        )),
         Some(format) => {
-            let decoded = (format.decode)(bytes, limits)?;
+            let decoded = (format.decode)(bytes, limits, choice)?;
             Ok(Loaded {
                 image: decoded.image,
                 format: format.name,
                 display_referred: decoded.display_referred,
                 notes: decoded.notes,
                 compression: decoded.compression,
+                original: decoded.original,
             })
         }
         None if bytes.is_empty() => Err(format!("the file is empty; expected {}", readable())),

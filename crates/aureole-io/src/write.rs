@@ -11,16 +11,17 @@ use crate::display::{render, Depth, DisplayOptions, Picture};
 use crate::error::{Error, Result};
 use crate::formats::{
     by_extension, extension, holding, image_outputs, picture_outputs, Encoder, Format, Kind,
-    LinearPlanes, Note,
+    LinearPlanes, Note, Original, Samples,
 };
 
 /// How to store a linear image.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct LinearOptions {
-    /// EXR only: half floats instead of float32.
-    pub half: bool,
-    /// EXR only: the compression; `None`: ZIP, lossless and what
-    /// compositors expect.
+    /// EXR only: half or float samples; `None`: as the EXR read had them,
+    /// else float.
+    pub samples: Option<Samples>,
+    /// EXR only: the compression; `None`: the EXR read's, else ZIP,
+    /// lossless and what compositors expect.
     pub compression: Option<Compression>,
 }
 
@@ -67,9 +68,24 @@ pub fn write_image(
     scale: f64,
     options: &WriteOptions,
 ) -> Result<Written> {
+    write_image_into(path, image, scale, options, Original::default())
+}
+
+/// As [`write_image`], into the file `image` was read from: an EXR result
+/// keeps `original`'s other layers and parts, windows, attributes,
+/// channel names and sample types.
+pub fn write_image_into(
+    path: &Path,
+    image: &Image,
+    scale: f64,
+    options: &WriteOptions,
+    original: Original,
+) -> Result<Written> {
     let format = output_format(path)?;
     match format.kind() {
-        Kind::Linear => write_linear(path, image, options.linear).map(Written::Linear),
+        Kind::Linear => {
+            write_linear_into(path, image, options.linear, original).map(Written::Linear)
+        }
         Kind::Picture => {
             let picture = render(image, scale, &options.display);
             let depth = options.depth.unwrap_or(format.depths[0]);
@@ -85,6 +101,17 @@ pub fn write_image(
 /// Writes `image` as `.exr`, `.hdr` or `.pfm` by the extension of `path`.
 /// Returns what the format could not keep.
 pub fn write_linear(path: &Path, image: &Image, options: LinearOptions) -> Result<Vec<Note>> {
+    write_linear_into(path, image, options, Original::default())
+}
+
+/// As [`write_linear`], into the file `image` was read from (see
+/// [`write_image_into`]).
+pub fn write_linear_into(
+    path: &Path,
+    image: &Image,
+    options: LinearOptions,
+    original: Original,
+) -> Result<Vec<Note>> {
     let encode = match by_extension(path).map(|f| &f.encode) {
         Some(Encoder::Linear(encode)) => encode,
         _ => {
@@ -101,15 +128,16 @@ pub fn write_linear(path: &Path, image: &Image, options: LinearOptions) -> Resul
     };
     encode(
         path,
-        &LinearPlanes {
+        LinearPlanes {
             width: image.width,
             height: image.height,
             colour,
             alpha: image.alpha.as_deref(),
             white_luminance: image.white_luminance,
             primaries: image.primaries,
-            half: options.half,
-            compression: options.compression.unwrap_or(Compression::Zip),
+            samples: options.samples,
+            compression: options.compression,
+            original,
         },
     )
 }

@@ -55,7 +55,7 @@ fn exr_half_keeps_half_precision() {
         &path,
         &image,
         LinearOptions {
-            half: true,
+            samples: Some(aureole_io::formats::Samples::Half),
             ..LinearOptions::default()
         },
     )
@@ -149,7 +149,7 @@ fn exr_tiled_half_piz_and_multi_view_luminance_are_read() {
     assert_eq!(loaded.image.layout, Layout::Luminance);
     assert_eq!(loaded.image.planes[0], ramp);
     assert!(
-        loaded.notes.iter().any(|n| n.contains("right.Y")),
+        loaded.notes.iter().any(|n| n.contains("others (right)")),
         "{:?}",
         loaded.notes
     );

@@ -1,30 +1,433 @@
-//! OpenEXR through the `exr` crate: scanline or tiled, half or float, every
-//! compression it reads; written as float32 (or half) planes named `Y` or
-//! `R`, `G`, `B` (and `A`), in scanlines, with any compression it writes
-//! ([`Compression`]).
+//! OpenEXR through the `exr` crate: scanline or tiled, half, float or
+//! uint, single or multi-part, every compression it reads.
+//!
+//! A compositor expects a result to drop back into its script, so the
+//! whole file is kept ([`Kept`]): the colour layer we spread is taken out,
+//! and a result written as EXR puts it back in its place, under its own
+//! channel names and sample types, with every other layer, part, window and
+//! attribute as it was.
 
+use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::path::Path;
 
-use aureole::image::{Image, Layout, Primaries};
+use aureole::image::{Image, Layout, Primaries, REC709_LUMINANCE};
 use aureole::memory::format_bytes;
+use exr::image::write::WritableImage;
+use exr::image::{FlatImage, Layers};
+use exr::meta::attribute::{LevelMode, SampleType};
+use exr::meta::BlockDescription;
 use exr::prelude::{self as x, ReadChannels, ReadLayers};
 
-use super::{Decoded, LinearPlanes, Note, HALF_MAX};
+use super::{Decoded, LinearPlanes, Note, Samples, HALF_MAX};
 use crate::atomic::write_atomic;
 use crate::compression::Compression;
 use crate::error::{Error, Result};
 use crate::limits::Limits;
-use crate::read::explain;
+use crate::read::{explain, Choice};
 
-/// Decodes an OpenEXR file: the first part with colour channels, its
-/// `R`, `G`, `B` (or `Y`) and `A`, and the attributes we keep.
-pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decoded, String> {
-    let meta = x::MetaData::read_from_buffered(Cursor::new(bytes), false)
-        .map_err(|e| explain("OpenEXR", e.to_string()))?;
-    // Every layer is decoded, then ours are copied out as f32 planes.
+/// What an EXR file held besides the planes aureole spreads.
+#[derive(Debug, Clone)]
+pub(crate) struct Kept {
+    /// The whole file, less the samples of the channels we took.
+    image: FlatImage,
+    /// The part we took them from.
+    part: usize,
+    /// The chosen layer's channel-name prefix (`ViewLayer.Combined.`), or
+    /// empty.
+    prefix: String,
+    /// The channels we took, colour then alpha, as the file names them.
+    taken: Vec<Taken>,
+    /// They were luminance and chroma (`Y`, `RY`, `BY`): the result is RGB.
+    chroma: bool,
+}
+
+/// A channel taken out of the file, to be put back under its own name.
+#[derive(Debug, Clone)]
+struct Taken {
+    name: String,
+    kind: SampleType,
+    /// OpenEXR's `pLinear`: how lossy compressions quantise it.
+    linear: bool,
+}
+
+impl Kept {
+    /// Parts, layers and channels, a line each, for a person.
+    pub(crate) fn describe(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        let display = self.image.attributes.display_window;
+        lines.push(format!(
+            "display window ({}, {})–({}, {}), pixel aspect {}",
+            display.position.0,
+            display.position.1,
+            display.position.0 + display.size.0 as i32 - 1,
+            display.position.1 + display.size.1 as i32 - 1,
+            self.image.attributes.pixel_aspect
+        ));
+        for (i, layer) in self.image.layer_data.iter().enumerate() {
+            let name = layer
+                .attributes
+                .layer_name
+                .as_ref()
+                .map(|n| format!(" {:?}", n.to_string()))
+                .unwrap_or_default();
+            let at = layer.attributes.layer_position;
+            let compression = Compression::from_exr(layer.encoding.compression).map_or_else(
+                || format!("{:?}", layer.encoding.compression),
+                |c| c.to_string(),
+            );
+            let chosen = if i == self.part {
+                format!(", spreading {}", layer_name(&self.prefix))
+            } else {
+                String::new()
+            };
+            lines.push(format!(
+                "part {i}{name}: data window ({}, {})–({}, {}), {}{chosen}",
+                at.0,
+                at.1,
+                at.0 + layer.size.0 as i32 - 1,
+                at.1 + layer.size.1 as i32 - 1,
+                compression
+            ));
+            let mut names: Vec<(String, SampleType)> = layer
+                .channel_data
+                .list
+                .iter()
+                .map(|c| (c.name.to_string(), sample_type(&c.sample_data)))
+                .collect();
+            if i == self.part {
+                names.extend(self.taken.iter().map(|t| (t.name.clone(), t.kind)));
+            }
+            for (prefix, channels) in by_prefix(names.iter().map(|(n, t)| (n.as_str(), *t))) {
+                let mut channels = channels;
+                channels.sort_by_key(|c| c.0);
+                let list: Vec<String> = channels
+                    .iter()
+                    .map(|(c, t)| format!("{c} {}", type_name(*t)))
+                    .collect();
+                lines.push(format!(
+                    "  layer {}: {}",
+                    layer_name(&prefix),
+                    list.join(", ")
+                ));
+            }
+        }
+        lines
+    }
+}
+
+/// A channel-name prefix as a layer's name for a person.
+fn layer_name(prefix: &str) -> String {
+    if prefix.is_empty() {
+        "(unprefixed)".to_string()
+    } else {
+        prefix.trim_end_matches('.').to_string()
+    }
+}
+
+fn sample_type(samples: &x::FlatSamples) -> SampleType {
+    match samples {
+        x::FlatSamples::F16(_) => SampleType::F16,
+        x::FlatSamples::F32(_) => SampleType::F32,
+        x::FlatSamples::U32(_) => SampleType::U32,
+    }
+}
+
+fn type_name(t: SampleType) -> &'static str {
+    match t {
+        SampleType::F16 => "half",
+        SampleType::F32 => "float",
+        SampleType::U32 => "uint",
+    }
+}
+
+/// Channels grouped by layer: the prefix up to the last `.`, and the rest.
+fn by_prefix<'a>(
+    names: impl Iterator<Item = (&'a str, SampleType)>,
+) -> BTreeMap<String, Vec<(&'a str, SampleType)>> {
+    let mut groups: BTreeMap<String, Vec<(&str, SampleType)>> = BTreeMap::new();
+    for (name, t) in names {
+        let split = name.rfind('.').map_or(0, |i| i + 1);
+        groups
+            .entry(name[..split].to_string())
+            .or_default()
+            .push((&name[split..], t));
+    }
+    groups
+}
+
+/// A layer that holds colour: where, and which of its channels.
+struct Candidate {
+    part: usize,
+    part_name: Option<String>,
+    prefix: String,
+    /// `R`, `G`, `B` (or `Y`, or `Y`, `RY`, `BY`) as the file names them.
+    colour: Vec<String>,
+    alpha: Option<String>,
+    chroma: bool,
+}
+
+impl Candidate {
+    fn describe(&self) -> String {
+        let channels: Vec<&str> = self
+            .colour
+            .iter()
+            .chain(&self.alpha)
+            .map(|c| c.strip_prefix(self.prefix.as_str()).unwrap_or(c))
+            .collect();
+        let part = match &self.part_name {
+            Some(name) => format!("part {} {name:?}: ", self.part),
+            None => String::new(),
+        };
+        format!(
+            "{} ({part}{})",
+            layer_name(&self.prefix),
+            channels.join(", ")
+        )
+    }
+
+    fn is_beauty(&self) -> bool {
+        self.prefix.is_empty()
+    }
+
+    fn is_combined(&self) -> bool {
+        self.prefix
+            .trim_end_matches('.')
+            .rsplit('.')
+            .next()
+            .is_some_and(|last| last.eq_ignore_ascii_case("combined"))
+    }
+}
+
+/// The channel among `names` called `wanted`: exactly, else in another
+/// case when only one matches.
+fn find<'a>(names: &[&'a str], wanted: &str) -> Option<&'a str> {
+    if let Some(exact) = names.iter().find(|n| **n == wanted) {
+        return Some(exact);
+    }
+    let mut loose = names.iter().filter(|n| n.eq_ignore_ascii_case(wanted));
+    match (loose.next(), loose.next()) {
+        (Some(one), None) => Some(one),
+        _ => None,
+    }
+}
+
+/// Every colour layer of every part, in file order.
+fn candidates(image: &FlatImage) -> Vec<Candidate> {
+    let mut found = Vec::new();
+    for (part, layer) in image.layer_data.iter().enumerate() {
+        let names = layer
+            .channel_data
+            .list
+            .iter()
+            .map(|c| (c.name.as_slice(), sample_type(&c.sample_data)));
+        let names: Vec<(String, SampleType)> = names
+            .map(|(n, t)| (String::from_utf8_lossy(n).into_owned(), t))
+            .collect();
+        for (prefix, channels) in by_prefix(names.iter().map(|(n, t)| (n.as_str(), *t))) {
+            let short: Vec<&str> = channels.iter().map(|(n, _)| *n).collect();
+            let full = |c: &str| format!("{prefix}{c}");
+            let rgb = ["R", "G", "B"].map(|c| find(&short, c));
+            let (colour, chroma) = if let [Some(r), Some(g), Some(b)] = rgb {
+                (vec![full(r), full(g), full(b)], false)
+            } else if let Some(y) = find(&short, "Y") {
+                match (find(&short, "RY"), find(&short, "BY")) {
+                    (Some(ry), Some(by)) => (vec![full(y), full(ry), full(by)], true),
+                    _ => (vec![full(y)], false),
+                }
+            } else {
+                continue;
+            };
+            found.push(Candidate {
+                part,
+                part_name: layer.attributes.layer_name.as_ref().map(|n| n.to_string()),
+                prefix: prefix.clone(),
+                colour,
+                alpha: find(&short, "A").map(full),
+                chroma,
+            });
+        }
+    }
+    found
+}
+
+/// Parts of one colour channel (a grey picture stored as `G`): read as
+/// luminance, as a compositor shows them, when no part holds colour.
+fn lone_channels(image: &FlatImage) -> Vec<Candidate> {
+    let mut found = Vec::new();
+    for (part, layer) in image.layer_data.iter().enumerate() {
+        if let [channel] = layer.channel_data.list.as_slice() {
+            let name = channel.name.to_string();
+            let split = name.rfind('.').map_or(0, |i| i + 1);
+            if find(&["R", "G", "B"], &name[split..]).is_none() {
+                continue;
+            }
+            found.push(Candidate {
+                part,
+                part_name: layer.attributes.layer_name.as_ref().map(|n| n.to_string()),
+                prefix: name[..split].to_string(),
+                colour: vec![name],
+                alpha: None,
+                chroma: false,
+            });
+        }
+    }
+    found
+}
+
+/// The layer to spread: the one asked for, else the beauty as compositors
+/// find it (unprefixed channels, else the only colour layer, else
+/// Blender's `Combined`).
+fn choose(image: &FlatImage, choice: &Choice) -> std::result::Result<Candidate, String> {
+    let mut all = candidates(image);
+    if all.is_empty() {
+        all = lone_channels(image);
+    }
+    let parts = image.layer_data.len();
+    if let Some(part) = &choice.part {
+        let index = match part.trim().parse::<usize>() {
+            Ok(i) if i < parts => i,
+            _ => image
+                .layer_data
+                .iter()
+                .position(|l| {
+                    l.attributes
+                        .layer_name
+                        .as_ref()
+                        .is_some_and(|n| n.to_string() == *part)
+                })
+                .ok_or_else(|| {
+                    let names: Vec<String> = image
+                        .layer_data
+                        .iter()
+                        .enumerate()
+                        .map(|(i, l)| match &l.attributes.layer_name {
+                            Some(n) => format!("{i} ({n})"),
+                            None => i.to_string(),
+                        })
+                        .collect();
+                    format!(
+                        "there is no part {part:?}: the file's parts are {}",
+                        names.join(", ")
+                    )
+                })?,
+        };
+        all.retain(|c| c.part == index);
+    }
+    let listing = |all: &[Candidate]| {
+        all.iter()
+            .map(Candidate::describe)
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    if let Some(wanted) = &choice.layer {
+        let wanted = wanted.trim().trim_end_matches('.');
+        let matches = |c: &Candidate, exact: bool| {
+            let name = c.prefix.trim_end_matches('.');
+            if exact {
+                name == wanted
+            } else {
+                name.eq_ignore_ascii_case(wanted)
+            }
+        };
+        let at = all
+            .iter()
+            .position(|c| matches(c, true))
+            .or_else(|| all.iter().position(|c| matches(c, false)));
+        return match at {
+            Some(at) => Ok(all.swap_remove(at)),
+            None if all.is_empty() => Err(no_colour(image)),
+            None => Err(format!(
+                "there is no colour layer {wanted:?}; the layers that can be chosen are {}",
+                listing(&all)
+            )),
+        };
+    }
+    let at = all
+        .iter()
+        .position(Candidate::is_beauty)
+        .or_else(|| (all.len() == 1).then_some(0))
+        .or_else(|| all.iter().position(Candidate::is_combined));
+    match at {
+        Some(at) => Ok(all.swap_remove(at)),
+        None if all.is_empty() => Err(no_colour(image)),
+        None => Err(format!(
+            "several colour layers and none is the beauty (unprefixed R, G, B or Blender's Combined): {}; choose one by name (--layer)",
+            listing(&all)
+        )),
+    }
+}
+
+fn no_colour(image: &FlatImage) -> String {
+    let names: Vec<String> = image
+        .layer_data
+        .iter()
+        .flat_map(|l| l.channel_data.list.iter().map(|c| c.name.to_string()))
+        .collect();
+    format!(
+        "no colour layer: a layer needs R, G, B or Y (channels: {})",
+        names.join(", ")
+    )
+}
+
+/// The layers and parts besides `chosen`, for a note: a few names.
+fn other_layers(image: &FlatImage, chosen: &Candidate) -> String {
+    let mut names = Vec::new();
+    for (part, layer) in image.layer_data.iter().enumerate() {
+        let channels: Vec<String> = layer
+            .channel_data
+            .list
+            .iter()
+            .map(|c| c.name.to_string())
+            .collect();
+        let groups = by_prefix(channels.iter().map(|n| (n.as_str(), SampleType::F32)));
+        for prefix in groups.keys() {
+            if part == chosen.part && *prefix == chosen.prefix {
+                continue;
+            }
+            let name = layer_name(prefix);
+            names.push(match &layer.attributes.layer_name {
+                Some(part_name) if image.layer_data.len() > 1 => format!("{part_name}: {name}"),
+                _ => name,
+            });
+        }
+    }
+    const SHOWN: usize = 6;
+    if names.len() > SHOWN {
+        let more = names.len() - SHOWN;
+        names.truncate(SHOWN);
+        names.push(format!("{more} more"));
+    }
+    names.join(", ")
+}
+
+/// Refuses what the `exr` crate would refuse with a less helpful word, or
+/// what would not fit in memory, from the headers alone.
+fn check_headers(meta: &x::MetaData, limits: Limits) -> std::result::Result<bool, String> {
     let (mut pixels, mut needed) = (0u64, 0u64);
-    for header in &meta.headers {
+    let mut levels = false;
+    for (i, header) in meta.headers.iter().enumerate() {
+        if header.deep {
+            return Err(format!(
+                "part {i} holds deep data (several samples per pixel), which aureole does not spread; flatten it first (for example oiiotool in.exr --flatten -o flat.exr)"
+            ));
+        }
+        let subsampled: Vec<String> = header
+            .channels
+            .list
+            .iter()
+            .filter(|c| c.sampling != x::Vec2(1, 1))
+            .map(|c| format!("{} ({}x{})", c.name, c.sampling.0, c.sampling.1))
+            .collect();
+        if !subsampled.is_empty() {
+            return Err(format!(
+                "channels {} are subsampled (luminance/chroma with reduced chroma), which aureole does not read; convert the file to RGB first (for example oiiotool in.exr -o rgb.exr)",
+                subsampled.join(", ")
+            ));
+        }
+        if let BlockDescription::Tiles(tiles) = header.blocks {
+            levels |= tiles.level_mode != LevelMode::Singular;
+        }
         let layer = header.layer_size.0 as u64 * header.layer_size.1 as u64;
         let stored: u64 = header
             .channels
@@ -33,6 +436,7 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
             .map(|c| c.sample_type.bytes_per_sample() as u64)
             .sum();
         pixels = pixels.saturating_add(layer);
+        // The decoded samples, and our f32 planes beside them.
         needed = needed.saturating_add(layer.saturating_mul(stored + 4 * 4));
     }
     if needed > limits.max_bytes {
@@ -44,6 +448,19 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
             format_bytes(limits.max_bytes)
         ));
     }
+    Ok(levels)
+}
+
+/// Decodes an OpenEXR file: the colour layer chosen by `choice` (or the
+/// beauty), with everything else kept for writing back.
+pub(crate) fn decode(
+    bytes: &[u8],
+    limits: Limits,
+    choice: &Choice,
+) -> std::result::Result<Decoded, String> {
+    let meta = x::MetaData::read_from_buffered(Cursor::new(bytes), false)
+        .map_err(|e| explain("OpenEXR", e.to_string()))?;
+    let levels = check_headers(&meta, limits)?;
     let mut image = x::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -53,84 +470,25 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
         .from_buffered(Cursor::new(bytes))
         .map_err(|e| explain("OpenEXR", e.to_string()))?;
 
+    let chosen = choose(&image, choice)?;
     let mut notes = Vec::new();
-    // The default view of a multi-view file is the channels without a view
-    // prefix (`Y`, not `right.Y`); in a multi-part file, the first part that
-    // has colour channels.
-    let has = |layer: &x::Layer<x::AnyChannels<x::FlatSamples>>, name: &str| {
-        layer
-            .channel_data
-            .list
-            .iter()
-            .any(|c| c.name.to_string() == name)
-    };
-    let chosen = image
-        .layer_data
-        .iter()
-        .position(|l| (has(l, "R") && has(l, "G") && has(l, "B")) || has(l, "Y"))
-        .ok_or_else(|| {
-            let names: Vec<String> = image
-                .layer_data
-                .iter()
-                .flat_map(|l| l.channel_data.list.iter().map(|c| c.name.to_string()))
-                .collect();
-            format!(
-                "no R, G, B or Y channel in any layer (channels: {})",
-                names.join(", ")
-            )
-        })?;
-    for (i, layer) in image.layer_data.iter().enumerate() {
-        if i != chosen {
-            let name = layer
-                .attributes
-                .layer_name
-                .as_ref()
-                .map_or_else(|| format!("#{i}"), |n| n.to_string());
-            notes.push(format!("ignored EXR layer {name}"));
+    let others = other_layers(&image, &chosen);
+    if !others.is_empty() {
+        notes.push(format!(
+            "spreading layer {}; the others ({others}) go back unchanged into an EXR output",
+            chosen.describe()
+        ));
+    }
+    if let [lone] = chosen.colour.as_slice() {
+        if !lone.ends_with('Y') {
+            notes.push(format!("the only channel, {lone}, is read as luminance"));
         }
     }
-    let layer = image.layer_data.swap_remove(chosen);
-    let (width, height) = (layer.size.0, layer.size.1);
-    let rgb = has(&layer, "R") && has(&layer, "G") && has(&layer, "B");
-    let (layout, used): (Layout, &[&str]) = if rgb {
-        (Layout::Rgb, &["R", "G", "B", "A"])
-    } else {
-        (Layout::Luminance, &["Y", "A"])
-    };
-    let ignored: Vec<String> = layer
-        .channel_data
-        .list
-        .iter()
-        .map(|c| c.name.to_string())
-        .filter(|n| !used.contains(&n.as_str()))
-        .collect();
-    let compression = Compression::from_exr(layer.encoding.compression);
-    let white_luminance = layer
-        .attributes
-        .white_luminance
-        .filter(|w| w.is_finite() && *w > 0.0);
-    // Float samples are moved out, not copied: a 4K frame is 100 MB.
-    let mut channels: Vec<(String, x::FlatSamples)> = layer
-        .channel_data
-        .list
-        .into_iter()
-        .map(|c| (c.name.to_string(), c.sample_data))
-        .collect();
-    let mut plane = |name: &str| {
-        let at = channels.iter().position(|(n, _)| n == name)?;
-        Some(match channels.swap_remove(at).1 {
-            x::FlatSamples::F32(values) => values,
-            other => other.values_as_f32().collect(),
-        })
-    };
-    let planes: Vec<Vec<f32>> = used
-        .iter()
-        .filter(|n| **n != "A")
-        .filter_map(|n| plane(n))
-        .collect();
-    let alpha = plane("A");
-    if !ignored.is_empty() {
-        notes.push(format!("ignored EXR channels {}", ignored.join(", ")));
+    if levels {
+        notes.push(
+            "the file has mip or rip levels: the largest is read, and an EXR output holds only it"
+                .into(),
+        );
     }
     let primaries = image.attributes.chromaticities.map(|c| Primaries {
         red: [c.red.0, c.red.1],
@@ -141,6 +499,60 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
     if primaries.is_some_and(|p| p.luminance_weights().is_none()) {
         notes.push("the chromaticities attribute is degenerate: luminance uses Rec.709".into());
     }
+    let layer = &mut image.layer_data[chosen.part];
+    let (width, height) = (layer.size.0, layer.size.1);
+    let white_luminance = layer
+        .attributes
+        .white_luminance
+        .filter(|w| w.is_finite() && *w > 0.0);
+    // Float samples are moved out, not copied: a 4K frame is 100 MB.
+    let mut take = |name: &str| -> Option<(Vec<f32>, Taken)> {
+        let list = &mut layer.channel_data.list;
+        let at = list.iter().position(|c| c.name.to_string() == name)?;
+        let channel = list.remove(at);
+        let taken = Taken {
+            name: name.to_string(),
+            kind: sample_type(&channel.sample_data),
+            linear: channel.quantize_linearly,
+        };
+        let values = match channel.sample_data {
+            x::FlatSamples::F32(values) => values,
+            other => other.values_as_f32().collect(),
+        };
+        Some((values, taken))
+    };
+    let mut taken = Vec::new();
+    let mut planes = Vec::new();
+    for name in &chosen.colour {
+        if let Some((values, id)) = take(name) {
+            planes.push(values);
+            taken.push(id);
+        }
+    }
+    let alpha = chosen
+        .alpha
+        .as_deref()
+        .and_then(&mut take)
+        .map(|(values, id)| {
+            taken.push(id);
+            values
+        });
+    let layout = if planes.len() == 3 {
+        Layout::Rgb
+    } else {
+        Layout::Luminance
+    };
+    if chosen.chroma {
+        let weights = primaries
+            .and_then(|p| p.luminance_weights())
+            .unwrap_or(REC709_LUMINANCE);
+        planes = rgb_from_chroma(planes, weights);
+        notes.push(
+            "luminance/chroma channels (Y, RY, BY) decoded to RGB; an EXR output holds R, G, B"
+                .into(),
+        );
+    }
+    let compression = Compression::from_exr(layer.encoding.compression);
     Ok(Decoded {
         image: Image {
             width,
@@ -154,91 +566,202 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
         display_referred: false,
         notes,
         compression,
+        original: super::Original {
+            exr: Some(Box::new(Kept {
+                image,
+                part: chosen.part,
+                prefix: chosen.prefix,
+                taken,
+                chroma: chosen.chroma,
+            })),
+        },
     })
 }
 
-/// Writes the planes to `path` atomically; with `half`, samples beyond the
-/// half range are clamped to it (and counted).
-pub(crate) fn encode(path: &Path, planes: &LinearPlanes) -> Result<Vec<Note>> {
-    use exr::prelude::{
-        f16, AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, Vec2,
-        WritableImage,
+/// OpenEXR's luminance/chroma to RGB (`RgbaYca::YCAtoRGBA`): RY = (R − Y)/Y,
+/// BY = (B − Y)/Y, and G from Y with the file's luminance weights.
+fn rgb_from_chroma(planes: Vec<Vec<f32>>, weights: [f32; 3]) -> Vec<Vec<f32>> {
+    let mut planes = planes.into_iter();
+    let (Some(y), Some(mut ry), Some(mut by)) = (planes.next(), planes.next(), planes.next())
+    else {
+        return Vec::new();
     };
-    let names: &[&str] = match planes.colour.len() {
-        1 => &["Y"],
-        3 => &["R", "G", "B"],
-        n => {
-            return Err(Error::Encode {
-                path: path.to_path_buf(),
-                format: "EXR",
-                message: format!("expected 1 or 3 channels, not {n}"),
-            })
-        }
+    let mut g = vec![0.0; y.len()];
+    for i in 0..y.len() {
+        let r = (ry[i] + 1.0) * y[i];
+        let b = (by[i] + 1.0) * y[i];
+        g[i] = (y[i] - r * weights[0] - b * weights[2]) / weights[1];
+        ry[i] = r;
+        by[i] = b;
+    }
+    vec![ry, g, by]
+}
+
+/// Samples to store: half (clamped to its range, counted) or float.
+fn samples(plane: &[f32], half: bool, clamp: bool, clamped: &mut usize) -> x::FlatSamples {
+    if half {
+        x::FlatSamples::F16(
+            plane
+                .iter()
+                .map(|&v| {
+                    if clamp && v.is_finite() && v.abs() > HALF_MAX {
+                        *clamped += 1;
+                        x::f16::from_f32(v.clamp(-HALF_MAX, HALF_MAX))
+                    } else {
+                        x::f16::from_f32(v)
+                    }
+                })
+                .collect(),
+        )
+    } else {
+        x::FlatSamples::F32(plane.to_vec())
+    }
+}
+
+/// Writes the planes to `path` atomically: into the file they were read
+/// from when it is given, else as a new file. With half samples, values
+/// beyond the half range are clamped to it (and counted).
+pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
+    let encode_error = |message: String| Error::Encode {
+        path: path.to_path_buf(),
+        format: "EXR",
+        message,
     };
+    let colours = planes.colour.len();
+    if colours != 1 && colours != 3 {
+        return Err(encode_error(format!(
+            "expected 1 or 3 channels, not {colours}"
+        )));
+    }
     let mut notes = Vec::new();
     let mut clamped = 0;
-    let mut samples = |plane: &[f32], colour: bool| {
-        if planes.half {
-            FlatSamples::F16(
-                plane
-                    .iter()
-                    .map(|&v| {
-                        if colour && v.abs() > HALF_MAX {
-                            clamped += 1;
-                            f16::from_f32(v.clamp(-HALF_MAX, HALF_MAX))
-                        } else {
-                            f16::from_f32(v)
-                        }
-                    })
-                    .collect(),
-            )
-        } else {
-            FlatSamples::F32(plane.to_vec())
+    let image = match planes.original.exr {
+        Some(kept) => {
+            let Kept {
+                mut image,
+                part,
+                prefix,
+                taken,
+                chroma,
+            } = *kept;
+            let layer = &mut image.layer_data[part];
+            if (layer.size.0, layer.size.1) != (planes.width, planes.height) {
+                return Err(encode_error(format!(
+                    "the result is {}x{} but the layer read was {}x{}",
+                    planes.width, planes.height, layer.size.0, layer.size.1
+                )));
+            }
+            // The result's colour channels take the names and types of those
+            // read, unless the colour changed form (luminance/chroma).
+            let like = |name: &str| Taken {
+                name: format!("{prefix}{name}"),
+                kind: taken.first().map_or(SampleType::F32, |t| t.kind),
+                linear: false,
+            };
+            let colour_ids: Vec<Taken> = if chroma || taken.len() < colours {
+                let names: &[&str] = if colours == 3 {
+                    &["R", "G", "B"]
+                } else {
+                    &["Y"]
+                };
+                names.iter().map(|n| like(n)).collect()
+            } else {
+                taken[..colours].to_vec()
+            };
+            let alpha_id = taken
+                .get(if chroma { 3 } else { colours })
+                .cloned()
+                .unwrap_or_else(|| like("A"));
+            let channel = |id: &Taken, plane: &[f32], clamp: bool, clamped: &mut usize| {
+                let half = match planes.samples {
+                    Some(Samples::Half) => true,
+                    Some(Samples::Float) => false,
+                    None => id.kind == SampleType::F16,
+                };
+                x::AnyChannel {
+                    name: id.name.as_str().into(),
+                    sample_data: samples(plane, half, clamp, clamped),
+                    quantize_linearly: id.linear,
+                    sampling: x::Vec2(1, 1),
+                }
+            };
+            let mut list = std::mem::take(&mut layer.channel_data.list);
+            for (id, plane) in colour_ids.iter().zip(&planes.colour) {
+                list.push(channel(id, plane, true, &mut clamped));
+            }
+            if let Some(alpha) = planes.alpha {
+                list.push(channel(&alpha_id, alpha, false, &mut clamped));
+            }
+            layer.channel_data = x::AnyChannels::sort(list);
+            // A preview shows the picture before the camera: no longer true.
+            layer.attributes.preview = None;
+            if let Some(compression) = planes.compression {
+                for layer in image.layer_data.iter_mut() {
+                    layer.encoding.compression = compression.to_exr();
+                }
+            }
+            image
         }
+        None => new_image(&planes, &mut clamped),
     };
-    let mut list: Vec<AnyChannel<FlatSamples>> = names
-        .iter()
-        .zip(&planes.colour)
-        .map(|(name, plane)| AnyChannel::new(*name, samples(plane, true)))
-        .collect();
-    if let Some(alpha) = planes.alpha {
-        list.push(AnyChannel::new("A", samples(alpha, false)));
-    }
     if clamped > 0 {
         notes.push(Note::ClampedToHalf { count: clamped });
     }
-    let attributes = LayerAttributes {
-        white_luminance: planes.white_luminance,
-        ..LayerAttributes::default()
+    write_atomic(path, |out| {
+        image
+            .write()
+            .to_buffered(out)
+            .map_err(|e| encode_error(e.to_string()))
+    })?;
+    Ok(notes)
+}
+
+/// A single-part file of the planes: `Y` or `R`, `G`, `B`, and `A`.
+fn new_image(planes: &LinearPlanes, clamped: &mut usize) -> FlatImage {
+    let names: &[&str] = if planes.colour.len() == 1 {
+        &["Y"]
+    } else {
+        &["R", "G", "B"]
     };
-    let layer = Layer::new(
+    let half = planes.samples == Some(Samples::Half);
+    let mut list: Vec<x::AnyChannel<x::FlatSamples>> = names
+        .iter()
+        .zip(&planes.colour)
+        .map(|(name, plane)| x::AnyChannel::new(*name, samples(plane, half, true, clamped)))
+        .collect();
+    if let Some(alpha) = planes.alpha {
+        list.push(x::AnyChannel::new(
+            "A",
+            samples(alpha, half, false, clamped),
+        ));
+    }
+    let attributes = x::LayerAttributes {
+        white_luminance: planes.white_luminance,
+        ..x::LayerAttributes::default()
+    };
+    let layer = x::Layer::new(
         (planes.width, planes.height),
         attributes,
-        Encoding {
-            compression: planes.compression.to_exr(),
-            ..Encoding::SMALL_LOSSLESS
+        x::Encoding {
+            compression: planes.compression.unwrap_or(Compression::Zip).to_exr(),
+            ..x::Encoding::SMALL_LOSSLESS
         },
-        AnyChannels::sort(list.into_iter().collect()),
+        x::AnyChannels::sort(list.into_iter().collect()),
     );
-    let mut exr_image = exr::prelude::Image::from_layer(layer);
-    exr_image.attributes.chromaticities =
+    let mut image = x::Image::from_layer(layer);
+    image.attributes.chromaticities =
         planes
             .primaries
             .map(|p| exr::meta::attribute::Chromaticities {
-                red: Vec2(p.red[0], p.red[1]),
-                green: Vec2(p.green[0], p.green[1]),
-                blue: Vec2(p.blue[0], p.blue[1]),
-                white: Vec2(p.white[0], p.white[1]),
+                red: x::Vec2(p.red[0], p.red[1]),
+                green: x::Vec2(p.green[0], p.green[1]),
+                blue: x::Vec2(p.blue[0], p.blue[1]),
+                white: x::Vec2(p.white[0], p.white[1]),
             });
-    write_atomic(path, |out| {
-        exr_image
-            .write()
-            .to_buffered(out)
-            .map_err(|e| Error::Encode {
-                path: path.to_path_buf(),
-                format: "EXR",
-                message: e.to_string(),
-            })
-    })?;
-    Ok(notes)
+    let mut layers = Layers::new();
+    layers.push(image.layer_data);
+    FlatImage {
+        attributes: image.attributes,
+        layer_data: layers,
+    }
 }

@@ -17,6 +17,7 @@ use crate::compression::Compression;
 use crate::display::Depth;
 use crate::error::Result;
 use crate::limits::Limits;
+use crate::read::Choice;
 
 /// What a format holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -51,8 +52,9 @@ pub struct Format {
     pub depths: &'static [Depth],
     /// Whether a file starting with these bytes is in this format.
     pub(crate) magic: fn(&[u8]) -> bool,
-    /// Decodes a whole file; the error is one line.
-    pub(crate) decode: fn(&[u8], Limits) -> std::result::Result<Decoded, String>,
+    /// Decodes a whole file (the layer and part chosen, where it has
+    /// several); the error is one line.
+    pub(crate) decode: fn(&[u8], Limits, &Choice) -> std::result::Result<Decoded, String>,
     /// Writes it.
     pub(crate) encode: Encoder,
 }
@@ -70,7 +72,7 @@ impl Format {
 /// How a format is written.
 pub(crate) enum Encoder {
     /// Linear planes, through our own or the `exr` crate's encoder.
-    Linear(fn(&Path, &LinearPlanes) -> Result<Vec<Note>>),
+    Linear(fn(&Path, LinearPlanes) -> Result<Vec<Note>>),
     /// An 8 or 16-bit RGB picture through the `image` crate.
     Picture(image::ImageFormat),
 }
@@ -84,6 +86,33 @@ pub(crate) struct Decoded {
     pub notes: Vec<String>,
     /// The file's compression, where the format has a choice (EXR).
     pub compression: Option<Compression>,
+    /// The rest of the file, for writing the result back into it.
+    pub original: Original,
+}
+
+/// What a file held besides the planes aureole spreads (for an EXR: its
+/// other layers and parts, windows, attributes, channel names and types),
+/// so that a result written in the same format keeps it.
+#[derive(Debug, Clone, Default)]
+pub struct Original {
+    pub(crate) exr: Option<Box<exr::Kept>>,
+}
+
+impl Original {
+    /// The parts, layers and channels of the file, a line each, for a
+    /// person; empty for a format without them.
+    pub fn describe(&self) -> Vec<String> {
+        self.exr.as_ref().map(|k| k.describe()).unwrap_or_default()
+    }
+}
+
+/// How samples are stored, where the format has a choice (EXR).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Samples {
+    /// 16-bit half floats.
+    Half,
+    /// 32-bit floats.
+    Float,
 }
 
 /// Linear planes to write, borrowed from an image or a kernel.
@@ -95,10 +124,14 @@ pub(crate) struct LinearPlanes<'a> {
     pub alpha: Option<&'a [f32]>,
     pub white_luminance: Option<f32>,
     pub primaries: Option<Primaries>,
-    /// Half floats, where the format has them.
-    pub half: bool,
-    /// The compression, where the format has a choice (EXR).
-    pub compression: Compression,
+    /// Half or float, where the format has the choice; `None`: as read,
+    /// else float.
+    pub samples: Option<Samples>,
+    /// The compression, where the format has a choice (EXR); `None`: as
+    /// read, else ZIP.
+    pub compression: Option<Compression>,
+    /// The file the image was read from, to write the result back into.
+    pub original: Original,
 }
 
 /// What a writer could not keep, for the user.
@@ -161,7 +194,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::Unsupported,
         depths: &[],
         magic: |head| head.starts_with(b"#?"),
-        decode: picture::decode,
+        decode: |bytes, limits, _| picture::decode(bytes, limits),
         encode: Encoder::Linear(radiance::encode),
     },
     Format {
@@ -170,7 +203,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::Planes,
         depths: &[],
         magic: |head| head.starts_with(b"PF") || head.starts_with(b"Pf"),
-        decode: pfm::decode_file,
+        decode: |bytes, limits, _| pfm::decode_file(bytes, limits),
         encode: Encoder::Linear(pfm::encode),
     },
     Format {
@@ -179,7 +212,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::LogPicture,
         depths: &[Depth::Eight, Depth::Sixteen],
         magic: |head| head.starts_with(b"\x89PNG"),
-        decode: picture::decode,
+        decode: |bytes, limits, _| picture::decode(bytes, limits),
         encode: Encoder::Picture(image::ImageFormat::Png),
     },
     Format {
@@ -188,7 +221,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Eight],
         magic: |head| head.starts_with(&[0xff, 0xd8, 0xff]),
-        decode: picture::decode,
+        decode: |bytes, limits, _| picture::decode(bytes, limits),
         encode: Encoder::Picture(image::ImageFormat::Jpeg),
     },
     Format {
@@ -197,7 +230,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Sixteen, Depth::Eight],
         magic: |head| head.starts_with(b"II*\0") || head.starts_with(b"MM\0*"),
-        decode: picture::decode,
+        decode: |bytes, limits, _| picture::decode(bytes, limits),
         encode: Encoder::Picture(image::ImageFormat::Tiff),
     },
 ];

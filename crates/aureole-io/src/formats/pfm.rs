@@ -26,7 +26,7 @@ pub struct Pfm {
 }
 
 /// Writes one plane as `Pf` or three as `PF`, little endian, atomically.
-pub(crate) fn encode(path: &Path, image: &LinearPlanes) -> Result<Vec<Note>> {
+pub(crate) fn encode(path: &Path, image: LinearPlanes) -> Result<Vec<Note>> {
     let (width, height, planes) = (image.width, image.height, &image.colour);
     let magic = match planes.len() {
         1 => "Pf",
@@ -91,6 +91,7 @@ pub(crate) fn decode_file(bytes: &[u8], limits: Limits) -> std::result::Result<D
         display_referred: false,
         notes: Vec::new(),
         compression: None,
+        original: Default::default(),
     })
 }
 
@@ -212,10 +213,11 @@ mod tests {
                 alpha: None,
                 white_luminance: None,
                 primaries: None,
-                half: false,
-                compression: crate::compression::Compression::Zip,
+                samples: None,
+                compression: None,
+                original: Default::default(),
             };
-            encode(&path, &borrowed).unwrap();
+            encode(&path, borrowed).unwrap();
             let back = decode(&std::fs::read(&path).unwrap()).unwrap();
             assert_eq!((back.width, back.height), (4, 3));
             assert_eq!(back.planes, planes);

@@ -88,6 +88,7 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
         display_referred: !float,
         notes: Vec::new(),
         compression: None,
+        original: Default::default(),
     })
 }
 

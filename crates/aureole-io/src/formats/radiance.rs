@@ -14,7 +14,7 @@ const NAME: &str = "Radiance RGBE";
 
 /// Writes the planes as RGBE (a luminance plane in all three channels),
 /// negatives as 0, atomically.
-pub(crate) fn encode(path: &Path, planes: &LinearPlanes) -> Result<Vec<Note>> {
+pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
     let mut notes = Vec::new();
     let colour = &planes.colour;
     let negatives = colour

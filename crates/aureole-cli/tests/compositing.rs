@@ -1,0 +1,390 @@
+//! Results that drop back into a compositing script: plates that line up,
+//! layers and parts chosen and kept, attributes and channel types as they
+//! were. Inputs are written with the `exr` crate, as a renderer would.
+
+use std::path::Path;
+
+use assert_cmd::Command;
+use exr::prelude::*;
+use predicates::prelude::*;
+
+fn aureole() -> Command {
+    Command::cargo_bin("aureole").unwrap()
+}
+
+/// A dim plate with one lamp, `w`×`h`, as half samples.
+fn plate(w: usize, h: usize, level: f32) -> Vec<f32> {
+    let mut v = vec![0.02 * level; w * h];
+    v[(h / 2) * w + w / 2] = 5e4;
+    v
+}
+
+fn half(values: &[f32]) -> FlatSamples {
+    FlatSamples::F16(values.iter().map(|&v| f16::from_f32(v)).collect())
+}
+
+fn read_all(path: &Path) -> FlatImage {
+    read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .unwrap()
+}
+
+fn channel<'a>(image: &'a FlatImage, part: usize, name: &str) -> &'a FlatSamples {
+    &image.layer_data[part]
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == name)
+        .unwrap_or_else(|| panic!("no channel {name}"))
+        .sample_data
+}
+
+fn write(path: &Path, layers: Vec<Layer<AnyChannels<FlatSamples>>>, display: (usize, usize)) {
+    let mut image = Image::from_layers(
+        ImageAttributes::new(IntegerBounds::from_dimensions(display)),
+        layers,
+    );
+    image.attributes.pixel_aspect = 2.0;
+    image.write().to_file(path).unwrap();
+}
+
+fn layer(
+    size: (usize, usize),
+    channels: Vec<AnyChannel<FlatSamples>>,
+    attributes: LayerAttributes,
+) -> Layer<AnyChannels<FlatSamples>> {
+    Layer::new(
+        size,
+        attributes,
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into_iter().collect()),
+    )
+}
+
+#[test]
+fn a_plate_with_a_data_window_comes_back_in_its_place_with_every_attribute() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("plate.exr"), dir.path().join("out.exr"));
+    let (w, h) = (400, 300);
+    let values = plate(w, h, 1.0);
+    let mut attributes = LayerAttributes::named("beauty");
+    attributes.layer_position = Vec2(100, 50);
+    attributes.owner = Some("Studio".into());
+    attributes.capture_date = Some("2026:11:23 01:00:00".into());
+    attributes.utc_offset = Some(3600.0);
+    attributes.other.insert(
+        "shotName".into(),
+        exr::meta::attribute::AttributeValue::Text("sh010".into()),
+    );
+    let channels = ["R", "G", "B"]
+        .iter()
+        .map(|n| AnyChannel::new(*n, half(&values)))
+        .chain([AnyChannel::new("Z", FlatSamples::F32(vec![7.0; w * h]))])
+        .collect();
+    write(
+        &input,
+        vec![layer((w, h), channels, attributes)],
+        (600, 400),
+    );
+    let before = std::fs::read(&input).unwrap();
+
+    aureole()
+        .args(["apply", "--threshold", "100", "--max-kernel", "65"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .assert()
+        .success();
+
+    assert_eq!(
+        std::fs::read(&input).unwrap(),
+        before,
+        "the input is untouched"
+    );
+    let (a, b) = (read_all(&input), read_all(&output));
+    assert_eq!(b.attributes.display_window, a.attributes.display_window);
+    assert_eq!(b.attributes.pixel_aspect, 2.0);
+    let (la, lb) = (&a.layer_data[0], &b.layer_data[0]);
+    assert_eq!(
+        lb.attributes, la.attributes,
+        "data window, owner, date, custom"
+    );
+    assert_eq!(lb.size, la.size);
+    assert_eq!(lb.encoding.compression, la.encoding.compression);
+    // The colour keeps its half samples; the depth is as it was.
+    assert!(matches!(channel(&b, 0, "R"), FlatSamples::F16(_)));
+    assert_eq!(channel(&b, 0, "Z"), channel(&a, 0, "Z"));
+    // And the light was spread: the plate next to the lamp got brighter.
+    let near = (h / 2) * w + w / 2 + 3;
+    let r = |i: &FlatImage| channel(i, 0, "R").value_by_flat_index(near).to_f32();
+    assert!(r(&b) > 1.5 * r(&a), "{} → {}", r(&a), r(&b));
+
+    // --float overrides the input's types.
+    let float = dir.path().join("float.exr");
+    aureole()
+        .args([
+            "apply",
+            "--threshold",
+            "100",
+            "--max-kernel",
+            "65",
+            "--float",
+            "-q",
+        ])
+        .arg(&input)
+        .arg("-o")
+        .arg(&float)
+        .assert()
+        .success();
+    assert!(matches!(
+        channel(&read_all(&float), 0, "R"),
+        FlatSamples::F32(_)
+    ));
+}
+
+/// A Blender render: `ViewLayer.Combined`, an AOV and a depth pass in one
+/// part.
+fn blender(path: &Path) {
+    let (w, h) = (64, 48);
+    let values = plate(w, h, 1.0);
+    let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
+    for n in ["R", "G", "B", "A"] {
+        channels.push(AnyChannel::new(
+            format!("ViewLayer.Combined.{n}").as_str(),
+            FlatSamples::F32(values.clone()),
+        ));
+    }
+    for n in ["R", "G", "B"] {
+        channels.push(AnyChannel::new(
+            format!("ViewLayer.DiffCol.{n}").as_str(),
+            FlatSamples::F32(vec![0.5; w * h]),
+        ));
+    }
+    channels.push(AnyChannel::new(
+        "ViewLayer.Depth.Z",
+        FlatSamples::F32(vec![3.0; w * h]),
+    ));
+    write(
+        path,
+        vec![layer((w, h), channels, LayerAttributes::default())],
+        (w, h),
+    );
+}
+
+#[test]
+fn a_blender_render_spreads_its_combined_layer_and_keeps_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("render.exr"), dir.path().join("out.exr"));
+    blender(&input);
+    aureole()
+        .args(["apply", "--threshold", "100", "--max-kernel", "33"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains(
+            "spreading layer ViewLayer.Combined",
+        ));
+    let (a, b) = (read_all(&input), read_all(&output));
+    let names = |i: &FlatImage| -> Vec<String> {
+        i.layer_data[0]
+            .channel_data
+            .list
+            .iter()
+            .map(|c| c.name.to_string())
+            .collect()
+    };
+    assert_eq!(names(&a), names(&b));
+    for kept in [
+        "ViewLayer.DiffCol.R",
+        "ViewLayer.Depth.Z",
+        "ViewLayer.Combined.A",
+    ] {
+        assert_eq!(channel(&a, 0, kept), channel(&b, 0, kept), "{kept}");
+    }
+    assert_ne!(
+        channel(&a, 0, "ViewLayer.Combined.R"),
+        channel(&b, 0, "ViewLayer.Combined.R")
+    );
+
+    // Another layer by name; a layer that is not there lists those that are.
+    let other = dir.path().join("diffcol.exr");
+    aureole()
+        .args([
+            "apply",
+            "--threshold",
+            "0.1",
+            "--max-kernel",
+            "33",
+            "--layer",
+            "ViewLayer.DiffCol",
+            "-q",
+        ])
+        .arg(&input)
+        .arg("-o")
+        .arg(&other)
+        .assert()
+        .success();
+    let c = read_all(&other);
+    assert_eq!(
+        channel(&c, 0, "ViewLayer.Combined.R"),
+        channel(&a, 0, "ViewLayer.Combined.R")
+    );
+    aureole()
+        .args(["apply", "--layer", "diffuse"])
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("no.exr"))
+        .assert()
+        .code(1)
+        .stderr(
+            predicate::str::contains("there is no colour layer \"diffuse\"")
+                .and(predicate::str::contains("ViewLayer.Combined (R, G, B, A)"))
+                .and(predicate::str::contains("ViewLayer.DiffCol (R, G, B)")),
+        );
+    assert!(!dir.path().join("no.exr").exists());
+
+    // info lists the layers and their channels.
+    aureole().arg("info").arg(&input).assert().success().stdout(
+        predicate::str::contains("layer ViewLayer.Depth: Z float")
+            .and(predicate::str::contains("spreading ViewLayer.Combined")),
+    );
+}
+
+#[test]
+fn a_file_whose_only_layer_is_prefixed_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("diffuse.exr"), dir.path().join("out.exr"));
+    let values = plate(32, 24, 1.0);
+    let channels = ["diffuse.R", "diffuse.G", "diffuse.B"]
+        .iter()
+        .map(|n| AnyChannel::new(*n, FlatSamples::F32(values.clone())))
+        .collect();
+    write(
+        &input,
+        vec![layer((32, 24), channels, LayerAttributes::default())],
+        (32, 24),
+    );
+    aureole()
+        .args(["apply", "--threshold", "100", "--max-kernel", "17", "-q"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .assert()
+        .success();
+    let b = read_all(&output);
+    assert!(matches!(channel(&b, 0, "diffuse.G"), FlatSamples::F32(_)));
+}
+
+#[test]
+fn a_multi_part_file_keeps_its_other_parts_and_a_part_can_be_chosen() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("parts.exr"), dir.path().join("out.exr"));
+    let values = plate(40, 30, 1.0);
+    let rgb = |level: f32| -> Vec<AnyChannel<FlatSamples>> {
+        ["R", "G", "B"]
+            .iter()
+            .map(|n| {
+                AnyChannel::new(
+                    *n,
+                    half(&values.iter().map(|v| v * level).collect::<Vec<_>>()),
+                )
+            })
+            .collect()
+    };
+    let mut depth = LayerAttributes::named("depth");
+    depth.layer_position = Vec2(5, 5);
+    write(
+        &input,
+        vec![
+            layer((40, 30), rgb(1.0), LayerAttributes::named("left")),
+            layer(
+                (20, 10),
+                vec![AnyChannel::new("Z", FlatSamples::F32(vec![2.0; 200]))],
+                depth,
+            ),
+            layer((40, 30), rgb(0.5), LayerAttributes::named("right")),
+        ],
+        (40, 30),
+    );
+    aureole()
+        .args([
+            "apply",
+            "--threshold",
+            "100",
+            "--max-kernel",
+            "17",
+            "--part",
+            "right",
+        ])
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .assert()
+        .success();
+    let (a, b) = (read_all(&input), read_all(&output));
+    assert_eq!(a.layer_data.len(), 3);
+    assert_eq!(b.layer_data.len(), 3);
+    assert_eq!(channel(&a, 0, "R"), channel(&b, 0, "R"), "left untouched");
+    assert_eq!(channel(&a, 1, "Z"), channel(&b, 1, "Z"), "depth untouched");
+    assert_eq!(b.layer_data[1].attributes.layer_position, Vec2(5, 5));
+    assert_ne!(channel(&a, 2, "R"), channel(&b, 2, "R"), "right spread");
+    aureole()
+        .args(["apply", "--part", "7"])
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("no.exr"))
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains(
+            "the file's parts are 0 (left), 1 (depth), 2 (right)",
+        ));
+}
+
+#[test]
+fn luminance_chroma_is_decoded_to_rgb() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("yc.exr"), dir.path().join("out.exr"));
+    // A saturated red at Y = 1: R = 1/wr … so RY = (R − Y)/Y.
+    let [wr, wg, wb] = aureole::image::REC709_LUMINANCE;
+    let (r, g, b) = (2.0f32, 0.5f32, 0.25f32);
+    let y = wr * r + wg * g + wb * b;
+    let n = 16 * 8;
+    let channels = vec![
+        AnyChannel::new("Y", FlatSamples::F32(vec![y; n])),
+        AnyChannel::new("RY", FlatSamples::F32(vec![(r - y) / y; n])),
+        AnyChannel::new("BY", FlatSamples::F32(vec![(b - y) / y; n])),
+    ];
+    write(
+        &input,
+        vec![layer((16, 8), channels, LayerAttributes::default())],
+        (16, 8),
+    );
+    aureole()
+        .args(["apply", "--threshold", "100", "--max-kernel", "5"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("decoded to RGB"));
+    let out = read_all(&output);
+    for (name, want) in [("R", r), ("G", g), ("B", b)] {
+        let got = channel(&out, 0, name).value_by_flat_index(0).to_f32();
+        assert!(
+            (got - want).abs() < 1e-5 * want,
+            "{name}: {got} against {want}"
+        );
+    }
+    assert!(out.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .all(|c| c.name.to_string() != "RY"));
+}
