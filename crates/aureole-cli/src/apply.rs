@@ -176,6 +176,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     for job in &jobs {
         output::check(&job.output, Some(&job.input))?;
     }
+    output::tidy(jobs.iter().map(|j| j.output.as_path()), quiet);
     let limit = args.max_memory.unwrap_or_else(default_memory_limit);
     let session = match &args.kernel {
         Some(path) => Session::with_kernel(read_kernel(path, Limits { max_bytes: limit })?),

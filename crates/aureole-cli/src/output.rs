@@ -2,6 +2,7 @@
 //! exposure and tone curve; the output path checked before any work.
 
 use std::path::Path;
+use std::time::Duration;
 
 use anyhow::anyhow;
 use aureole::Image;
@@ -63,10 +64,46 @@ pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Removes what runs killed while writing left in the output folders
+/// (temporary files older than a day), with a note.
+pub fn tidy<'a>(outputs: impl IntoIterator<Item = &'a Path>, quiet: bool) {
+    let mut folders: Vec<&Path> = outputs.into_iter().map(folder_of).collect();
+    folders.sort();
+    folders.dedup();
+    for folder in folders {
+        let removed = aureole_io::atomic::remove_stale(folder, Duration::from_secs(24 * 3600));
+        if !removed.is_empty() && !quiet {
+            let names: Vec<String> = removed
+                .iter()
+                .filter_map(|p| p.file_name())
+                .map(|n| n.to_string_lossy().into_owned())
+                .collect();
+            eprintln!(
+                "aureole: note: {}: removed {} temporary files older than a day, left by a run that was killed while writing: {}",
+                folder.display(),
+                removed.len(),
+                names.join(", ")
+            );
+        }
+    }
+}
+
+/// Whether writing `b` would replace the file `a`: the same file by its
+/// identity (device and inode, links followed), however it is named: a
+/// symbolic or hard link to it, `./a`, an absolute path.
+#[cfg(unix)]
 fn same_file(a: &Path, b: &Path) -> bool {
-    let canonical = |p: &Path| Some(folder_of(p).canonicalize().ok()?.join(p.file_name()?));
-    match (canonical(a), canonical(b)) {
-        (Some(a), Some(b)) => a == b,
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
         _ => false,
     }
 }

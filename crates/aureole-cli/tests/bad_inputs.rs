@@ -212,6 +212,8 @@ fn make_inputs(dir: &Path) {
     config("kind.toml", &bloom.replace("\"bloom\"", "\"blom\""));
     config("syntax.toml", "[[effect]\ntype = \"bloom\"\n");
     config("um.toml", &bloom.replace("10px", "60um"));
+    std::os::unix::fs::symlink("scene.exr", dir.join("link.exr")).unwrap();
+    std::fs::hard_link(dir.join("scene.exr"), dir.join("hard.exr")).unwrap();
     std::fs::create_dir(dir.join("folder.exr")).unwrap();
     std::fs::create_dir(dir.join("out")).unwrap();
 }
@@ -346,6 +348,27 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
         output(
             "output is the input",
             "./scene.exr",
+            &["scene.exr", "overwrite the input"],
+        ),
+        case(
+            "input is a link to the output",
+            apply("link.exr", "scene.exr", &[]),
+            2,
+            &["scene.exr", "overwrite the input"],
+        ),
+        output(
+            "output is a hard link to the input",
+            "hard.exr",
+            &["hard.exr", "overwrite the input"],
+        ),
+        output(
+            "output is a link to the input",
+            "link.exr",
+            &["link.exr", "overwrite the input"],
+        ),
+        output(
+            "output is the input by its absolute path",
+            &format!("{}/scene.exr", dir.display()),
             &["scene.exr", "overwrite the input"],
         ),
         output(

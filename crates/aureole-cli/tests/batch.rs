@@ -290,3 +290,33 @@ fn a_run_over_the_memory_limit_stops_before_allocating_and_says_how_to_fit() {
         .assert()
         .success();
 }
+
+#[test]
+fn temporary_files_a_killed_run_left_are_removed_a_day_later() {
+    let temp = sequence(1, (24, 16));
+    let out = temp.path().join("out");
+    let make = |name: &str, age: u64| {
+        let file = std::fs::File::create(out.join(name)).unwrap();
+        let then = std::time::SystemTime::now() - Duration::from_secs(age);
+        file.set_modified(then).unwrap();
+    };
+    make(".aureole-AbC123.part", 2 * 86_400);
+    make(".aureole-probe-XyZ", 3 * 86_400);
+    // A young one may be another run's, still writing; another name is not ours.
+    make(".aureole-young.part", 60);
+    make("notes.part", 5 * 86_400);
+    aureole()
+        .args(["apply", "--max-kernel", "9"])
+        .arg(temp.path().join("shot.0001.exr"))
+        .arg("-o")
+        .arg(out.join("r.exr"))
+        .assert()
+        .success()
+        .stderr(predicates::str::contains(
+            "removed 2 temporary files older than a day",
+        ));
+    let mut left = leftovers(&out);
+    left.sort();
+    assert_eq!(left, [".aureole-young.part"]);
+    assert!(out.join("notes.part").exists() && out.join("r.exr").exists());
+}

@@ -4,7 +4,8 @@
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, SystemTime};
 
 use crate::error::{Error, Result};
 
@@ -24,7 +25,7 @@ where
 {
     let folder = folder_of(path);
     let mut builder = tempfile::Builder::new();
-    builder.prefix(".aureole-").suffix(".part");
+    builder.prefix(TEMPORARY.0).suffix(TEMPORARY.1);
     // Temporary files are private by default; the result is an ordinary
     // file, so it gets the ordinary mode (0666 less the umask).
     #[cfg(unix)]
@@ -51,4 +52,36 @@ where
     temp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
     temp.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
+}
+
+/// The names of our temporary files: prefix and suffix.
+const TEMPORARY: (&str, &str) = (".aureole-", ".part");
+
+/// Removes the temporary files of ours in `folder` last changed more than
+/// `age` ago, which only a run killed while writing (SIGKILL, a power cut)
+/// leaves; returns those removed. A younger one may belong to a run still
+/// writing.
+pub fn remove_stale(folder: &Path, age: Duration) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return Vec::new();
+    };
+    let now = SystemTime::now();
+    let mut removed = Vec::new();
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        let ours = name.starts_with(TEMPORARY.0)
+            && (name.ends_with(TEMPORARY.1) || name.starts_with(".aureole-probe-"));
+        let Ok(meta) = entry.metadata() else { continue };
+        let old = meta
+            .modified()
+            .ok()
+            .and_then(|m| now.duration_since(m).ok())
+            .is_some_and(|d| d > age);
+        if ours && meta.is_file() && old && std::fs::remove_file(entry.path()).is_ok() {
+            removed.push(entry.path());
+        }
+    }
+    removed.sort();
+    removed
 }
