@@ -198,6 +198,20 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     let session = session
         .with_memory_limit(limit)
         .with_frames_in_flight(in_flight);
+    // A frame too large for the memory or the kernel is refused from its
+    // header, before it is decoded.
+    if let Some(job) = todo.first() {
+        let choice = Choice {
+            layer: args.layer.clone(),
+            part: args.part.clone(),
+        };
+        let limits = Limits { max_bytes: limit };
+        if let Some(shape) = aureole_io::read::probe(&job.input, limits, &choice)? {
+            session
+                .check_shape(shape.width, shape.height, shape.planes, shape.alpha)
+                .map_err(|e| input::about(&job.input, e))?;
+        }
+    }
     let skipped = jobs.len() - todo.len();
     if let [job] = jobs.as_slice() {
         if skipped == 1 {

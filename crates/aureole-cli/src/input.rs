@@ -83,14 +83,14 @@ pub fn scale_source(source: ScaleSource) -> &'static str {
 }
 
 /// A library error about the image at `path`: what its samples hold or
-/// what it would need is said with the file's name.
+/// what it would need (memory, a kernel for its size) is said with the
+/// file's name, as a failure of the run on that file.
 pub fn about(path: &Path, error: aureole::Error) -> Failure {
-    let named = matches!(
-        error,
-        aureole::Error::BadSamples { .. } | aureole::Error::Memory { .. }
-    );
-    match Failure::from(error) {
-        Failure::Run(e) if named => Failure::Run(e.context(path.display().to_string())),
-        failure => failure,
+    use aureole::Error as E;
+    match error {
+        E::BadSamples { .. } | E::Memory { .. } | E::KernelSize { .. } => Failure::Run(
+            anyhow::anyhow!(crate::words::library(&error)).context(path.display().to_string()),
+        ),
+        _ => Failure::from(error),
     }
 }

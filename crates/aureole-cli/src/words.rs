@@ -17,6 +17,9 @@ pub fn library(error: &Error) -> String {
             None => error.to_string(),
         },
         Error::BadSamples { .. } => format!("{error}; --sanitize replaces them by 0"),
+        Error::KernelSize { .. } => {
+            format!("{error}; a smaller kernel is (apply --max-kernel WxH, psf --size WxH)")
+        }
         Error::Memory {
             needed,
             stage,

@@ -174,6 +174,9 @@ fn make_inputs(dir: &Path) {
     file("huge.exr", &window(99_999, 99_999, 0));
     file("absurd.exr", &window(2_000_000_000, 2_000_000_000, 0));
     file("wide.exr", &window(1 << 24, 15, 0));
+    // 12000×8000 declared; the pixels are not there, so only a check of the
+    // header before decoding tells the kernel's size.
+    file("large.exr", &window(11_999, 7_999, 0));
     file("inverted.exr", &window(0, 15, 100));
     let mut hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 100000 +X 100000\n".to_vec();
     hdr.extend_from_slice(&[2, 2, 0x80, 0, 1, 2, 3, 4]);
@@ -241,7 +244,17 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
             "absurd.exr",
             &["absurd.exr", "OpenEXR", "data window"],
         ),
-        input("wide EXR", "wide.exr", &["wide.exr", "OpenEXR"]),
+        // Checked from the header, before the pixels are decoded.
+        input(
+            "wide EXR",
+            "wide.exr",
+            &["wide.exr", "kernel size", "--max-kernel"],
+        ),
+        input(
+            "large EXR, full kernel",
+            "large.exr",
+            &["large.exr", "kernel size 23999x15999", "--max-kernel"],
+        ),
         input(
             "inverted EXR window",
             "inverted.exr",

@@ -49,6 +49,86 @@ impl Choice {
     }
 }
 
+/// What a file will decode to, as its header declares it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shape {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Colour planes: 1 (luminance) or 3 (RGB).
+    pub planes: usize,
+    /// Whether it has alpha.
+    pub alpha: bool,
+}
+
+/// The shape of the image at `path` (the layer `choice` names), from its
+/// header alone, so that what a run needs can be checked before the file
+/// is decoded: refused when decoding it would need more than `limits`;
+/// `None` when the header does not say (reading the file then says why).
+pub fn probe(path: &Path, limits: Limits, choice: &Choice) -> Result<Option<Shape>> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(256);
+    let opened = std::fs::File::open(path).and_then(|f| f.take(256).read_to_end(&mut head));
+    let Some(format) = opened.ok().and_then(|_| by_content(&head)) else {
+        return Ok(None);
+    };
+    let shape = match format.name {
+        "OpenEXR" => {
+            crate::formats::exr::probe(path, limits, choice).map_err(|message| Error::Decode {
+                path: path.to_path_buf(),
+                message,
+            })?
+        }
+        // A PFM shorter than it declares is refused by its decoder, which
+        // says so.
+        "PFM" => crate::formats::pfm::header(&head)
+            .ok()
+            .filter(|h| {
+                let declared =
+                    (h.width as u64 * h.height as u64).saturating_mul(h.channels as u64 * 4);
+                std::fs::metadata(path).is_ok_and(|m| m.len() >= declared)
+            })
+            .map(|header| Shape {
+                width: header.width,
+                height: header.height,
+                planes: header.channels,
+                alpha: false,
+            }),
+        _ => image::ImageReader::open(path)
+            .ok()
+            .and_then(|r| r.with_guessed_format().ok())
+            .and_then(|r| r.into_dimensions().ok())
+            .map(|(width, height)| Shape {
+                width: width as usize,
+                height: height as usize,
+                planes: 3,
+                alpha: false,
+            }),
+    };
+    if let Some(shape) = shape {
+        // The decoded planes, and the decoder's own copy at least as large.
+        let planes = (shape.planes + usize::from(shape.alpha)) as u64;
+        let needed = (shape.width as u64)
+            .saturating_mul(shape.height as u64)
+            .saturating_mul(planes * 4 * 2);
+        if needed > limits.max_bytes {
+            return Err(Error::Decode {
+                path: path.to_path_buf(),
+                message: format!(
+                    "{} declares {}x{} pixels, which need {} to decode but the memory limit is {}",
+                    format.name,
+                    shape.width,
+                    shape.height,
+                    format_bytes(needed),
+                    format_bytes(limits.max_bytes)
+                ),
+            });
+        }
+    }
+    Ok(shape)
+}
+
 /// Reads the image at `path`, recognising the format by its content, and
 /// refusing a file whose decoding would need more than `limits` allows.
 pub fn read_image(path: &Path, limits: Limits) -> Result<Loaded> {

@@ -24,7 +24,7 @@ use crate::atomic::write_atomic;
 use crate::compression::Compression;
 use crate::error::{Error, Result};
 use crate::limits::Limits;
-use crate::read::{explain, Choice};
+use crate::read::{explain, Choice, Shape};
 
 /// What an EXR file held besides the planes aureole spreads.
 #[derive(Debug, Clone)]
@@ -142,10 +142,10 @@ fn type_name(t: SampleType) -> &'static str {
 }
 
 /// Channels grouped by layer: the prefix up to the last `.`, and the rest.
-fn by_prefix<'a>(
-    names: impl Iterator<Item = (&'a str, SampleType)>,
-) -> BTreeMap<String, Vec<(&'a str, SampleType)>> {
-    let mut groups: BTreeMap<String, Vec<(&str, SampleType)>> = BTreeMap::new();
+fn by_prefix<'a, T>(
+    names: impl Iterator<Item = (&'a str, T)>,
+) -> BTreeMap<String, Vec<(&'a str, T)>> {
+    let mut groups: BTreeMap<String, Vec<(&str, T)>> = BTreeMap::new();
     for (name, t) in names {
         let split = name.rfind('.').map_or(0, |i| i + 1);
         groups
@@ -213,18 +213,47 @@ fn find<'a>(names: &[&'a str], wanted: &str) -> Option<&'a str> {
 }
 
 /// Every colour layer of every part, in file order.
-fn candidates(image: &FlatImage) -> Vec<Candidate> {
-    let mut found = Vec::new();
-    for (part, layer) in image.layer_data.iter().enumerate() {
-        let names = layer
+/// A part's name and channel names: what choosing a layer looks at, from a
+/// decoded file or from its headers alone.
+struct Part {
+    name: Option<String>,
+    channels: Vec<String>,
+}
+
+fn parts_of_image(image: &FlatImage) -> Vec<Part> {
+    let parts = image.layer_data.iter().map(|layer| Part {
+        name: layer.attributes.layer_name.as_ref().map(|n| n.to_string()),
+        channels: layer
             .channel_data
             .list
             .iter()
-            .map(|c| (c.name.as_slice(), sample_type(&c.sample_data)));
-        let names: Vec<(String, SampleType)> = names
-            .map(|(n, t)| (String::from_utf8_lossy(n).into_owned(), t))
-            .collect();
-        for (prefix, channels) in by_prefix(names.iter().map(|(n, t)| (n.as_str(), *t))) {
+            .map(|c| c.name.to_string())
+            .collect(),
+    });
+    parts.collect()
+}
+
+fn parts_of_headers(meta: &x::MetaData) -> Vec<Part> {
+    let parts = meta.headers.iter().map(|header| Part {
+        name: header
+            .own_attributes
+            .layer_name
+            .as_ref()
+            .map(|n| n.to_string()),
+        channels: header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.name.to_string())
+            .collect(),
+    });
+    parts.collect()
+}
+
+fn candidates(parts: &[Part]) -> Vec<Candidate> {
+    let mut found = Vec::new();
+    for (index, part) in parts.iter().enumerate() {
+        for (prefix, channels) in by_prefix(part.channels.iter().map(|n| (n.as_str(), ()))) {
             let short: Vec<&str> = channels.iter().map(|(n, _)| *n).collect();
             let full = |c: &str| format!("{prefix}{c}");
             let rgb = ["R", "G", "B"].map(|c| find(&short, c));
@@ -239,8 +268,8 @@ fn candidates(image: &FlatImage) -> Vec<Candidate> {
                 continue;
             };
             found.push(Candidate {
-                part,
-                part_name: layer.attributes.layer_name.as_ref().map(|n| n.to_string()),
+                part: index,
+                part_name: part.name.clone(),
                 prefix: prefix.clone(),
                 colour,
                 alpha: find(&short, "A").map(full),
@@ -253,18 +282,18 @@ fn candidates(image: &FlatImage) -> Vec<Candidate> {
 
 /// Parts of one colour channel (a grey picture stored as `G`): read as
 /// luminance, as a compositor shows them, when no part holds colour.
-fn lone_channels(image: &FlatImage) -> Vec<Candidate> {
+fn lone_channels(parts: &[Part]) -> Vec<Candidate> {
     let mut found = Vec::new();
-    for (part, layer) in image.layer_data.iter().enumerate() {
-        if let [channel] = layer.channel_data.list.as_slice() {
-            let name = channel.name.to_string();
+    for (index, part) in parts.iter().enumerate() {
+        if let [name] = part.channels.as_slice() {
+            let name = name.clone();
             let split = name.rfind('.').map_or(0, |i| i + 1);
             if find(&["R", "G", "B"], &name[split..]).is_none() {
                 continue;
             }
             found.push(Candidate {
-                part,
-                part_name: layer.attributes.layer_name.as_ref().map(|n| n.to_string()),
+                part: index,
+                part_name: part.name.clone(),
                 prefix: name[..split].to_string(),
                 colour: vec![name],
                 alpha: None,
@@ -278,39 +307,29 @@ fn lone_channels(image: &FlatImage) -> Vec<Candidate> {
 /// The layer to spread: the one asked for, else the beauty as compositors
 /// find it (unprefixed channels, else the only colour layer, else
 /// Blender's `Combined`).
-fn choose(image: &FlatImage, choice: &Choice) -> std::result::Result<Candidate, String> {
-    let mut all = candidates(image);
+fn choose(parts: &[Part], choice: &Choice) -> std::result::Result<Candidate, String> {
+    let mut all = candidates(parts);
     if all.is_empty() {
-        all = lone_channels(image);
+        all = lone_channels(parts);
     }
-    let parts = image.layer_data.len();
-    if let Some(part) = &choice.part {
-        let index = match part.trim().parse::<usize>() {
-            Ok(i) if i < parts => i,
-            _ => image
-                .layer_data
-                .iter()
-                .position(|l| {
-                    l.attributes
-                        .layer_name
-                        .as_ref()
-                        .is_some_and(|n| n.to_string() == *part)
-                })
-                .ok_or_else(|| {
-                    let names: Vec<String> = image
-                        .layer_data
-                        .iter()
-                        .enumerate()
-                        .map(|(i, l)| match &l.attributes.layer_name {
-                            Some(n) => format!("{i} ({n})"),
-                            None => i.to_string(),
-                        })
-                        .collect();
-                    format!(
-                        "there is no part {part:?}: the file's parts are {}",
-                        names.join(", ")
-                    )
-                })?,
+    if let Some(wanted) = &choice.part {
+        let named = |p: &Part| p.name.as_deref() == Some(wanted.as_str());
+        let index = match wanted.trim().parse::<usize>() {
+            Ok(i) if i < parts.len() => i,
+            _ => parts.iter().position(named).ok_or_else(|| {
+                let names: Vec<String> = parts
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| match &p.name {
+                        Some(n) => format!("{i} ({n})"),
+                        None => i.to_string(),
+                    })
+                    .collect();
+                format!(
+                    "there is no part {wanted:?}: the file's parts are {}",
+                    names.join(", ")
+                )
+            })?,
         };
         all.retain(|c| c.part == index);
     }
@@ -336,7 +355,7 @@ fn choose(image: &FlatImage, choice: &Choice) -> std::result::Result<Candidate, 
             .or_else(|| all.iter().position(|c| matches(c, false)));
         return match at {
             Some(at) => Ok(all.swap_remove(at)),
-            None if all.is_empty() => Err(no_colour(image)),
+            None if all.is_empty() => Err(no_colour(parts)),
             None => Err(format!(
                 "there is no colour layer {wanted:?}; the layers that can be chosen are {}",
                 listing(&all)
@@ -350,7 +369,7 @@ fn choose(image: &FlatImage, choice: &Choice) -> std::result::Result<Candidate, 
         .or_else(|| all.iter().position(Candidate::is_combined));
     match at {
         Some(at) => Ok(all.swap_remove(at)),
-        None if all.is_empty() => Err(no_colour(image)),
+        None if all.is_empty() => Err(no_colour(parts)),
         None => Err(format!(
             "several colour layers and none is the beauty (unprefixed R, G, B or Blender's Combined): {}; choose one by name (--layer)",
             listing(&all)
@@ -358,11 +377,10 @@ fn choose(image: &FlatImage, choice: &Choice) -> std::result::Result<Candidate, 
     }
 }
 
-fn no_colour(image: &FlatImage) -> String {
-    let names: Vec<String> = image
-        .layer_data
+fn no_colour(parts: &[Part]) -> String {
+    let names: Vec<&str> = parts
         .iter()
-        .flat_map(|l| l.channel_data.list.iter().map(|c| c.name.to_string()))
+        .flat_map(|p| p.channels.iter().map(String::as_str))
         .collect();
     format!(
         "no colour layer: a layer needs R, G, B or Y (channels: {})",
@@ -451,6 +469,28 @@ fn check_headers(meta: &x::MetaData, limits: Limits) -> std::result::Result<bool
     Ok(levels)
 }
 
+/// The size and planes of the layer `choice` names (or the beauty), from
+/// the headers alone.
+/// `None` when the headers cannot be read (decoding says why).
+pub(crate) fn probe(
+    path: &Path,
+    limits: Limits,
+    choice: &Choice,
+) -> std::result::Result<Option<Shape>, String> {
+    let Ok(meta) = x::MetaData::read_from_file(path, false) else {
+        return Ok(None);
+    };
+    check_headers(&meta, limits)?;
+    let chosen = choose(&parts_of_headers(&meta), choice)?;
+    let size = meta.headers[chosen.part].layer_size;
+    Ok(Some(Shape {
+        width: size.0,
+        height: size.1,
+        planes: if chosen.colour.len() == 1 { 1 } else { 3 },
+        alpha: chosen.alpha.is_some(),
+    }))
+}
+
 /// Decodes an OpenEXR file: the colour layer chosen by `choice` (or the
 /// beauty), with everything else kept for writing back.
 pub(crate) fn decode(
@@ -470,7 +510,7 @@ pub(crate) fn decode(
         .from_buffered(Cursor::new(bytes))
         .map_err(|e| explain("OpenEXR", e.to_string()))?;
 
-    let chosen = choose(&image, choice)?;
+    let chosen = choose(&parts_of_image(&image), choice)?;
     let mut notes = Vec::new();
     let others = other_layers(&image, &chosen);
     if !others.is_empty() {

@@ -95,14 +95,18 @@ pub(crate) fn decode_file(bytes: &[u8], limits: Limits) -> std::result::Result<D
     })
 }
 
-/// Decodes PFM bytes; the error says what is wrong.
-pub fn decode(bytes: &[u8]) -> std::result::Result<Pfm, String> {
-    decode_limited(bytes, u64::MAX)
+/// A PFM header: what follows the magic, and where the samples start.
+pub(crate) struct Header {
+    pub channels: usize,
+    pub width: usize,
+    pub height: usize,
+    scale: f32,
+    /// The offset of the whitespace byte that ends the header.
+    at: usize,
 }
 
-/// As [`decode`], refusing images whose planes would take more than
-/// `max_bytes`.
-pub fn decode_limited(bytes: &[u8], max_bytes: u64) -> std::result::Result<Pfm, String> {
+/// Parses the header at the start of `bytes`.
+pub(crate) fn header(bytes: &[u8]) -> std::result::Result<Header, String> {
     let mut at = 0;
     let mut token = |what: &str| -> std::result::Result<String, String> {
         while at < bytes.len() && bytes[at].is_ascii_whitespace() {
@@ -140,7 +144,30 @@ pub fn decode_limited(bytes: &[u8], max_bytes: u64) -> std::result::Result<Pfm, 
         .ok()
         .filter(|s: &f32| s.is_finite() && *s != 0.0)
         .ok_or_else(|| format!("PFM scale {scale_text:?} is not a non-zero number"))?;
-    // Exactly one whitespace byte ends the header.
+    Ok(Header {
+        channels,
+        width,
+        height,
+        scale,
+        at,
+    })
+}
+
+/// Decodes PFM bytes; the error says what is wrong.
+pub fn decode(bytes: &[u8]) -> std::result::Result<Pfm, String> {
+    decode_limited(bytes, u64::MAX)
+}
+
+/// As [`decode`], refusing images whose planes would take more than
+/// `max_bytes`.
+pub fn decode_limited(bytes: &[u8], max_bytes: u64) -> std::result::Result<Pfm, String> {
+    let Header {
+        channels,
+        width,
+        height,
+        scale,
+        at,
+    } = header(bytes)?;
     let data = bytes.get(at + 1..).unwrap_or(&[]);
     let needed = width
         .checked_mul(height)

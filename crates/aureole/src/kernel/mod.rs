@@ -71,11 +71,17 @@ impl Extent {
         image_height: usize,
         max: Option<(usize, usize)>,
     ) -> Result<Extent> {
-        let extent = Extent::for_image(image_width, image_height)?;
-        Ok(match max {
-            Some((w, h)) => extent.capped(w, h),
-            None => extent,
-        })
+        // Capped first: an image too large for a full kernel runs with a
+        // capped one.
+        let full = (
+            image_width.saturating_mul(2).saturating_sub(1),
+            image_height.saturating_mul(2).saturating_sub(1),
+        );
+        let (width, height) = match max {
+            Some((w, h)) => (full.0.min(w.max(1)), full.1.min(h.max(1))),
+            None => full,
+        };
+        Ok(Extent::new(width, height)?.with_image_width(image_width))
     }
 
     /// The same kernel size for an image `image_width` pixels wide.

@@ -277,7 +277,7 @@ impl Session {
     pub fn costs(&self, frame: &Frame, options: &ApplyOptions) -> Result<Costs> {
         let image = frame.image();
         let size = (image.width, image.height);
-        let (workload, _) = self.workload(image)?;
+        let (workload, _) = self.workload(Shape::of(image))?;
         let (kernel, kernel_planes) = (workload.kernel, workload.kernel_planes);
         let default = self.config().map_or(0.0, |config| config.threshold);
         let threshold = Threshold {
@@ -332,10 +332,36 @@ impl Session {
         plan.apply_with(image, frame.scale(), options, recycled, &mut control)
     }
 
+    /// Refuses, before a file is decoded, a frame of `width`×`height` with
+    /// `planes` colour planes (1 or 3) and maybe alpha whose run would need
+    /// more than the memory limit, or whose kernel could not be built: what
+    /// [`Session::apply`] would refuse, known from a file's header.
+    pub fn check_shape(
+        &self,
+        width: usize,
+        height: usize,
+        planes: usize,
+        alpha: bool,
+    ) -> Result<()> {
+        let shape = Shape {
+            width,
+            height,
+            planes,
+            alpha,
+        };
+        match &self.plan {
+            Some(plan) if plan.size() == (width, height) => Ok(()),
+            _ => {
+                self.workload(shape)?;
+                self.check_memory(shape).map(drop)
+            }
+        }
+    }
+
     /// The plan for `image`'s size, once its memory is known to fit the
     /// limit; a kernel given is kept when the plan cannot be made.
     fn build_plan(&mut self, image: &Image, progress: &mut dyn FnMut(Stage, f64)) -> Result<Plan> {
-        let double = self.check_memory(image)?;
+        let double = self.check_memory(Shape::of(image))?;
         let (width, height) = (image.width, image.height);
         let mut report = |f| progress(Stage::BuildingKernel, f);
         let mut control = Control::new(&self.cancel, &mut report);
@@ -383,8 +409,8 @@ impl Session {
 
     /// What a run on `image` works on, and the effects it builds (none for
     /// a kernel given ready-made, held by the session or its plan).
-    fn workload(&self, image: &Image) -> Result<(Workload, &[Effect])> {
-        let (planes, alpha) = (image.planes.len(), image.alpha.is_some());
+    fn workload(&self, image: Shape) -> Result<(Workload, &[Effect])> {
+        let (planes, alpha) = (image.planes, image.alpha);
         match &self.lens {
             Lens::Config(config) => {
                 let workload = Workload::of_config(
@@ -416,7 +442,7 @@ impl Session {
     /// Refuses a frame whose run would need more than the memory limit,
     /// with the estimate and the largest kernel that would fit; else says
     /// whether the f64 engine, which a scene's range may need, would not.
-    fn check_memory(&self, image: &Image) -> Result<Option<DoubleRefused>> {
+    fn check_memory(&self, image: Shape) -> Result<Option<DoubleRefused>> {
         let Some(limit) = self.memory_limit else {
             return Ok(None);
         };
@@ -453,5 +479,25 @@ impl Session {
             fits: workload.largest_fitting(effects, start, limit_left),
             built: !effects.is_empty(),
         })
+    }
+}
+
+/// A frame's size and planes, from its pixels or a file's header.
+#[derive(Debug, Clone, Copy)]
+struct Shape {
+    width: usize,
+    height: usize,
+    planes: usize,
+    alpha: bool,
+}
+
+impl Shape {
+    fn of(image: &Image) -> Shape {
+        Shape {
+            width: image.width,
+            height: image.height,
+            planes: image.planes.len(),
+            alpha: image.alpha.is_some(),
+        }
     }
 }
