@@ -7,7 +7,7 @@ use std::time::Instant;
 use aureole::{Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, Method, Session};
 use aureole_io::compression::Compression;
 use aureole_io::formats::{Original, Samples};
-use aureole_io::kernel::read_kernel;
+use aureole_io::kernel::read_kernel_file;
 use aureole_io::limits::{default_memory_limit, Limits};
 use aureole_io::read::Choice;
 use aureole_io::write::LinearOptions;
@@ -63,6 +63,12 @@ pub struct Args {
     /// it once, apply it to every frame.
     #[arg(long, value_name = "FILE", conflicts_with_all = ["preset", "config", "seed", "max_kernel"])]
     kernel: Option<PathBuf>,
+
+    /// Apply a --kernel to frames of another width than the one it was
+    /// built for (`psf --image-width`), which its µm and mm became pixels
+    /// for: rays and halos then have the wrong size on the sensor.
+    #[arg(long, requires = "kernel")]
+    kernel_any_width: bool,
 
     /// Luminance threshold in cd/m²: pixels at or below it keep their light
     /// in place (overrides the config's `threshold`; 0 spreads every pixel).
@@ -175,11 +181,19 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     )?;
     for job in &jobs {
         output::check(&job.output, Some(&job.input))?;
+        if args.glare_only {
+            refuse_unsigned(&job.output)?;
+        }
     }
     output::tidy(jobs.iter().map(|j| j.output.as_path()), quiet);
     let limit = args.max_memory.unwrap_or_else(default_memory_limit);
+    let mut kernel_width = None;
     let session = match &args.kernel {
-        Some(path) => Session::with_kernel(read_kernel(path, Limits { max_bytes: limit })?),
+        Some(path) => {
+            let (kernel, width) = read_kernel_file(path, Limits { max_bytes: limit })?;
+            kernel_width = width.filter(|_| !args.kernel_any_width);
+            Session::with_kernel(kernel)
+        }
         None => {
             let (config, defaulted) = args.chain.compose_or_default(matches)?;
             if defaulted && !quiet {
@@ -226,6 +240,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     }
     let run = Run {
         args,
+        kernel_width,
         limit,
         quiet,
         batch: jobs.len() > 1,
@@ -253,9 +268,27 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     Ok(())
 }
 
+/// A glare-only result has negative samples where the camera moved light
+/// away; a linear format without negatives would drop them, and adding the
+/// file back over the original would then create light.
+fn refuse_unsigned(output: &std::path::Path) -> Result<(), Failure> {
+    let format = aureole_io::write::output_format(output)?;
+    if format.kind() == aureole_io::formats::Kind::Linear && !format.signed {
+        return Err(Failure::Usage(anyhow::anyhow!(
+            "{}: {} holds no negative values, which a --glare-only result has (light moved away from the sources); write {}",
+            output.display(),
+            format.name,
+            aureole_io::formats::signed_outputs()
+        )));
+    }
+    Ok(())
+}
+
 /// What every frame of a batch is read and written with.
 struct Run<'a> {
     args: &'a Args,
+    /// The image width the --kernel was built for, to be held to.
+    kernel_width: Option<usize>,
     limit: u64,
     quiet: bool,
     /// Several jobs: a frame's failure is said at once and the rest go on.
@@ -370,6 +403,17 @@ impl Run<'_> {
     fn apply<'j>(&self, session: &mut Session, read: Read<'j>) -> Result<Convolved<'j>, Failure> {
         let args = self.args;
         let job = read.job;
+        let width = read.frame.image().width;
+        if let (Some(built), Some(kernel)) = (self.kernel_width, &args.kernel) {
+            if built != width {
+                return Err(Failure::Usage(anyhow::anyhow!(
+                    "{}: the kernel {} was built for images {built} px wide (aureole psf --image-width), this one is {width} px wide: its µm and mm, which became pixels at that pitch, would be a factor {:.2} off here; build one with --image-width {width}, or pass --kernel-any-width",
+                    job.input.display(),
+                    kernel.display(),
+                    built as f64 / width as f64
+                )));
+            }
+        }
         let options = ApplyOptions {
             threshold: args.threshold,
             knee: args.knee,

@@ -18,11 +18,12 @@ pub struct Job {
 /// refused, not expanded.
 const MAX_FRAMES: u64 = 1_000_000;
 
-/// Frame numbers, in the order given.
+/// Frame numbers, in the order given, each once.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Frames(pub Vec<u64>);
 
-/// Parses a frame list: `1-240`, `7`, `1-10,20,30-40`, in that order.
+/// Parses a frame list: `1-240`, `7`, `1-10,20,30-40`, in that order; a
+/// frame named twice is done once.
 pub fn parse_frames(text: &str) -> Result<Frames, String> {
     let bad = |part: &str| {
         format!("{part:?} is not a frame number or range; write e.g. 1-240 or 1-10,20,30-40")
@@ -39,11 +40,13 @@ pub fn parse_frames(text: &str) -> Result<Frames, String> {
                 "{part:?} runs backwards; write the first frame first"
             ));
         }
-        if frames.len() as u64 + (last - first + 1) > MAX_FRAMES {
+        if (last - first).saturating_add(1) > MAX_FRAMES - frames.len() as u64 {
             return Err(format!("{text:?} names more than {MAX_FRAMES} frames"));
         }
         frames.extend(first..=last);
     }
+    let mut seen = std::collections::HashSet::new();
+    frames.retain(|f| seen.insert(*f));
     Ok(Frames(frames))
 }
 
@@ -120,6 +123,16 @@ pub fn jobs(
                 })
                 .collect()
         }
+        None if inputs.iter().chain([&output.to_path_buf()]).any(|p| has_placeholder(p)) => {
+            Err(usage(format!(
+                "{}: a %d or %04d in a name stands for frame numbers, which --frames gives (e.g. --frames 1-240)",
+                inputs
+                    .iter()
+                    .find(|p| has_placeholder(p))
+                    .map_or(output, PathBuf::as_path)
+                    .display()
+            )))
+        }
         None if inputs.len() == 1 && !folder => Ok(vec![Job {
             input: inputs[0].clone(),
             output: output.to_path_buf(),
@@ -150,9 +163,18 @@ mod tests {
             parse_frames("1-3,7,9-10").unwrap().0,
             vec![1, 2, 3, 7, 9, 10]
         );
-        for bad in ["", "a-3", "5-2", "1-", "0-99999999"] {
+        for bad in [
+            "",
+            "a-3",
+            "5-2",
+            "1-",
+            "0-99999999",
+            "0-18446744073709551615",
+            "1-999999,1000001-1000002",
+        ] {
             assert!(parse_frames(bad).is_err(), "{bad}");
         }
+        assert_eq!(parse_frames("1-3,2,1,5").unwrap().0, vec![1, 2, 3, 5]);
     }
 
     #[test]

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use aureole::{Cancel, Control, Extent};
 use aureole_io::formats::{by_extension, extension, kernel_outputs, KernelStorage};
-use aureole_io::kernel::write_kernel;
+use aureole_io::kernel::write_kernel_for;
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
@@ -95,7 +95,9 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     let mut report = |fraction| progress.set(fraction);
     let kernel = config.kernel_with(&extent, &mut Control::new(&cancel, &mut report))?;
     progress.stage("writing");
-    crate::interrupt::writing(|| write_kernel(&args.output, &kernel))?;
+    crate::interrupt::writing(|| {
+        write_kernel_for(&args.output, &kernel, Some(extent.image_width))
+    })?;
     if let Some(plot) = &args.profile {
         let (cx, cy) = kernel.centre();
         let radius = args

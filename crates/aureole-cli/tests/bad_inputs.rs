@@ -208,6 +208,15 @@ fn make_inputs(dir: &Path) {
     config("toptypo.toml", &format!("treshold = 1\n{bloom}"));
     config("type.toml", &bloom.replace("beta = 2", "beta = \"two\""));
     config("missing.toml", &bloom.replace("epsilon = 0.05\n", ""));
+    config("seed.toml", &format!("seed = -1\n{bloom}"));
+    config(
+        "camera.toml",
+        &format!("[camera]\nf_number = \"eight\"\n{bloom}"),
+    );
+    config(
+        "wavelength.toml",
+        "[[effect]]\ntype = \"aperture\"\nwavelength_nm = 550\nblades = 6\n",
+    );
     config(
         "range.toml",
         &bloom.replace("epsilon = 0.05", "epsilon = 1.5"),
@@ -292,6 +301,23 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
     };
     cases.extend([
         configured(
+            "frame range beyond counting",
+            &["--frames", "0-18446744073709551615"],
+            &["more than 1000000 frames"],
+        ),
+        case(
+            "frame pattern without --frames",
+            apply("scene.exr", "out/r.%04d.exr", &[]),
+            2,
+            &["out/r.%04d.exr", "--frames"],
+        ),
+        case(
+            "glare-only into a format without negatives",
+            apply("scene.exr", "out/g.hdr", &["--glare-only"]),
+            2,
+            &["out/g.hdr", "negative", ".exr or .pfm"],
+        ),
+        configured(
             "unknown preset",
             &["--preset", "paper-fig5-corna"],
             &[
@@ -313,7 +339,26 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
         configured(
             "wrong type",
             &["--config", "type.toml"],
-            &["type.toml", "\"two\"", "expected"],
+            &["type.toml:4:1", "`beta`", "\"two\"", "expected a number"],
+        ),
+        configured(
+            "negative seed",
+            &["--config", "seed.toml"],
+            &[
+                "seed.toml:1:",
+                "`seed`",
+                "expected a whole number of at least 0",
+            ],
+        ),
+        configured(
+            "camera field of the wrong type",
+            &["--config", "camera.toml"],
+            &["camera.toml:2:", "`f_number`", "expected a number"],
+        ),
+        configured(
+            "a wavelength for a spectral kernel",
+            &["--config", "wavelength.toml"],
+            &["wavelength.toml:3:1", "`wavelength_nm`", "spectral = false"],
         ),
         configured(
             "missing field",

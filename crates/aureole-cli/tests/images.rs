@@ -251,6 +251,8 @@ fn apply_reuses_a_kernel_written_by_psf() {
             "paper-fig5-both",
             "--size",
             "95x63",
+            "--image-width",
+            "48",
             "-o",
         ])
         .arg(&kernel)
@@ -276,6 +278,43 @@ fn apply_reuses_a_kernel_written_by_psf() {
     {
         assert!((a - b).abs() <= 1e-5 * b.abs().max(1.0), "{a} vs {b}");
     }
+    // A kernel built for other frames is refused, unless told.
+    let wide = dir.path().join("wide.exr");
+    aureole()
+        .args([
+            "psf",
+            "--preset",
+            "paper-fig5-both",
+            "--size",
+            "95x63",
+            "--image-width",
+            "144",
+            "-o",
+        ])
+        .arg(&wide)
+        .assert()
+        .success();
+    aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("--kernel")
+        .arg(&wide)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "was built for images 144 px wide (aureole psf --image-width), this one is 48 px wide",
+        ).and(predicate::str::contains("factor 3.00")));
+    aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("--kernel")
+        .arg(&wide)
+        .args(["--kernel-any-width", "-q", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
     aureole()
         .arg("apply")
         .arg(&input)

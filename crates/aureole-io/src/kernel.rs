@@ -15,10 +15,21 @@ use crate::read::read_image;
 /// Decades of weight the picture spans, from its brightest spread pixel down.
 pub const PICTURE_DECADES: f64 = 6.0;
 
+/// The EXR attribute that records the width of the images a kernel was
+/// built for: its µm and mm became pixels at that pitch.
+pub const IMAGE_WIDTH_ATTRIBUTE: &str = "aureoleImageWidth";
+
 /// Writes `kernel` to `path` in the format its extension names: its planes
 /// as float32 (`.pfm`: `Pf` or `PF`; `.exr`: `Y` or `R`, `G`, `B`), or a
 /// log-scaled picture (`.png`). The file appears whole or not at all.
 pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
+    write_kernel_for(path, kernel, None)
+}
+
+/// [`write_kernel`], recording in an EXR the width of the images the
+/// kernel was built for ([`IMAGE_WIDTH_ATTRIBUTE`]), so that applying it to
+/// another width can be refused (PFM has no room for it).
+pub fn write_kernel_for(path: &Path, kernel: &Kernel, image_width: Option<usize>) -> Result<()> {
     let refuse = || Error::OutputFormat {
         path: path.to_path_buf(),
         extension: extension(path),
@@ -37,6 +48,7 @@ pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
                 samples: Some(crate::formats::Samples::Float),
                 compression: None,
                 original: Default::default(),
+                image_width,
             };
             encode(path, planes).map(drop)
         }
@@ -55,11 +67,22 @@ pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
 /// planes of non-negative weights, centre in its middle) and normalises
 /// each plane to ΣK = 1.
 pub fn read_kernel(path: &Path, limits: Limits) -> Result<Kernel> {
-    let image = read_image(path, limits)?.image;
-    Kernel::from_planes(image.width, image.height, image.planes).map_err(|error| Error::Content {
-        path: path.to_path_buf(),
-        error,
-    })
+    read_kernel_file(path, limits).map(|(kernel, _)| kernel)
+}
+
+/// [`read_kernel`], with the width of the images the kernel was built for
+/// when the file records it ([`write_kernel_for`]).
+pub fn read_kernel_file(path: &Path, limits: Limits) -> Result<(Kernel, Option<usize>)> {
+    let loaded = read_image(path, limits)?;
+    let image_width = loaded.original.recorded_image_width();
+    let image = loaded.image;
+    let kernel = Kernel::from_planes(image.width, image.height, image.planes).map_err(|error| {
+        Error::Content {
+            path: path.to_path_buf(),
+            error,
+        }
+    })?;
+    Ok((kernel, image_width))
 }
 
 /// 8-bit RGB levels where grey ∝ log₁₀ K over [`PICTURE_DECADES`] decades

@@ -60,8 +60,16 @@ impl ConfigFile {
             }
         };
         let located = |span, message| place(span, message, None);
-        let raw: RawFile = toml::from_str(text)
-            .map_err(|e| located(e.span().unwrap_or(0..0), with_suggestion(e.message())))?;
+        let raw: RawFile = toml::from_str(text).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            let message = match key_at(text, span.start) {
+                Some(key) if is_type_error(e.message()) => {
+                    format!("`{key}`: {}", plain_types(e.message()))
+                }
+                _ => with_suggestion(e.message()),
+            };
+            located(span, message)
+        })?;
 
         if let Some(threshold) = &raw.threshold {
             check::range(
@@ -92,8 +100,15 @@ impl ConfigFile {
                     // Whatever the file holds there is echoed: keep it short.
                     |kind| kind.chars().take(40).collect(),
                 );
-            let effect = Effect::from_table(table.into_inner()).map_err(|e| {
-                let message = with_suggestion(e.message());
+            let table = table.into_inner();
+            let keys = table.clone();
+            let effect = Effect::from_table(table).map_err(|e| {
+                let message = match key_holding(&keys, e.message()) {
+                    Some(key) if is_type_error(e.message()) => {
+                        format!("`{key}`: {}", plain_types(e.message()))
+                    }
+                    _ => with_suggestion(e.message()),
+                };
                 let incomplete = message.starts_with("missing field").then(|| kind.clone());
                 place(
                     key_span(text, &span, &message),
@@ -101,6 +116,18 @@ impl ConfigFile {
                     incomplete,
                 )
             })?;
+            // A wavelength the spectral kernel would ignore is a mistake:
+            // the user meant an achromatic one.
+            let spectral = keys.get("spectral").and_then(toml::Value::as_bool) != Some(false);
+            if keys.contains_key("wavelength_nm") && spectral {
+                return Err(located(
+                    key_span(text, &span, "`wavelength_nm`"),
+                    format!(
+                        "{}: `wavelength_nm` is the wavelength of an achromatic kernel; a spectral one (the default) covers 380–780 nm: add `spectral = false` to use it, or remove it",
+                        context(effect.kind())
+                    ),
+                ));
+            }
             effect.validate().map_err(|e| {
                 let at = match &e {
                     Error::Parameter { name, .. } => key_span(text, &span, &format!("`{name}`")),
@@ -153,6 +180,62 @@ fn with_suggestion(message: &str) -> String {
         }
     }
     line
+}
+
+/// Whether serde refused a value for its type or range, a message that
+/// names no key.
+fn is_type_error(message: &str) -> bool {
+    message.starts_with("invalid type") || message.starts_with("invalid value")
+}
+
+/// Serde's type names in words: `expected u64` is "a whole number of at
+/// least 0".
+fn plain_types(message: &str) -> String {
+    let words = [
+        ("expected u64", "expected a whole number of at least 0"),
+        ("expected u32", "expected a whole number of at least 0"),
+        ("expected usize", "expected a whole number of at least 0"),
+        ("expected i64", "expected a whole number"),
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+    ];
+    let mut line = message.trim().replace('\n', " ");
+    for (serde, plain) in words {
+        line = line.replace(serde, plain);
+    }
+    line
+}
+
+/// The key written on the line of `text` at byte `offset` (`seed` in
+/// `seed = -1`).
+fn key_at(text: &str, offset: usize) -> Option<String> {
+    let start = text.get(..offset)?.rfind('\n').map_or(0, |i| i + 1);
+    let line = text[start..].lines().next()?;
+    let (key, _) = line.split_once('=')?;
+    let key = key.trim().trim_matches('"').trim_matches('\'');
+    (!key.is_empty() && !key.starts_with('[')).then(|| key.to_string())
+}
+
+/// The key of `table` whose value serde's `message` quotes (`invalid type:
+/// string "two", expected f64`), when exactly one has it.
+fn key_holding(table: &toml::Table, message: &str) -> Option<String> {
+    let shown = |value: &toml::Value| match value {
+        toml::Value::String(s) => Some(format!("string {s:?}")),
+        toml::Value::Integer(i) => Some(format!("integer `{i}`")),
+        toml::Value::Float(f) => Some(format!("floating point `{f}`")),
+        toml::Value::Boolean(b) => Some(format!("boolean `{b}`")),
+        toml::Value::Array(_) => Some("sequence".to_string()),
+        toml::Value::Table(_) => Some("map".to_string()),
+        toml::Value::Datetime(_) => None,
+    };
+    let mut found = table
+        .iter()
+        .filter(|(_, v)| shown(v).is_some_and(|s| message.contains(&s)))
+        .map(|(k, _)| k.clone());
+    match (found.next(), found.next()) {
+        (Some(key), None) => Some(key),
+        _ => None,
+    }
 }
 
 /// Where, in the `[[effect]]` table whose header is at `header`, the key that

@@ -52,6 +52,23 @@ struct Taken {
 }
 
 impl Kept {
+    /// The image width a kernel file records.
+    pub(crate) fn recorded_image_width(&self) -> Option<usize> {
+        // A custom attribute may be read as the file's or as its part's.
+        let key = x::Text::from(crate::kernel::IMAGE_WIDTH_ATTRIBUTE);
+        let part = self.image.layer_data.get(self.part);
+        let value = self
+            .image
+            .attributes
+            .other
+            .get(&key)
+            .or_else(|| part.and_then(|l| l.attributes.other.get(&key)));
+        match value {
+            Some(exr::meta::attribute::AttributeValue::I32(n)) => usize::try_from(*n).ok(),
+            _ => None,
+        }
+    }
+
     /// Parts, layers and channels, a line each, for a person.
     pub(crate) fn describe(&self) -> Vec<String> {
         let mut lines = Vec::new();
@@ -798,6 +815,12 @@ fn new_image(planes: &LinearPlanes, clamped: &mut usize) -> FlatImage {
                 blue: x::Vec2(p.blue[0], p.blue[1]),
                 white: x::Vec2(p.white[0], p.white[1]),
             });
+    if let Some(width) = planes.image_width.and_then(|w| i32::try_from(w).ok()) {
+        image.attributes.other.insert(
+            crate::kernel::IMAGE_WIDTH_ATTRIBUTE.into(),
+            exr::meta::attribute::AttributeValue::I32(width),
+        );
+    }
     let mut layers = Layers::new();
     layers.push(image.layer_data);
     FlatImage {

@@ -47,6 +47,8 @@ pub struct Format {
     pub extensions: &'static [&'static str],
     /// How it holds a kernel.
     pub kernels: KernelStorage,
+    /// Whether it holds negative values (a glare-only result has them).
+    pub signed: bool,
     /// The sample depths a picture may have, the default first (none for
     /// linear formats).
     pub depths: &'static [Depth],
@@ -104,6 +106,11 @@ impl Original {
     pub fn describe(&self) -> Vec<String> {
         self.exr.as_ref().map(|k| k.describe()).unwrap_or_default()
     }
+
+    /// The image width a kernel file records ([`crate::kernel::write_kernel_for`]).
+    pub fn recorded_image_width(&self) -> Option<usize> {
+        self.exr.as_ref().and_then(|k| k.recorded_image_width())
+    }
 }
 
 /// How samples are stored, where the format has a choice (EXR).
@@ -132,6 +139,9 @@ pub(crate) struct LinearPlanes<'a> {
     pub compression: Option<Compression>,
     /// The file the image was read from, to write the result back into.
     pub original: Original,
+    /// For a kernel: the width of the images it was built for, recorded
+    /// where the format can (EXR).
+    pub image_width: Option<usize>,
 }
 
 /// What a writer could not keep, for the user.
@@ -181,6 +191,7 @@ pub const HALF_MAX: f32 = 65504.0;
 pub static FORMATS: &[Format] = &[
     Format {
         name: "OpenEXR",
+        signed: true,
         extensions: &["exr"],
         kernels: KernelStorage::Planes,
         depths: &[],
@@ -190,6 +201,7 @@ pub static FORMATS: &[Format] = &[
     },
     Format {
         name: "Radiance HDR",
+        signed: false,
         extensions: &["hdr"],
         kernels: KernelStorage::Unsupported,
         depths: &[],
@@ -199,6 +211,7 @@ pub static FORMATS: &[Format] = &[
     },
     Format {
         name: "PFM",
+        signed: true,
         extensions: &["pfm"],
         kernels: KernelStorage::Planes,
         depths: &[],
@@ -208,6 +221,7 @@ pub static FORMATS: &[Format] = &[
     },
     Format {
         name: "PNG",
+        signed: false,
         extensions: &["png"],
         kernels: KernelStorage::LogPicture,
         depths: &[Depth::Eight, Depth::Sixteen],
@@ -217,6 +231,7 @@ pub static FORMATS: &[Format] = &[
     },
     Format {
         name: "JPEG",
+        signed: false,
         extensions: &["jpg", "jpeg"],
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Eight],
@@ -226,6 +241,7 @@ pub static FORMATS: &[Format] = &[
     },
     Format {
         name: "TIFF",
+        signed: false,
         extensions: &["tif", "tiff"],
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Sixteen, Depth::Eight],
@@ -312,6 +328,17 @@ pub fn kernel_outputs() -> String {
         })
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// The linear formats that hold negative values, for a message:
+/// `.exr or .pfm`.
+pub fn signed_outputs() -> String {
+    FORMATS
+        .iter()
+        .filter(|f| f.signed && f.kind() == Kind::Linear)
+        .map(|f| format!(".{}", f.extensions[0]))
+        .collect::<Vec<_>>()
+        .join(" or ")
 }
 
 /// The pictures that hold `depth`, for a message: `.png or .tif`.
