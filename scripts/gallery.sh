@@ -143,6 +143,24 @@ if [ -d "$data" ]; then
     "$work/candleglass-f32-8blade.png=8 blades, f/32, roundness 0.1" \
     "$work/straight.png=8 straight blades, f/32"
 
+  # Auto exposure, before and now. "Before" is the white the log-average
+  # meter (9.6 L̄) chose for these very runs, measured before it was
+  # replaced by the lit-scene meter (docs/physics.md §9).
+  exposure() { # exposure NAME INPUT OLD_WHITE
+    "$aureole" apply -q "$2" --max-kernel 257 --white "$3" -o "$work/ae-$1-before.png"
+    "$aureole" apply -q "$2" --max-kernel 257 -o "$work/ae-$1-now.png"
+  }
+  exposure street "$work/demo.exr" 1.53
+  exposure candle "$data/CandleGlass.exr" 0.00626
+  exposure goldengate "$data/GoldenGate.exr" 0.622
+  exposure tree "$data/Tree.exr" 473
+  "$montage" "$out/auto-exposure.jpg" --columns 2 --width 400 \
+    "$work/ae-street-before.png=demo street: log-average meter (before)" \
+    "$work/ae-street-now.png=lit-scene meter (now)" \
+    "$work/ae-candle-before.png=CandleGlass: before" "$work/ae-candle-now.png=now" \
+    "$work/ae-goldengate-before.png=GoldenGate: before" "$work/ae-goldengate-now.png=now" \
+    "$work/ae-tree-before.png=Tree (day, backlit): before" "$work/ae-tree-now.png=now"
+
   # Recipes of the guide (configs/) on scenes that suit them.
   "$aureole" apply -q "$work/demo.exr" --config configs/night-street.toml --white 6 -o "$work/r1.png"
   "$aureole" apply -q "$data/CandleGlass.exr" --config configs/candle-interior.toml \

@@ -6,8 +6,8 @@ use aureole::image::{Image, Layout};
 /// How bright the picture is.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Exposure {
-    /// From the log-average luminance, as a reflected-light meter sets a
-    /// camera (mid-grey at the log-average).
+    /// Metered on the lit scene, ignoring the light sources and a black
+    /// sky, with its highlights protected ([`meter`]).
     Auto,
     /// Exposure value at ISO 100 (EV100): a camera at f/N and t seconds has
     /// EV = log₂(N²/t). The luminance shown as white is 1.2·2^EV cd/m²
@@ -76,22 +76,110 @@ impl Picture {
     }
 }
 
-/// Luminance (cd/m²) that floors the log-average, so that black pixels do
-/// not drag it to zero.
-const LOG_AVERAGE_FLOOR: f64 = 1e-4;
+/// The darkest white auto exposure chooses, cd/m²: a black frame stays
+/// black instead of dividing by zero.
+const DARKEST_WHITE: f64 = 1e-4;
 
-/// The log-average luminance exp(mean ln(L + 10⁻⁴)) in cd/m².
-pub fn log_average_luminance(image: &Image, scale: f64) -> f64 {
+/// Where the lit scene's median is put: at this fraction of white, the
+/// lower mid-tones (sRGB code 112 of 255 through the filmic curve, about
+/// 95 through the others; zones IV to V).
+const MEDIAN_AT: f64 = 0.12;
+
+/// What the auto exposure meter found, cd/m².
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Metering {
+    /// The luminance shown as white.
+    pub white: f64,
+    /// The median of the lit scene.
+    pub median: f64,
+    /// Pixels brighter than this count as light sources and may clip.
+    pub sources_above: f64,
+    /// The 99th percentile of the other pixels' brightest channel, kept
+    /// below clipping.
+    pub highlights: f64,
+}
+
+/// The auto exposure of `image` (`scale` cd/m² per unit) for `curve`, a
+/// percentile meter on the lit scene (docs/physics.md §9):
+///
+/// - the lit scene is every pixel within ten stops of the highlights
+///   (L ≥ P99.9 / 1000): a black sky or a dark table does not count;
+/// - light sources are the pixels brighter than both ten times the lit
+///   median and the 98th percentile: lamps, flames, lit windows, the sun;
+///   they may clip, as in a photograph;
+/// - white puts the lit median at [`MEDIAN_AT`] of white, unless that would
+///   clip more than 1 % of the other pixels (their brightest channel's
+///   99th percentile at the curve's clipping point): highlights win.
+///
+/// Percentiles are taken on at most about two million pixels, every k-th,
+/// so a 4K frame meters in milliseconds and always alike.
+pub fn meter(image: &Image, scale: f64, curve: ToneCurve) -> Metering {
     let n = image.width * image.height;
-    if n == 0 {
-        return LOG_AVERAGE_FLOOR;
-    }
-    let sum: f64 = image
-        .luminance()
+    let stride = n.div_ceil(1 << 21).max(1);
+    let luminance = image.luminance();
+    let brightest = |i: usize| match image.layout {
+        Layout::Luminance => image.planes[0][i],
+        Layout::Rgb => image.planes[0][i]
+            .max(image.planes[1][i])
+            .max(image.planes[2][i]),
+    };
+    let sampled: Vec<(f64, f64)> = (0..n)
+        .step_by(stride)
+        .map(|i| {
+            let cd = |v: f32| (f64::from(v) * scale).max(0.0);
+            (cd(luminance[i]), cd(brightest(i)))
+        })
+        .filter(|(l, m)| l.is_finite() && m.is_finite())
+        .collect();
+    let mut all: Vec<f64> = sampled.iter().map(|s| s.0).collect();
+    let top = percentile(&mut all, 0.999);
+    let mut lit: Vec<f64> = all.iter().copied().filter(|&l| l >= top / 1000.0).collect();
+    let median = percentile(&mut lit, 0.5);
+    let sources_above = (10.0 * median).max(percentile(&mut all, 0.98));
+    let mut others: Vec<f64> = sampled
         .iter()
-        .map(|&y| (f64::from(y).max(0.0) * scale + LOG_AVERAGE_FLOOR).ln())
-        .sum();
-    (sum / n as f64).exp()
+        .filter(|s| s.0 <= sources_above)
+        .map(|s| s.1)
+        .collect();
+    // Just inside 1 %, so that sampling never tips it over.
+    let highlights = percentile(&mut others, 0.991);
+    let white = (median / MEDIAN_AT)
+        .max(highlights / clipping_point(curve))
+        .max(DARKEST_WHITE);
+    Metering {
+        white,
+        median,
+        sources_above,
+        highlights,
+    }
+}
+
+/// The `q` quantile (0…1) of `values` (reordered), 0 when empty.
+fn percentile(values: &mut [f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let at = ((values.len() - 1) as f64 * q).round() as usize;
+    *values.select_nth_unstable_by(at, f64::total_cmp).1
+}
+
+/// The exposed level (1 = white) from which `curve` shows the top 8-bit
+/// code: the filmic shoulder reaches it only at about 6.4.
+pub fn clipping_point(curve: ToneCurve) -> f64 {
+    let clips = |x: f64| linear_to_srgb(tone(curve, x as f32)) >= 254.5 / 255.0;
+    let (mut low, mut high) = (0.0, 1.0);
+    while !clips(high) {
+        high *= 2.0;
+    }
+    for _ in 0..40 {
+        let mid = 0.5 * (low + high);
+        if clips(mid) {
+            high = mid;
+        } else {
+            low = mid;
+        }
+    }
+    high
 }
 
 /// The sRGB encoding curve: linear light (0…1) to display code value.
@@ -118,9 +206,7 @@ fn tone(curve: ToneCurve, x: f32) -> f32 {
 /// Renders `image` (file units, `scale` cd/m² per unit) for a display.
 pub fn render(image: &Image, scale: f64, options: &DisplayOptions) -> Picture {
     let white = match options.exposure {
-        // A meter reads EV100 = log₂(L·100/12.5) for a log-average L; the
-        // saturation luminance at that EV is 1.2·2^EV = 9.6 L.
-        Exposure::Auto => 9.6 * log_average_luminance(image, scale),
+        Exposure::Auto => meter(image, scale, options.tone).white,
         Exposure::Ev(ev) => 1.2 * ev.exp2(),
         Exposure::White(white) => white,
     };
@@ -209,7 +295,7 @@ mod tests {
     }
 
     #[test]
-    fn auto_exposure_puts_a_uniform_scene_at_a_tenth_of_white() {
+    fn auto_exposure_puts_a_uniform_scene_in_the_lower_mid_tones() {
         let image = Image::filled(4, 4, Layout::Rgb, 50.0);
         let picture = render(
             &image,
@@ -220,6 +306,23 @@ mod tests {
             },
         );
         let linear = srgb_to_linear(picture.rgb[0]);
-        assert!((linear - 1.0 / 9.6).abs() < 1e-3, "{linear}");
+        assert!((f64::from(linear) - MEDIAN_AT).abs() < 1e-3, "{linear}");
+    }
+
+    #[test]
+    fn clipping_points_are_where_each_curve_reaches_its_top_code() {
+        assert!((clipping_point(ToneCurve::Clip) - 0.996).abs() < 0.002);
+        let filmic = clipping_point(ToneCurve::Filmic);
+        assert!((6.0..7.0).contains(&filmic), "{filmic}");
+        for curve in [ToneCurve::Clip, ToneCurve::Reinhard, ToneCurve::Filmic] {
+            let x = clipping_point(curve);
+            assert!(linear_to_srgb(tone(curve, (x * 0.99) as f32)) < 254.5 / 255.0);
+        }
+    }
+
+    #[test]
+    fn a_black_frame_meters_to_the_darkest_white() {
+        let image = Image::filled(8, 8, Layout::Rgb, 0.0);
+        assert_eq!(meter(&image, 1.0, ToneCurve::Filmic).white, DARKEST_WHITE);
     }
 }

@@ -374,3 +374,72 @@ fn an_unwritable_folder_leaves_no_file() {
     .is_err());
     assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
 }
+
+#[test]
+fn radiance_exposure_colour_correction_and_primaries_are_honoured_and_kept() {
+    use aureole_io::write::write_linear_into;
+    let dir = tempfile::tempdir().unwrap();
+    let plain = dir.path().join("plain.hdr");
+    let mut image = aureole::Image::filled(8, 4, Layout::Rgb, 0.0);
+    for (c, plane) in image.planes.iter_mut().enumerate() {
+        plane.iter_mut().for_each(|v| *v = [4.0, 2.0, 1.0][c]);
+    }
+    write_linear(&plain, &image, LinearOptions::default()).unwrap();
+    // A renderer's file whose pixels were doubled after rendering, its red
+    // halved, on other primaries.
+    let bytes = std::fs::read(&plain).unwrap();
+    let format = b"FORMAT=32-bit_rle_rgbe\n";
+    let at = bytes
+        .windows(format.len())
+        .position(|w| w == format)
+        .unwrap()
+        + format.len();
+    let mut edited = bytes[..at].to_vec();
+    edited.extend_from_slice(
+        b"EXPOSURE=2\nCOLORCORR=0.5 1 1\nPRIMARIES=0.68 0.32 0.265 0.69 0.15 0.06 0.3127 0.329\n",
+    );
+    edited.extend_from_slice(&bytes[at..]);
+    let exposed = dir.path().join("exposed.hdr");
+    std::fs::write(&exposed, &edited).unwrap();
+
+    let loaded = read_image(&exposed, Limits::NONE).unwrap();
+    // Red: 4 stored = 4 · 2 (exposure) · 0.5 (correction); green 2 = 1 · 2.
+    let first = |l: &aureole_io::read::Loaded, c: usize| l.image.planes[c][0];
+    assert!(
+        (first(&loaded, 0) - 4.0).abs() < 0.05,
+        "{}",
+        first(&loaded, 0)
+    );
+    assert!(
+        (first(&loaded, 1) - 1.0).abs() < 0.02,
+        "{}",
+        first(&loaded, 1)
+    );
+    assert!(
+        loaded.notes.iter().any(|n| n.contains("EXPOSURE=2")),
+        "{:?}",
+        loaded.notes
+    );
+    let p3 = loaded.image.primaries.expect("the header's primaries");
+    assert_eq!(p3.green, [0.265, 0.69]);
+
+    // Written back, the header says the same and the pixels read the same.
+    let back = dir.path().join("back.hdr");
+    write_linear_into(
+        &back,
+        &loaded.image,
+        LinearOptions::default(),
+        loaded.original.clone(),
+    )
+    .unwrap();
+    let text = String::from_utf8_lossy(&std::fs::read(&back).unwrap()).into_owned();
+    assert!(
+        text.contains("EXPOSURE=2\n") && text.contains("COLORCORR=0.5 1 1\n"),
+        "{text}"
+    );
+    assert!(text.contains("PRIMARIES=0.68 0.32"), "{text}");
+    let again = read_image(&back, Limits::NONE).unwrap();
+    for c in 0..3 {
+        assert!((first(&again, c) - first(&loaded, c)).abs() < 0.02 * first(&loaded, c));
+    }
+}

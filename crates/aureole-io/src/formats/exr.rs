@@ -624,6 +624,7 @@ pub(crate) fn decode(
         notes,
         compression,
         original: super::Original {
+            radiance: None,
             exr: Some(Box::new(Kept {
                 image,
                 part: chosen.part,

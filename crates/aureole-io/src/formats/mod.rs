@@ -98,6 +98,7 @@ pub(crate) struct Decoded {
 #[derive(Debug, Clone, Default)]
 pub struct Original {
     pub(crate) exr: Option<Box<exr::Kept>>,
+    pub(crate) radiance: Option<radiance::Header>,
 }
 
 impl Original {
@@ -206,7 +207,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::Unsupported,
         depths: &[],
         magic: |head| head.starts_with(b"#?"),
-        decode: |bytes, limits, _| picture::decode(bytes, limits),
+        decode: |bytes, limits, _| radiance::decode(bytes, limits),
         encode: Encoder::Linear(radiance::encode),
     },
     Format {
