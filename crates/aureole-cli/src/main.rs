@@ -14,6 +14,7 @@ mod output;
 mod presets;
 mod progress;
 mod psf;
+mod studio;
 mod words;
 
 use std::process::ExitCode;
@@ -50,6 +51,8 @@ enum Command {
     Psf(psf::Args),
     /// List the built-in presets, or print one as TOML to start a config from.
     Presets(presets::Args),
+    /// Tune the camera on an image in the browser: a local web studio.
+    Studio(studio::Args),
 }
 
 /// How a run failed: a usage or configuration error (exit 2) or a failure
@@ -127,6 +130,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info::run(args, cli.quiet),
         Command::Psf(args) => psf::run(args, sub("psf"), cli.quiet),
         Command::Presets(args) => presets::run(args),
+        Command::Studio(args) => studio::run(args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

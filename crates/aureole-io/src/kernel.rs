@@ -55,7 +55,7 @@ pub fn write_kernel_for(path: &Path, kernel: &Kernel, image_width: Option<usize>
         (KernelStorage::LogPicture, Encoder::Picture(encoding)) => picture::encode_samples(
             path,
             (kernel.width(), kernel.height()),
-            log_levels(kernel),
+            log_picture(kernel),
             *encoding,
             format.name,
         ),
@@ -89,7 +89,7 @@ pub fn read_kernel_file(path: &Path, limits: Limits) -> Result<(Kernel, Option<u
 /// below the brightest pixel outside the centre (the unspread centre is far
 /// brighter and shows white). A coloured kernel gives a colour picture, all
 /// channels on one scale.
-fn log_levels(kernel: &Kernel) -> Vec<u8> {
+pub fn log_picture(kernel: &Kernel) -> Vec<u8> {
     let (width, height) = (kernel.width(), kernel.height());
     let (cx, cy) = kernel.centre();
     let centre = cy * width + cx;

@@ -288,6 +288,18 @@ impl Default for Config {
 }
 
 impl Config {
+    /// The same camera for the image resampled by `factor` (a preview of
+    /// width W·factor): lengths in pixels scale with it, while lengths on
+    /// the sensor and diffraction follow from the new pixel pitch, so the
+    /// kernel draws what the full image's kernel draws, smaller.
+    pub fn with_pixels_scaled(&self, factor: f64) -> Config {
+        let mut scaled = self.clone();
+        for effect in &mut scaled.effects {
+            effect.scale_pixels(factor);
+        }
+        scaled
+    }
+
     /// Adds a file on top: its settings replace ours, its effects follow ours.
     pub fn apply(&mut self, file: ConfigFile) {
         self.seed = file.seed.unwrap_or(self.seed);

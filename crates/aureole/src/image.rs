@@ -118,6 +118,49 @@ impl Image {
         }
     }
 
+    /// The image resampled to `width`×`height` by area: each new pixel is
+    /// the mean of the old pixels it covers, weighted by the part of each it
+    /// covers, so that luminance stays luminance and the light of the
+    /// whole (sum × pixel area) is kept. For previews, which are smaller.
+    pub fn resampled(&self, width: usize, height: usize) -> Image {
+        let (width, height) = (width.max(1), height.max(1));
+        let columns = area_weights(self.width, width);
+        let rows = area_weights(self.height, height);
+        let resample = |plane: &Vec<f32>| -> Vec<f32> {
+            // Along rows first, in f64 so that wide spans stay exact.
+            let narrow: Vec<f64> = (0..self.height)
+                .into_par_iter()
+                .flat_map_iter(|y| {
+                    let row = &plane[y * self.width..(y + 1) * self.width];
+                    columns
+                        .iter()
+                        .map(move |w| w.iter().map(|&(x, f)| f * f64::from(row[x])).sum::<f64>())
+                })
+                .collect();
+            (0..height)
+                .into_par_iter()
+                .flat_map_iter(|y| {
+                    let (rows, narrow) = (&rows, &narrow);
+                    (0..width).map(move |x| {
+                        rows[y]
+                            .iter()
+                            .map(|&(r, f)| f * narrow[r * width + x])
+                            .sum::<f64>() as f32
+                    })
+                })
+                .collect()
+        };
+        Image {
+            width,
+            height,
+            layout: self.layout,
+            planes: self.planes.iter().map(resample).collect(),
+            alpha: self.alpha.as_ref().map(resample),
+            white_luminance: self.white_luminance,
+            primaries: self.primaries,
+        }
+    }
+
     /// Y = w·RGB for this image's primaries (Rec.709 unless the file
     /// says otherwise).
     pub fn luminance_weights(&self) -> [f32; 3] {
@@ -244,6 +287,26 @@ pub(crate) fn sum_f64(values: &[f32]) -> f64 {
     lanes.iter().sum::<f64>() + rest
 }
 
+/// For each of `to` cells spanning `from` old ones, the old cells it
+/// covers and the fraction of the new cell each fills (summing to 1).
+fn area_weights(from: usize, to: usize) -> Vec<Vec<(usize, f64)>> {
+    let step = from as f64 / to as f64;
+    (0..to)
+        .map(|i| {
+            let (start, end) = (i as f64 * step, (i + 1) as f64 * step);
+            let first = start.floor() as usize;
+            let last = (end.ceil() as usize).min(from);
+            (first..last)
+                .map(|k| {
+                    let covered = (end.min(k as f64 + 1.0) - start.max(k as f64)).max(0.0);
+                    (k, covered / step)
+                })
+                .filter(|&(_, f)| f > 0.0)
+                .collect()
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -281,5 +344,23 @@ mod tests {
             ..tree
         };
         assert!(degenerate.luminance_weights().is_none());
+    }
+
+    #[test]
+    fn resampling_by_area_keeps_the_light() {
+        let mut image = Image::filled(7, 5, Layout::Rgb, 0.0);
+        for (i, v) in image.planes[1].iter_mut().enumerate() {
+            *v = (i * 13 % 11) as f32;
+        }
+        let total = |im: &Image| -> f64 {
+            im.planes[1].iter().map(|&v| f64::from(v)).sum::<f64>() / (im.width * im.height) as f64
+        };
+        for (w, h) in [(3, 2), (7, 5), (2, 5), (1, 1)] {
+            let small = image.resampled(w, h);
+            assert_eq!((small.width, small.height), (w, h));
+            // The mean luminance, so sum × pixel area, is kept.
+            assert!((total(&small) - total(&image)).abs() < 1e-5, "{w}x{h}");
+        }
+        assert_eq!(image.resampled(7, 5).planes, image.planes);
     }
 }

@@ -67,6 +67,15 @@ impl Length {
         }
     }
 
+    /// Times `factor` if it is in pixels (for an image resampled by
+    /// `factor`); a length on the sensor does not change.
+    pub fn scaled_px(self, factor: f64) -> Length {
+        match self.unit {
+            Unit::Px => Length::px(self.value * factor),
+            Unit::Um | Unit::Mm => self,
+        }
+    }
+
     /// This length in pixels. Physical units need the pixel pitch in mm
     /// (sensor width / image width); `what` names the parameter for the error
     /// when there is none.

@@ -27,6 +27,10 @@ pub struct Bloom {
 impl Model for Bloom {
     const KIND: &'static str = "bloom";
 
+    fn scale_pixels(&mut self, factor: f64) {
+        self.radius = self.radius.scaled_px(factor);
+    }
+
     /// Checks ε ∈ [0, 1] and β > 1 (β ≤ 1 spreads infinite energy).
     fn validate(&self) -> Result<()> {
         check::epsilon("bloom", self.epsilon)?;

@@ -90,6 +90,11 @@ pub struct RayFactors {
 impl Model for Corona {
     const KIND: &'static str = "corona";
 
+    fn scale_pixels(&mut self, factor: f64) {
+        self.length = self.length.scaled_px(factor);
+        self.width = self.width.scaled_px(factor);
+    }
+
     /// Checks every parameter's range.
     fn validate(&self) -> Result<()> {
         const NAME: &str = "corona";

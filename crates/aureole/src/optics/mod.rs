@@ -85,6 +85,10 @@ pub(crate) trait Model:
     fn building_bytes(&self, plane_bytes: u64) -> u64 {
         plane_bytes * self.planes() as u64 + plane_bytes / 2
     }
+
+    /// Its lengths given in pixels, times `factor` (for an image resampled
+    /// by it); lengths on the sensor follow the pitch by themselves.
+    fn scale_pixels(&mut self, _factor: f64) {}
 }
 
 /// The registry: the effect enum, its dispatch to each [`Model`], the list
@@ -128,6 +132,14 @@ macro_rules! effects {
             pub(crate) fn source(&self, context: &Context) -> Result<Source> {
                 match self {
                     $(Effect::$variant(model) => model.source(context),)*
+                }
+            }
+
+            /// Its lengths given in pixels, times `factor`: the same effect
+            /// on an image resampled by `factor` (a preview).
+            pub fn scale_pixels(&mut self, factor: f64) {
+                match self {
+                    $(Effect::$variant(model) => model.scale_pixels(factor),)*
                 }
             }
 

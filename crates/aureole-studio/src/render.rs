@@ -1,0 +1,392 @@
+//! A preview render: the image resampled by area to the view's width, the
+//! camera built at the preview's pixel pitch (lengths in px scaled with
+//! it), through the same session as `aureole apply`, then exposed and
+//! tone-mapped as a PNG.
+
+use std::sync::{Arc, Mutex};
+use std::time::{Instant, SystemTime};
+
+use aureole::config::ConfigFile;
+use aureole::{ApplyOptions, Cancel, Config, Frame, FrameOptions, Image, Method, Session};
+use aureole_io::display::{render, DisplayOptions, Exposure, ToneCurve};
+use aureole_io::limits::Limits;
+use serde::Deserialize;
+
+use crate::error::StudioError;
+use crate::roots::Roots;
+
+/// The widest preview: a 4K view at 1:1.
+pub const MAX_WIDTH: usize = 4096;
+
+/// The image the studio shows when none is chosen: the demo night street.
+pub const DEMO: &str = "demo";
+
+/// What a render shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum View {
+    /// The image through the camera.
+    #[default]
+    Result,
+    /// The image as it is.
+    Original,
+    /// Only the light the camera adds.
+    Glare,
+    /// The kernel at the preview's pitch, log-scaled, its centre in the
+    /// middle.
+    Kernel,
+}
+
+/// `POST /api/render`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderRequest {
+    /// A path under a root, or `demo`.
+    pub image: String,
+    /// The camera, as a config file's TOML.
+    pub config: String,
+    /// The preview's width in pixels.
+    pub width: usize,
+    /// What to show.
+    #[serde(default)]
+    pub view: View,
+    /// EV100, or `"auto"` (the default).
+    #[serde(default)]
+    pub exposure: Option<serde_json::Value>,
+    /// The luminance shown as white, cd/m² (instead of `exposure`).
+    #[serde(default)]
+    pub white: Option<f64>,
+    /// `filmic` (the default), `reinhard` or `clip`.
+    #[serde(default)]
+    pub tonemap: Option<String>,
+    /// cd/m²; the config's when absent.
+    #[serde(default)]
+    pub threshold: Option<f64>,
+    /// The soft knee above the threshold, relative to it.
+    #[serde(default)]
+    pub knee: f64,
+}
+
+/// A rendered picture and what the page shows beside it.
+pub struct Rendered {
+    /// The picture.
+    pub png: Vec<u8>,
+    /// Its width in pixels.
+    pub width: usize,
+    /// Its height in pixels.
+    pub height: usize,
+    /// The light of the preview before the camera (Σ luminance, cd/m²·px).
+    pub energy_in: f64,
+    /// And after.
+    pub energy_out: f64,
+    /// The luminance shown as white, cd/m² (0 for the kernel).
+    pub white: f64,
+    /// How long the render took.
+    pub milliseconds: f64,
+}
+
+/// A full image in memory, with where it came from.
+struct Loaded {
+    key: (String, Option<SystemTime>),
+    frame: Arc<Frame>,
+}
+
+/// A preview image: (source key, width) and the resampled frame.
+struct Preview {
+    key: ((String, Option<SystemTime>), usize),
+    frame: Arc<Frame>,
+}
+
+/// The session of the last camera and preview size, kept so that a change
+/// of threshold or exposure reuses its kernel and spectra.
+struct Camera {
+    key: (String, (usize, usize)),
+    session: Session,
+}
+
+/// What renders share: the roots, the memory limit, the last image, its
+/// preview, the last camera, and the running render's cancellation.
+pub struct Renderer {
+    roots: Roots,
+    memory_limit: u64,
+    loaded: Mutex<Option<Loaded>>,
+    preview: Mutex<Option<Preview>>,
+    camera: Mutex<Option<Camera>>,
+    running: Mutex<Cancel>,
+}
+
+fn locked<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+impl Renderer {
+    /// Renders from files under `roots`, within `memory_limit` bytes.
+    pub fn new(roots: Roots, memory_limit: u64) -> Renderer {
+        Renderer {
+            roots,
+            memory_limit,
+            loaded: Mutex::new(None),
+            preview: Mutex::new(None),
+            camera: Mutex::new(None),
+            running: Mutex::new(Cancel::new()),
+        }
+    }
+
+    /// The roots files are read from.
+    pub fn roots(&self) -> &Roots {
+        &self.roots
+    }
+
+    /// Renders `request`; a render still running is cancelled first, as the
+    /// newer request replaces it.
+    pub fn render(&self, request: &RenderRequest) -> Result<Rendered, StudioError> {
+        let start = Instant::now();
+        let cancel = {
+            let mut running = locked(&self.running);
+            running.cancel();
+            *running = Cancel::new();
+            running.clone()
+        };
+        if request.width == 0 || request.width > MAX_WIDTH {
+            return Err(StudioError::BadRequest(format!(
+                "width {} is not allowed: from 1 to {MAX_WIDTH} px",
+                request.width
+            )));
+        }
+        let display = display_options(request)?;
+        let full = self.load(&request.image)?;
+        let preview = self.preview(&request.image, &full, request.width)?;
+        let image = preview.image();
+        let (width, height) = (image.width, image.height);
+        let factor = width as f64 / full.image().width as f64;
+
+        let (shown, energy_in, energy_out) = match request.view {
+            View::Original => (
+                image.clone(),
+                image.total_luminance(),
+                image.total_luminance(),
+            ),
+            view => {
+                let mut camera = locked(&self.camera);
+                let key = (request.config.clone(), (width, height));
+                if camera.as_ref().is_none_or(|c| c.key != key) {
+                    let config = parse_config(&request.config)?.with_pixels_scaled(factor);
+                    *camera = Some(Camera {
+                        key,
+                        session: Session::new(config).with_memory_limit(self.memory_limit),
+                    });
+                }
+                let Some(camera) = camera.as_mut() else {
+                    return Err(StudioError::Internal("no camera".into()));
+                };
+                camera.session.set_cancel_token(cancel.clone());
+                let options = ApplyOptions {
+                    threshold: request.threshold,
+                    knee: request.knee,
+                    glare_only: view == View::Glare,
+                    method: Method::Auto,
+                };
+                let applied = camera.session.apply(&preview, &options, &mut |_, _| {})?;
+                let picture = if view == View::Kernel {
+                    let plan = camera
+                        .session
+                        .plan()
+                        .ok_or_else(|| StudioError::Internal("the kernel was not built".into()))?;
+                    kernel_picture(plan.kernel(), width, height)
+                } else {
+                    applied.image
+                };
+                (picture, applied.energy_in, applied.energy_out)
+            }
+        };
+        cancel.check()?;
+        let (png, white) = if request.view == View::Kernel {
+            (encode_png(&shown, |v| v)?, 0.0)
+        } else {
+            let picture = render(&shown, preview.scale(), &display);
+            let white = picture.white;
+            (encode_png_picture(&picture)?, white)
+        };
+        Ok(Rendered {
+            png,
+            width,
+            height,
+            energy_in,
+            energy_out,
+            white,
+            milliseconds: start.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+
+    /// The full image `name` names, read once while it does not change.
+    fn load(&self, name: &str) -> Result<Arc<Frame>, StudioError> {
+        let (path, modified) = if name == DEMO {
+            (None, None)
+        } else {
+            let path = self.roots.resolve(name)?;
+            let modified = std::fs::metadata(&path).and_then(|m| m.modified()).ok();
+            (Some(path), modified)
+        };
+        let key = (name.to_string(), modified);
+        let mut loaded = locked(&self.loaded);
+        if let Some(hit) = loaded.as_ref().filter(|l| l.key == key) {
+            return Ok(hit.frame.clone());
+        }
+        let image = match &path {
+            None => aureole_io::demo::night_street(1280, 720),
+            Some(path) => read(path, self.memory_limit)?,
+        };
+        let frame = Arc::new(
+            Frame::new(image, &FrameOptions::default())
+                .map_err(|e| StudioError::Unprocessable(format!("{name}: {e}")))?,
+        );
+        *loaded = Some(Loaded {
+            key,
+            frame: frame.clone(),
+        });
+        Ok(frame)
+    }
+
+    /// `full` resampled by area to `width` (no wider than it is).
+    fn preview(&self, name: &str, full: &Frame, width: usize) -> Result<Arc<Frame>, StudioError> {
+        let image = full.image();
+        let width = width.min(image.width);
+        let height =
+            ((image.height as f64 * width as f64 / image.width as f64).round() as usize).max(1);
+        let modified = locked(&self.loaded).as_ref().and_then(|l| l.key.1);
+        let key = ((name.to_string(), modified), width);
+        let mut preview = locked(&self.preview);
+        if let Some(hit) = preview.as_ref().filter(|p| p.key == key) {
+            return Ok(hit.frame.clone());
+        }
+        let options = FrameOptions {
+            input_scale: Some(full.scale()),
+            sanitize: false,
+        };
+        let frame = Arc::new(Frame::new(image.resampled(width, height), &options)?);
+        *preview = Some(Preview {
+            key,
+            frame: frame.clone(),
+        });
+        Ok(frame)
+    }
+}
+
+fn read(path: &std::path::Path, memory_limit: u64) -> Result<Image, StudioError> {
+    let limits = Limits {
+        max_bytes: memory_limit,
+    };
+    Ok(aureole_io::read::read_image(path, limits)?.image)
+}
+
+/// The camera a TOML text describes, on top of the defaults.
+pub fn parse_config(text: &str) -> Result<Config, StudioError> {
+    let file = ConfigFile::parse(text, "config")?;
+    let mut config = Config::default();
+    config.apply(file);
+    if config.effects.is_empty() {
+        return Err(aureole::Error::NoEffect.into());
+    }
+    Ok(config)
+}
+
+fn display_options(request: &RenderRequest) -> Result<DisplayOptions, StudioError> {
+    let exposure = match (&request.white, &request.exposure) {
+        (Some(white), _) if white.is_finite() && *white > 0.0 => Exposure::White(*white),
+        (Some(white), _) => {
+            return Err(StudioError::BadRequest(format!(
+                "white {white} is not allowed: a luminance in cd/m² above 0"
+            )))
+        }
+        (None, None) => Exposure::Auto,
+        (None, Some(serde_json::Value::String(s))) if s == "auto" => Exposure::Auto,
+        (None, Some(serde_json::Value::Number(n))) => match n.as_f64() {
+            Some(ev) if ev.is_finite() && (-20.0..=30.0).contains(&ev) => Exposure::Ev(ev),
+            _ => {
+                return Err(StudioError::BadRequest(format!(
+                    "exposure {n} is not allowed: an EV100 from -20 to 30, or \"auto\""
+                )))
+            }
+        },
+        (None, Some(other)) => {
+            return Err(StudioError::BadRequest(format!(
+                "exposure {other} is not allowed: an EV100 from -20 to 30, or \"auto\""
+            )))
+        }
+    };
+    let tone = match request.tonemap.as_deref().unwrap_or("filmic") {
+        "filmic" => ToneCurve::Filmic,
+        "reinhard" => ToneCurve::Reinhard,
+        "clip" => ToneCurve::Clip,
+        other => {
+            return Err(StudioError::BadRequest(format!(
+                "tonemap {other:?} is not allowed: filmic, reinhard or clip"
+            )))
+        }
+    };
+    Ok(DisplayOptions { exposure, tone })
+}
+
+/// The kernel's central `width`×`height` as its log picture, as an RGB
+/// image of levels 0…1.
+fn kernel_picture(kernel: &aureole::Kernel, width: usize, height: usize) -> Image {
+    let levels = aureole_io::kernel::log_picture(kernel);
+    let (kw, kh) = (kernel.width(), kernel.height());
+    let (cx, cy) = kernel.centre();
+    let mut image = Image::filled(width, height, aureole::Layout::Rgb, 0.0);
+    for y in 0..height {
+        let ky = (cy + y).checked_sub(height / 2).filter(|&v| v < kh);
+        for x in 0..width {
+            let kx = (cx + x).checked_sub(width / 2).filter(|&v| v < kw);
+            if let (Some(kx), Some(ky)) = (kx, ky) {
+                for c in 0..3 {
+                    image.planes[c][y * width + x] =
+                        f32::from(levels[(ky * kw + kx) * 3 + c]) / 255.0;
+                }
+            }
+        }
+    }
+    image
+}
+
+/// An RGB image of display levels (0…1) as a PNG.
+fn encode_png(image: &Image, level: impl Fn(f32) -> f32) -> Result<Vec<u8>, StudioError> {
+    let n = image.width * image.height;
+    let mut bytes = Vec::with_capacity(n * 3);
+    for i in 0..n {
+        for c in 0..3 {
+            let plane = &image.planes[c.min(image.planes.len() - 1)];
+            bytes.push((level(plane[i]).clamp(0.0, 1.0) * 255.0).round() as u8);
+        }
+    }
+    png(image.width, image.height, &bytes)
+}
+
+fn encode_png_picture(picture: &aureole_io::display::Picture) -> Result<Vec<u8>, StudioError> {
+    let bytes: Vec<u8> = picture
+        .rgb
+        .iter()
+        .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+        .collect();
+    png(picture.width, picture.height, &bytes)
+}
+
+fn png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, StudioError> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new_with_quality(
+        &mut out,
+        image::codecs::png::CompressionType::Fast,
+        image::codecs::png::FilterType::Sub,
+    )
+    .write_image(
+        rgb,
+        width as u32,
+        height as u32,
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| StudioError::Internal(e.to_string()))?;
+    Ok(out)
+}

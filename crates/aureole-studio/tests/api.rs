@@ -1,0 +1,347 @@
+//! The studio's HTTP API against a real server on an ephemeral port.
+
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::Path;
+use std::sync::Arc;
+
+use aureole_studio::{Renderer, Roots};
+
+/// A server reading from `root`, on a port of its own, for the test's life.
+fn server(root: &Path) -> SocketAddr {
+    let roots = Roots::new(&[root.to_path_buf()]).unwrap();
+    let renderer = Arc::new(Renderer::new(roots, 4 << 30));
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .unwrap();
+        runtime.block_on(async {
+            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+            tx.send(listener.local_addr().unwrap()).unwrap();
+            aureole_studio::serve(listener, renderer).await.unwrap();
+        });
+    });
+    rx.recv().unwrap()
+}
+
+struct Reply {
+    status: u16,
+    headers: Vec<(String, String)>,
+    body: Vec<u8>,
+}
+
+impl Reply {
+    fn header(&self, name: &str) -> Option<&str> {
+        self.headers
+            .iter()
+            .find(|(n, _)| n.eq_ignore_ascii_case(name))
+            .map(|(_, v)| v.as_str())
+    }
+
+    fn json(&self) -> serde_json::Value {
+        serde_json::from_slice(&self.body).unwrap()
+    }
+
+    fn error(&self) -> String {
+        self.json()["error"].as_str().unwrap().to_string()
+    }
+}
+
+/// One HTTP/1.1 request, the connection closed after it.
+fn http(addr: SocketAddr, method: &str, path: &str, body: &str) -> Reply {
+    let mut stream = TcpStream::connect(addr).unwrap();
+    write!(
+        stream,
+        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        body.len()
+    )
+    .unwrap();
+    let mut raw = Vec::new();
+    stream.read_to_end(&mut raw).unwrap();
+    let split = raw.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    let head = String::from_utf8_lossy(&raw[..split]).into_owned();
+    let mut lines = head.lines();
+    let status = lines
+        .next()
+        .unwrap()
+        .split(' ')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let headers: Vec<(String, String)> = lines
+        .filter_map(|l| l.split_once(':'))
+        .map(|(n, v)| (n.trim().to_string(), v.trim().to_string()))
+        .collect();
+    let mut body = raw[split + 4..].to_vec();
+    let chunked = headers
+        .iter()
+        .any(|(n, v)| n.eq_ignore_ascii_case("transfer-encoding") && v.contains("chunked"));
+    if chunked {
+        body = unchunk(&body);
+    }
+    Reply {
+        status,
+        headers,
+        body,
+    }
+}
+
+fn unchunk(mut data: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    loop {
+        let end = data.windows(2).position(|w| w == b"\r\n").unwrap();
+        let size =
+            usize::from_str_radix(std::str::from_utf8(&data[..end]).unwrap().trim(), 16).unwrap();
+        if size == 0 {
+            return out;
+        }
+        out.extend_from_slice(&data[end + 2..end + 2 + size]);
+        data = &data[end + 2 + size + 2..];
+    }
+}
+
+fn render_body(image: &str, config: &str, width: usize, extra: &str) -> String {
+    format!(
+        r#"{{"image": {}, "config": {}, "width": {width}{extra}}}"#,
+        serde_json::to_string(image).unwrap(),
+        serde_json::to_string(config).unwrap()
+    )
+}
+
+fn preset(name: &str) -> &'static str {
+    aureole::presets::find(name).unwrap().toml
+}
+
+#[test]
+fn the_page_presets_and_images_are_served() {
+    let dir = tempfile::tempdir().unwrap();
+    aureole_io::write::write_linear(
+        &dir.path().join("street.exr"),
+        &aureole_io::demo::night_street(64, 36),
+        Default::default(),
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("notes.txt"), "not an image").unwrap();
+    let addr = server(dir.path());
+
+    let page = http(addr, "GET", "/", "");
+    assert_eq!(page.status, 200);
+    assert!(String::from_utf8_lossy(&page.body).contains("aureole"));
+    for asset in ["/app.js", "/app.css"] {
+        assert_eq!(http(addr, "GET", asset, "").status, 200, "{asset}");
+    }
+    let presets = http(addr, "GET", "/api/presets", "").json();
+    let names: Vec<&str> = presets
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names.len(), aureole::presets::PRESETS.len());
+    assert!(names.contains(&"camera-f8-7blade"));
+    assert!(presets[0]["toml"].as_str().unwrap().contains("[[effect]]"));
+
+    let images = http(addr, "GET", "/api/images", "").json();
+    let listed: Vec<&str> = images["images"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(listed.len(), 1, "{listed:?}");
+    assert!(listed[0].ends_with("street.exr"));
+}
+
+#[test]
+fn a_render_is_a_png_of_the_width_asked_with_its_energy() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = server(dir.path());
+    let reply = http(
+        addr,
+        "POST",
+        "/api/render",
+        &render_body("demo", preset("paper-fig5-both"), 320, ""),
+    );
+    assert_eq!(
+        reply.status,
+        200,
+        "{}",
+        String::from_utf8_lossy(&reply.body)
+    );
+    assert_eq!(reply.header("content-type"), Some("image/png"));
+    assert_eq!(reply.header("x-preview-size"), Some("320x180"));
+    let picture = image::load_from_memory(&reply.body).unwrap();
+    assert_eq!((picture.width(), picture.height()), (320, 180));
+    let energy = |name| reply.header(name).unwrap().parse::<f64>().unwrap();
+    // A full-frame kernel keeps the light (to the kernel's own sum).
+    let (e_in, e_out) = (energy("x-energy-in"), energy("x-energy-out"));
+    assert!((e_out / e_in - 1.0).abs() < 1e-3, "{e_in} {e_out}");
+    assert!(reply.header("x-render-ms").is_some());
+
+    // Every view answers, each a different picture.
+    let mut seen = Vec::new();
+    for view in ["result", "original", "glare", "kernel"] {
+        let reply = http(
+            addr,
+            "POST",
+            "/api/render",
+            &render_body(
+                "demo",
+                preset("paper-fig5-both"),
+                160,
+                &format!(r#", "view": "{view}""#),
+            ),
+        );
+        assert_eq!(
+            reply.status,
+            200,
+            "{view}: {}",
+            String::from_utf8_lossy(&reply.body)
+        );
+        assert!(!seen.contains(&reply.body), "{view} repeats another view");
+        seen.push(reply.body);
+    }
+}
+
+#[test]
+fn bad_requests_get_a_4xx_and_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let inside = dir.path().join("inside");
+    std::fs::create_dir(&inside).unwrap();
+    std::fs::write(dir.path().join("secret.exr"), b"outside the root").unwrap();
+    std::fs::write(inside.join("broken.exr"), b"v/1\x01 not really").unwrap();
+    std::os::unix::fs::symlink(dir.path().join("secret.exr"), inside.join("link.exr")).unwrap();
+    let addr = server(&inside);
+    let camera = preset("paper-fig4-bloom");
+    let cases: Vec<(String, u16, &str)> = vec![
+        (
+            render_body("../secret.exr", camera, 64, ""),
+            403,
+            "outside the folders",
+        ),
+        (
+            render_body(
+                &dir.path().join("secret.exr").display().to_string(),
+                camera,
+                64,
+                "",
+            ),
+            403,
+            "outside the folders",
+        ),
+        (
+            render_body("link.exr", camera, 64, ""),
+            403,
+            "outside the folders",
+        ),
+        (
+            render_body("missing.exr", camera, 64, ""),
+            404,
+            "no such file",
+        ),
+        (render_body("broken.exr", camera, 64, ""), 422, "broken.exr"),
+        (render_body("demo", "seed = -1", 64, ""), 400, "`seed`"),
+        (render_body("demo", "", 64, ""), 400, "effect"),
+        (render_body("demo", camera, 0, ""), 400, "width 0"),
+        (
+            render_body("demo", camera, 64, r#", "tonemap": "sepia""#),
+            400,
+            "tonemap",
+        ),
+        (
+            render_body("demo", camera, 64, r#", "exposure": 99"#),
+            400,
+            "exposure",
+        ),
+        ("{not json".to_string(), 400, "the render request"),
+    ];
+    for (body, status, words) in cases {
+        let reply = http(addr, "POST", "/api/render", &body);
+        assert_eq!(
+            reply.status,
+            status,
+            "{body}: {}",
+            String::from_utf8_lossy(&reply.body)
+        );
+        let error = reply.error();
+        assert!(
+            error.contains(words) && !error.contains('\n'),
+            "{body}: {error}"
+        );
+    }
+    // A body beyond the bound is refused before it is read whole.
+    let big = render_body("demo", &"#".repeat(2 << 20), 64, "");
+    assert_eq!(http(addr, "POST", "/api/render", &big).status, 413);
+    // And the server goes on rendering.
+    let reply = http(
+        addr,
+        "POST",
+        "/api/render",
+        &render_body("demo", camera, 64, ""),
+    );
+    assert_eq!(reply.status, 200);
+}
+
+#[test]
+fn the_preview_draws_what_a_resampled_full_render_draws() {
+    use aureole::{ApplyOptions, Config, Frame, FrameOptions, Session};
+    // Lengths in µm follow the preview's pitch; lengths in px are scaled.
+    let config_text = format!(
+        "{}\n[[effect]]\ntype = \"bloom\"\nradius = \"6px\"\nbeta = 2\nepsilon = 0.02\n",
+        preset("camera-f8-7blade")
+    );
+    let full_image = aureole_io::demo::night_street(640, 360);
+    let mut config = Config::default();
+    config.apply(aureole::config::ConfigFile::parse(&config_text, "test").unwrap());
+    let full = Session::new(config.clone())
+        .apply(
+            &Frame::new(full_image.clone(), &FrameOptions::default()).unwrap(),
+            &ApplyOptions::default(),
+            &mut |_, _| {},
+        )
+        .unwrap()
+        .image
+        .resampled(320, 180);
+    let small = Session::new(config.with_pixels_scaled(0.5))
+        .apply(
+            &Frame::new(full_image.resampled(320, 180), &FrameOptions::default()).unwrap(),
+            &ApplyOptions::default(),
+            &mut |_, _| {},
+        )
+        .unwrap()
+        .image;
+    // The same light in all, and the same halo around the brightest lamp.
+    let total = |i: &aureole::Image| i.total_luminance();
+    assert!((total(&small) / total(&full) - 1.0).abs() < 0.02);
+    let luminance = (small.luminance(), full.luminance());
+    let peak = (0..luminance.1.len())
+        .max_by(|&a, &b| luminance.1[a].total_cmp(&luminance.1[b]))
+        .unwrap();
+    let (px, py) = (peak % 320, peak / 320);
+    // The light in rings around it (the profile), each within 2 %.
+    for r in [3usize, 6, 12, 24] {
+        let ring = |l: &[f32]| -> f64 {
+            let mut sum = 0.0;
+            for y in py.saturating_sub(r + 2)..(py + r + 2).min(180) {
+                for x in px.saturating_sub(r + 2)..(px + r + 2).min(320) {
+                    let d =
+                        ((x as f64 - px as f64).powi(2) + (y as f64 - py as f64).powi(2)).sqrt();
+                    if d >= r as f64 && d < r as f64 + 2.0 {
+                        sum += f64::from(l[y * 320 + x]);
+                    }
+                }
+            }
+            sum
+        };
+        let (a, b) = (ring(&luminance.0), ring(&luminance.1));
+        eprintln!("ring {r}: preview {a:.4} full {b:.4}");
+        assert!(
+            (a / b - 1.0).abs() < 0.02,
+            "ring {r}: preview {a} against full {b}"
+        );
+    }
+}

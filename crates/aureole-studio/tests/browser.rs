@@ -1,0 +1,173 @@
+//! The studio page in a real headless Chromium (Debian's `chromium`, which
+//! `.ci/run` installs; without it these tests say so and pass): the page
+//! loads and renders with no console error, every view shows, and an
+//! unreadable file or a path outside the roots shows its one line.
+//! Screenshots are saved in `target/studio-screenshots/`.
+
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::Arc;
+
+use aureole_studio::{Renderer, Roots};
+
+fn chromium() -> Option<PathBuf> {
+    ["chromium", "chromium-browser", "google-chrome"]
+        .iter()
+        .map(PathBuf::from)
+        .find(|p| {
+            Command::new(p)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        })
+}
+
+fn server(root: &Path) -> SocketAddr {
+    let roots = Roots::new(&[root.to_path_buf()]).unwrap();
+    let renderer = Arc::new(Renderer::new(roots, 4 << 30));
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .unwrap();
+        runtime.block_on(async {
+            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+            tx.send(listener.local_addr().unwrap()).unwrap();
+            aureole_studio::serve(listener, renderer).await.unwrap();
+        });
+    });
+    rx.recv().unwrap()
+}
+
+/// What the page shows after its scripts ran: its DOM, what the console
+/// said, and a screenshot saved as `name`.
+struct Visit {
+    dom: String,
+    console: Vec<String>,
+}
+
+fn visit(browser: &Path, url: &str, name: &str) -> Visit {
+    let common = [
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--hide-scrollbars",
+        "--window-size=1400,860",
+        "--virtual-time-budget=30000",
+    ];
+    let dumped = Command::new(browser)
+        .args(common)
+        .args(["--enable-logging=stderr", "--v=0", "--dump-dom", url])
+        .output()
+        .unwrap();
+    let console = String::from_utf8_lossy(&dumped.stderr)
+        .lines()
+        .filter(|l| l.contains("CONSOLE"))
+        .map(str::to_string)
+        .collect();
+    let shots = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/studio-screenshots");
+    std::fs::create_dir_all(&shots).unwrap();
+    let shot = shots.join(format!("{name}.png"));
+    Command::new(browser)
+        .args(common)
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg(url)
+        .output()
+        .unwrap();
+    assert!(shot.is_file(), "no screenshot {}", shot.display());
+    Visit {
+        dom: String::from_utf8_lossy(&dumped.stdout).into_owned(),
+        console,
+    }
+}
+
+impl Visit {
+    fn attribute(&self, name: &str) -> usize {
+        let key = format!("{name}=\"");
+        self.dom
+            .find(&key)
+            .and_then(|at| {
+                let rest = &self.dom[at + key.len()..];
+                rest[..rest.find('"')?].parse().ok()
+            })
+            .unwrap_or(0)
+    }
+
+    fn text_of(&self, id: &str) -> String {
+        let key = format!("id=\"{id}\"");
+        let Some(at) = self.dom.find(&key) else {
+            return String::new();
+        };
+        let rest = &self.dom[at..];
+        let start = rest.find('>').map_or(0, |i| i + 1);
+        let end = rest[start..].find('<').map_or(start, |i| start + i);
+        rest[start..end].to_string()
+    }
+}
+
+#[test]
+fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
+    let Some(browser) = chromium() else {
+        eprintln!("skipped: no chromium (apt-get install chromium)");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("broken.exr"), b"v/1\x01 cut short").unwrap();
+    let addr = server(dir.path());
+    let base = format!("http://{addr}/");
+
+    let first = visit(&browser, &base, "result");
+    assert!(first.attribute("data-rendered") >= 1, "{}", first.dom);
+    assert_eq!(
+        first.attribute("data-failed"),
+        0,
+        "{}",
+        first.text_of("error")
+    );
+    assert!(
+        first.text_of("numbers").contains("energy in"),
+        "{}",
+        first.text_of("numbers")
+    );
+    let errors: Vec<&String> = first
+        .console
+        .iter()
+        .filter(|l| l.contains("ERROR") || l.contains("Uncaught"))
+        .collect();
+    assert!(errors.is_empty(), "console: {errors:?}");
+
+    for view in ["split", "kernel", "glare", "original"] {
+        let page = visit(&browser, &format!("{base}?view={view}"), view);
+        assert!(page.attribute("data-rendered") >= 1, "{view}");
+        assert_eq!(
+            page.attribute("data-failed"),
+            0,
+            "{view}: {}",
+            page.text_of("error")
+        );
+    }
+    // The split view puts the original under a handle.
+    let split = visit(&browser, &format!("{base}?view=split"), "split");
+    assert!(
+        !split.dom.contains(r#"id="handle" hidden"#),
+        "the handle is hidden"
+    );
+
+    let broken = visit(&browser, &format!("{base}?image=broken.exr"), "broken");
+    assert!(broken.attribute("data-failed") >= 1);
+    assert!(
+        broken.text_of("error").contains("broken.exr"),
+        "{}",
+        broken.text_of("error")
+    );
+
+    let outside = visit(&browser, &format!("{base}?image=/etc/hostname"), "outside");
+    assert!(
+        outside.text_of("error").contains("outside the folders"),
+        "{}",
+        outside.text_of("error")
+    );
+}
