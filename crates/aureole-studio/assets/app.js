@@ -39,13 +39,21 @@ async function fetchPicture(body, signal) {
     error.status = response.status;
     throw error;
   }
+  const header = (name) => Number(response.headers.get(name));
+  const [width, height] = (response.headers.get("x-preview-size") || "0x0").split("x").map(Number);
+  const linear = body.format === "linear";
   return {
-    url: URL.createObjectURL(await response.blob()),
-    energyIn: Number(response.headers.get("x-energy-in")),
-    energyOut: Number(response.headers.get("x-energy-out")),
-    ms: Number(response.headers.get("x-render-ms")),
-    white: Number(response.headers.get("x-white")),
-    size: response.headers.get("x-preview-size"),
+    linear: linear ? new Float32Array(await response.arrayBuffer()) : null,
+    url: linear ? null : URL.createObjectURL(await response.blob()),
+    width, height,
+    energyIn: header("x-energy-in"),
+    energyOut: header("x-energy-out"),
+    ms: header("x-render-ms"),
+    autoWhite: {
+      filmic: header("x-auto-white-filmic"),
+      reinhard: header("x-auto-white-reinhard"),
+      clip: header("x-auto-white-clip"),
+    },
   };
 }
 
@@ -55,31 +63,124 @@ function showError(message) {
   $("config-error").textContent = "";
   $("light-error").textContent = "";
   if (!message) return;
-  if (/^config:|effect|camera|preset|seed|NoEffect|no effect/i.test(message)) $("config-error").textContent = message;
+  if (/^config:|effect|camera|preset|seed|no effect/i.test(message)) $("config-error").textContent = message;
   else if (/threshold|knee/i.test(message)) $("light-error").textContent = message;
   else $("error").textContent = message;
+}
+
+// The display transform of aureole-io's display.rs, run here so that
+// exposure and tone curve redraw at the display's rate without the server:
+// x = L / white, the tone curve, then sRGB (a fine table).
+const SRGB_STEPS = 65536;
+const SRGB = (() => {
+  const table = new Uint8ClampedArray(SRGB_STEPS + 1);
+  for (let i = 0; i <= SRGB_STEPS; i++) {
+    const v = i / SRGB_STEPS;
+    const e = v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055;
+    table[i] = Math.round(e * 255);
+  }
+  return table;
+})();
+const CURVES = {
+  clip: (x) => Math.min(x, 1),
+  reinhard: (x) => Math.min((x * (1 + x / 4)) / (1 + x), 1),
+  filmic: (x) => Math.min(Math.max((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0), 1),
+};
+
+// srgb(curve(x)) as codes over 0 ≤ x < the curve's clipping point (code
+// 255 beyond), one table per curve: a draw is a multiply and a look-up.
+const CODE_STEPS = 1 << 18;
+const codeTables = {};
+function codeTable(name) {
+  if (codeTables[name]) return codeTables[name];
+  const curve = CURVES[name];
+  const srgb = (t) => SRGB[Math.round(t * SRGB_STEPS)];
+  let top = 1;
+  while (srgb(curve(top)) < 255) top *= 2;
+  const table = new Uint8ClampedArray(CODE_STEPS + 1);
+  for (let i = 0; i <= CODE_STEPS; i++) table[i] = srgb(curve((i / CODE_STEPS) * top));
+  codeTables[name] = { table, perUnit: CODE_STEPS / top };
+  return codeTables[name];
+}
+
+function white(shown) {
+  const tone = $("tonemap").value;
+  return $("auto").checked ? shown.autoWhite[tone] : 1.2 * Math.pow(2, Number($("ev").value));
+}
+
+function draw() {
+  const shown = state.shown;
+  if (!shown || !shown.linear) return;
+  const started = performance.now();
+  const { width, height } = shown;
+  const canvas = $("canvas");
+  if (canvas.width !== width || canvas.height !== height) {
+    canvas.width = width;
+    canvas.height = height;
+  }
+  const context = canvas.getContext("2d");
+  const picture = context.createImageData(width, height);
+  const data = picture.data;
+  const { table, perUnit } = codeTable($("tonemap").value);
+  const gain = perUnit / white(shown);
+  const split = state.view === "split" && state.under ? Math.round(state.split * width) : -1;
+  for (let y = 0; y < height; y++) {
+    for (let x = 0; x < width; x++) {
+      const i = y * width + x;
+      const source = x < split ? state.under.linear : shown.linear;
+      for (let c = 0; c < 3; c++) {
+        const k = source[3 * i + c] * gain;
+        data[4 * i + c] = k > 0 ? (k < CODE_STEPS ? table[Math.round(k)] : 255) : 0;
+      }
+      data[4 * i + 3] = 255;
+    }
+  }
+  context.putImageData(picture, 0, 0);
+  placeSplit();
+  state.drawMs = performance.now() - started;
+  showNumbers();
+}
+
+function showNumbers() {
+  const shown = state.shown;
+  if (!shown) return;
+  const ratio = shown.energyIn ? (100 * shown.energyOut / shown.energyIn).toFixed(3) + " %" : "–";
+  const parts = [`${shown.width}x${shown.height}`,
+    `energy in ${shown.energyIn.toExponential(4)} out ${shown.energyOut.toExponential(4)} (${ratio})`];
+  if (shown.linear) parts.push(`white ${white(shown).toPrecision(4)} cd/m²`);
+  parts.push(`render ${shown.ms.toFixed(0)} ms`);
+  if (shown.linear && state.drawMs !== undefined) parts.push(`display ${state.drawMs.toFixed(0)} ms`);
+  $("numbers").textContent = parts.join(" · ");
 }
 
 async function render() {
   if (state.controller) state.controller.abort();
   const controller = new AbortController();
   state.controller = controller;
-  const split = state.view === "split";
+  const view = state.view;
+  const kernel = view === "kernel";
   try {
-    const main = await fetchPicture(request(split ? "result" : state.view), controller.signal);
-    const under = split ? await fetchPicture(request("original"), controller.signal) : null;
+    const body = request(view === "split" ? "result" : view);
+    if (!kernel) body.format = "linear";
+    const shown = await fetchPicture(body, controller.signal);
+    const under = view === "split"
+      ? await fetchPicture({ ...request("original"), format: "linear" }, controller.signal)
+      : null;
     if (controller.signal.aborted) return;
-    $("picture").src = main.url;
-    $("under").hidden = !split;
-    $("handle").hidden = !split;
-    if (under) $("under").src = under.url;
-    placeSplit();
+    state.shown = shown;
+    state.under = under;
+    $("canvas").hidden = kernel;
+    $("picture").hidden = !kernel;
+    $("handle").hidden = view !== "split";
+    if (kernel) {
+      $("picture").src = shown.url;
+      showNumbers();
+    } else {
+      draw();
+    }
     showError("");
-    const ratio = main.energyIn ? (100 * main.energyOut / main.energyIn).toFixed(3) + " %" : "–";
-    $("numbers").textContent =
-      `${main.size} · energy in ${main.energyIn.toExponential(4)} out ${main.energyOut.toExponential(4)} (${ratio})` +
-      (main.white ? ` · white ${main.white.toPrecision(4)} cd/m²` : "") + ` · ${main.ms.toFixed(0)} ms`;
     document.body.dataset.rendered = String(Number(document.body.dataset.rendered || 0) + 1);
+    if (state.selfCheck && !kernel) await selfCheck(controller.signal);
   } catch (error) {
     if (error.name === "AbortError" || error.status === 409) return;
     showError(error.message);
@@ -88,16 +189,33 @@ async function render() {
   updateCommand();
 }
 
+// ?selfcheck=1: the server's PNG of the same view against what this page
+// drew, the largest difference in 8-bit codes (the browser test reads it).
+async function selfCheck(signal) {
+  const png = await fetchPicture(request(state.view === "split" ? "result" : state.view), signal);
+  const image = new Image();
+  image.src = png.url;
+  await image.decode();
+  const scratch = document.createElement("canvas");
+  scratch.width = png.width;
+  scratch.height = png.height;
+  const context = scratch.getContext("2d");
+  context.drawImage(image, 0, 0);
+  const theirs = context.getImageData(0, 0, png.width, png.height).data;
+  const ours = $("canvas").getContext("2d").getImageData(0, 0, png.width, png.height).data;
+  let worst = 0;
+  for (let i = 0; i < theirs.length; i++) worst = Math.max(worst, Math.abs(theirs[i] - ours[i]));
+  document.body.dataset.displayMismatch = String(worst);
+}
+
 function schedule() {
   clearTimeout(state.timer);
   state.timer = setTimeout(render, 120);
 }
 
 function placeSplit() {
-  const frame = $("frame");
-  const x = state.split * frame.clientWidth;
-  $("handle").style.left = `${x}px`;
-  $("under").style.clipPath = `inset(0 ${frame.clientWidth - x}px 0 0)`;
+  const canvas = $("canvas");
+  $("handle").style.left = `${state.split * canvas.clientWidth}px`;
 }
 
 function updateCommand() {
@@ -129,9 +247,11 @@ async function start() {
   clearTimeout(state.timer);
 
   $("preset").addEventListener("change", choosePreset);
-  for (const id of ["image", "config", "threshold", "knee", "tonemap"]) $(id).addEventListener("input", schedule);
-  $("auto").addEventListener("change", () => { $("ev").disabled = $("auto").checked; schedule(); });
-  $("ev").addEventListener("input", () => { $("ev-value").textContent = Number($("ev").value).toFixed(1); schedule(); });
+  for (const id of ["image", "config", "threshold", "knee"]) $(id).addEventListener("input", schedule);
+  // Exposure and tone curve are the page's own: redrawn without the server.
+  $("tonemap").addEventListener("input", () => { draw(); updateCommand(); });
+  $("auto").addEventListener("change", () => { $("ev").disabled = $("auto").checked; draw(); updateCommand(); });
+  $("ev").addEventListener("input", () => { $("ev-value").textContent = Number($("ev").value).toFixed(1); draw(); updateCommand(); });
   for (const button of document.querySelectorAll("#views button")) {
     button.addEventListener("click", () => {
       for (const b of document.querySelectorAll("#views button")) b.classList.toggle("on", b === button);
@@ -139,12 +259,9 @@ async function start() {
       render();
     });
   }
-  // The split can only be placed once the pictures have their size.
-  $("picture").addEventListener("load", placeSplit);
-  $("under").addEventListener("load", placeSplit);
   $("handle").addEventListener("pointerdown", (down) => {
     const frame = $("frame").getBoundingClientRect();
-    const move = (e) => { state.split = Math.min(1, Math.max(0, (e.clientX - frame.left) / frame.width)); placeSplit(); };
+    const move = (e) => { state.split = Math.min(1, Math.max(0, (e.clientX - frame.left) / frame.width)); draw(); };
     move(down);
     window.addEventListener("pointermove", move);
     window.addEventListener("pointerup", () => window.removeEventListener("pointermove", move), { once: true });
@@ -157,6 +274,7 @@ async function start() {
     link.click();
   });
   window.addEventListener("resize", schedule);
+  window.addEventListener("resize", placeSplit);
   fromAddress();
   render();
 }
@@ -165,6 +283,7 @@ async function start() {
 // ?image=PATH&preset=NAME&config=TOML&view=split
 function fromAddress() {
   const query = new URLSearchParams(location.search);
+  state.selfCheck = query.get("selfcheck") === "1";
   const image = query.get("image");
   if (image) {
     if (![...$("image").options].some((o) => o.value === image)) $("image").add(new Option(image, image));

@@ -10,8 +10,10 @@
 //! - `GET /api/images`: `{"roots": [...], "images": [...]}`, the images
 //!   under the roots.
 //! - `POST /api/render` with a JSON [`render::RenderRequest`]: a PNG of the
-//!   requested width, with `X-Energy-In`, `X-Energy-Out`, `X-White` and
-//!   `X-Render-Ms` headers. A refusal is a 4xx with `{"error": "one line"}`.
+//!   requested width (or, with `"format": "linear"`, its f32 R, G, B in
+//!   cd/m²), with `X-Energy-In`, `X-Energy-Out`, `X-White`, `X-Render-Ms`,
+//!   `X-Preview-Size` and `X-Auto-White-{Filmic,Reinhard,Clip}` headers. A
+//!   refusal is a 4xx with `{"error": "one line"}`.
 
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
@@ -117,17 +119,34 @@ async fn render_picture(
     let rendered = tokio::task::spawn_blocking(move || renderer.render(&request))
         .await
         .map_err(|e| StudioError::Internal(e.to_string()))??;
+    let kind = if rendered.is_png {
+        "image/png"
+    } else {
+        "application/octet-stream"
+    };
     let headers = [
-        (header::CONTENT_TYPE, "image/png".to_string()),
+        (header::CONTENT_TYPE, kind.to_string()),
         (header::CACHE_CONTROL, "no-store".to_string()),
     ];
-    let mut response = (headers, rendered.png).into_response();
+    let mut response = (headers, rendered.bytes).into_response();
     let extra = response.headers_mut();
     for (name, value) in [
         ("x-energy-in", format!("{:.6e}", rendered.energy_in)),
         ("x-energy-out", format!("{:.6e}", rendered.energy_out)),
         ("x-white", format!("{:.6}", rendered.white)),
         ("x-render-ms", format!("{:.1}", rendered.milliseconds)),
+        (
+            "x-auto-white-filmic",
+            format!("{:.6e}", rendered.auto_white[0]),
+        ),
+        (
+            "x-auto-white-reinhard",
+            format!("{:.6e}", rendered.auto_white[1]),
+        ),
+        (
+            "x-auto-white-clip",
+            format!("{:.6e}", rendered.auto_white[2]),
+        ),
         (
             "x-preview-size",
             format!("{}x{}", rendered.width, rendered.height),

@@ -8,7 +8,7 @@ use std::time::{Instant, SystemTime};
 
 use aureole::config::ConfigFile;
 use aureole::{ApplyOptions, Cancel, Config, Frame, FrameOptions, Image, Method, Session};
-use aureole_io::display::{render, DisplayOptions, Exposure, ToneCurve};
+use aureole_io::display::{meter, render, DisplayOptions, Exposure, ToneCurve};
 use aureole_io::limits::Limits;
 use serde::Deserialize;
 
@@ -65,12 +65,33 @@ pub struct RenderRequest {
     /// The soft knee above the threshold, relative to it.
     #[serde(default)]
     pub knee: f64,
+    /// `png` (the default): the picture, exposed and tone-mapped; `linear`:
+    /// the luminance itself, for the page to expose as the user drags.
+    #[serde(default)]
+    pub format: Format,
+}
+
+/// How a render is sent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Format {
+    /// A PNG picture.
+    #[default]
+    Png,
+    /// Little-endian f32 R, G, B per pixel, row by row from the top, in
+    /// cd/m² (the kernel view is always a PNG).
+    Linear,
 }
 
 /// A rendered picture and what the page shows beside it.
 pub struct Rendered {
-    /// The picture.
-    pub png: Vec<u8>,
+    /// The picture (PNG) or the linear samples.
+    pub bytes: Vec<u8>,
+    /// Whether `bytes` is a PNG.
+    pub is_png: bool,
+    /// The luminance auto exposure shows as white, per tone curve: filmic,
+    /// Reinhard, clip (0 for the kernel).
+    pub auto_white: [f64; 3],
     /// Its width in pixels.
     pub width: usize,
     /// Its height in pixels.
@@ -202,15 +223,31 @@ impl Renderer {
             }
         };
         cancel.check()?;
-        let (png, white) = if request.view == View::Kernel {
+        let kernel = request.view == View::Kernel;
+        let auto_white = if kernel {
+            [0.0; 3]
+        } else {
+            [ToneCurve::Filmic, ToneCurve::Reinhard, ToneCurve::Clip]
+                .map(|curve| meter(&shown, preview.scale(), curve).white)
+        };
+        let (bytes, white) = if kernel {
             (encode_png(&shown, |v| v)?, 0.0)
+        } else if request.format == Format::Linear {
+            let white = match display.exposure {
+                Exposure::Auto => meter(&shown, preview.scale(), display.tone).white,
+                Exposure::Ev(ev) => 1.2 * ev.exp2(),
+                Exposure::White(white) => white,
+            };
+            (linear_bytes(&shown, preview.scale()), white)
         } else {
             let picture = render(&shown, preview.scale(), &display);
             let white = picture.white;
             (encode_png_picture(&picture)?, white)
         };
         Ok(Rendered {
-            png,
+            bytes,
+            is_png: kernel || request.format == Format::Png,
+            auto_white,
             width,
             height,
             energy_in,
@@ -349,6 +386,20 @@ fn kernel_picture(kernel: &aureole::Kernel, width: usize, height: usize) -> Imag
         }
     }
     image
+}
+
+/// The image in cd/m² as little-endian f32 R, G, B per pixel (a
+/// luminance image in all three).
+fn linear_bytes(image: &Image, scale: f64) -> Vec<u8> {
+    let n = image.width * image.height;
+    let mut bytes = Vec::with_capacity(n * 12);
+    for i in 0..n {
+        for c in 0..3 {
+            let plane = &image.planes[c.min(image.planes.len() - 1)];
+            bytes.extend_from_slice(&((f64::from(plane[i]) * scale) as f32).to_le_bytes());
+        }
+    }
+    bytes
 }
 
 /// An RGB image of display levels (0…1) as a PNG.

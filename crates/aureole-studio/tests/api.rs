@@ -182,6 +182,41 @@ fn a_render_is_a_png_of_the_width_asked_with_its_energy() {
     assert!((e_out / e_in - 1.0).abs() < 1e-3, "{e_in} {e_out}");
     assert!(reply.header("x-render-ms").is_some());
 
+    // The linear preview, for the page to expose: f32 R, G, B in cd/m²,
+    // with the white auto exposure would choose for each tone curve.
+    let linear = http(
+        addr,
+        "POST",
+        "/api/render",
+        &render_body(
+            "demo",
+            preset("paper-fig5-both"),
+            320,
+            r#", "format": "linear""#,
+        ),
+    );
+    assert_eq!(linear.status, 200);
+    assert_eq!(
+        linear.header("content-type"),
+        Some("application/octet-stream")
+    );
+    assert_eq!(linear.body.len(), 320 * 180 * 12);
+    let samples: Vec<f32> = linear
+        .body
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    let brightest = samples.iter().copied().fold(0f32, f32::max);
+    assert!(brightest > 1e3, "the lamps are in cd/m²: {brightest}");
+    for curve in ["filmic", "reinhard", "clip"] {
+        let white: f64 = linear
+            .header(&format!("x-auto-white-{curve}"))
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(white > 0.1 && white < 100.0, "{curve}: {white}");
+    }
+
     // Every view answers, each a different picture.
     let mut seen = Vec::new();
     for view in ["result", "original", "glare", "kernel"] {

@@ -1,7 +1,8 @@
 //! The studio page in a real headless Chromium (Debian's `chromium`, which
 //! `.ci/run` installs; without it these tests say so and pass): the page
-//! loads and renders with no console error, every view shows, and an
-//! unreadable file or a path outside the roots shows its one line.
+//! loads and renders with no console error, its own tone mapping matches the
+//! server's, every view shows, and an unreadable file or a path outside the
+//! roots shows its one line.
 //! Screenshots are saved in `target/studio-screenshots/`.
 
 use std::net::SocketAddr;
@@ -138,6 +139,25 @@ fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
         .filter(|l| l.contains("ERROR") || l.contains("Uncaught"))
         .collect();
     assert!(errors.is_empty(), "console: {errors:?}");
+
+    // The page tone-maps the linear preview itself; what it draws is what
+    // the server's display path (aureole-io) draws, within a code.
+    for (query, name) in [
+        ("selfcheck=1", "selfcheck"),
+        ("selfcheck=1&view=glare", "selfcheck-glare"),
+    ] {
+        // The dump may come before the page's second fetch is decoded: a
+        // few tries.
+        let page = (0..4)
+            .map(|_| visit(&browser, &format!("{base}?{query}"), name))
+            .find(|page| page.dom.contains("data-display-mismatch"))
+            .unwrap_or_else(|| panic!("{name}: the page never finished its self-check"));
+        let worst = page.attribute("data-display-mismatch");
+        assert!(
+            worst <= 1,
+            "{name}: the page's picture differs by {worst} codes"
+        );
+    }
 
     for view in ["split", "kernel", "glare", "original"] {
         let page = visit(&browser, &format!("{base}?view={view}"), view);
