@@ -380,3 +380,88 @@ fn the_preview_draws_what_a_resampled_full_render_draws() {
         );
     }
 }
+
+/// The rays around the middle of a linear preview: its luminance on rings
+/// from `r0` to `r1` px, each ring divided by its median so that the
+/// radial fall-off cancels, averaged, and the peaks above `1.3` counted
+/// around the circle (as `tools/star_rays` counts a photograph's).
+fn rays(samples: &[f32], width: usize, height: usize, (r0, r1): (usize, usize)) -> usize {
+    const STEPS: usize = 720;
+    let luminance = |x: usize, y: usize| {
+        let i = 3 * (y * width + x);
+        0.2126 * samples[i] + 0.7152 * samples[i + 1] + 0.0722 * samples[i + 2]
+    };
+    let (cx, cy) = (width as f64 / 2.0, height as f64 / 2.0);
+    let mut profile = vec![0.0f64; STEPS];
+    for r in r0..=r1 {
+        let mut ring: Vec<f64> = (0..STEPS)
+            .map(|k| {
+                let a = k as f64 / STEPS as f64 * std::f64::consts::TAU;
+                let (x, y) = (cx + r as f64 * a.cos(), cy - r as f64 * a.sin());
+                f64::from(luminance(x as usize, y as usize))
+            })
+            .collect();
+        let mut sorted = ring.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted[STEPS / 2].max(1e-30);
+        ring.iter_mut().for_each(|v| *v /= median);
+        profile
+            .iter_mut()
+            .zip(&ring)
+            .for_each(|(p, v)| *p += v / (r1 - r0 + 1) as f64);
+    }
+    // A peak is the highest within ±5° (a ray a few pixels wide spans
+    // several steps, and pixel rounding can split its top).
+    const WINDOW: usize = 10;
+    (0..STEPS)
+        .filter(|&k| {
+            let around = (1..=WINDOW).flat_map(|d| [(k + d) % STEPS, (k + STEPS - d) % STEPS]);
+            let highest = around
+                .clone()
+                .all(|j| profile[k] > profile[j] || (profile[k] == profile[j] && k < j));
+            profile[k] >= 1.3 && highest
+        })
+        .count()
+}
+
+#[test]
+fn changing_the_blade_count_from_7_to_8_changes_the_picture_and_its_rays() {
+    let dir = tempfile::tempdir().unwrap();
+    // One lamp in the dark: its rays are the only structure.
+    let mut lamp = aureole::Image::filled(512, 512, aureole::Layout::Rgb, 0.001);
+    for plane in &mut lamp.planes {
+        plane[256 * 512 + 256] = 1e7;
+    }
+    aureole_io::write::write_linear(&dir.path().join("lamp.exr"), &lamp, Default::default())
+        .unwrap();
+    let addr = server(dir.path());
+    let mut counted = Vec::new();
+    let mut pictures = Vec::new();
+    for blades in [7, 8] {
+        let config =
+            preset("camera-f8-7blade").replace("blades = 7", &format!("blades = {blades}"));
+        let body = render_body(
+            "lamp.exr",
+            &config,
+            512,
+            r#", "view": "glare", "format": "linear""#,
+        );
+        let reply = http(addr, "POST", "/api/render", &body);
+        assert_eq!(
+            reply.status,
+            200,
+            "{}",
+            String::from_utf8_lossy(&reply.body)
+        );
+        let samples: Vec<f32> = reply
+            .body
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        counted.push(rays(&samples, 512, 512, (12, 40)));
+        pictures.push(reply.body);
+    }
+    assert_ne!(pictures[0], pictures[1]);
+    // An odd stop of n blades gives 2n rays, an even one n.
+    assert_eq!(counted, [14, 8], "rays counted for 7 and 8 blades");
+}
