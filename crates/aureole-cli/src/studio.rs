@@ -2,11 +2,10 @@
 
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::path::PathBuf;
-use std::sync::Arc;
 
 use anyhow::anyhow;
 use aureole_io::limits::default_memory_limit;
-use aureole_studio::{Renderer, Roots};
+use aureole_studio::{Roots, Studio};
 
 use crate::Failure;
 
@@ -58,7 +57,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
             "aureole: warning: listening on {address}: other machines can reach the studio and read the images under its folders"
         );
     }
-    let renderer = Arc::new(Renderer::new(roots, default_memory_limit()));
+    let studio = Studio::new(roots, default_memory_limit());
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -80,7 +79,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         if !args.no_browser {
             open_browser(&url, quiet);
         }
-        aureole_studio::serve(listener, renderer)
+        aureole_studio::serve(listener, studio)
             .await
             .map_err(|e| Failure::Run(anyhow!("the server stopped: {e}")))
     })

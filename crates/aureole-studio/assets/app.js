@@ -6,6 +6,8 @@ const $ = (id) => document.getElementById(id);
 const state = { view: "result", split: 0.5, controller: null, timer: null, presets: [] };
 
 function previewWidth() {
+  // At 1:1 the preview is the image itself (up to 4096 px wide).
+  if (state.actual && state.fullWidth) return Math.min(4096, state.fullWidth);
   const stage = $("stage");
   return Math.max(64, Math.min(4096, Math.round(stage.clientWidth * (window.devicePixelRatio || 1))));
 }
@@ -42,6 +44,12 @@ async function fetchPicture(body, signal) {
   const header = (name) => Number(response.headers.get(name));
   const [width, height] = (response.headers.get("x-preview-size") || "0x0").split("x").map(Number);
   const linear = body.format === "linear";
+  const full = (response.headers.get("x-full-size") || "0x0").split("x").map(Number);
+  const range = (response.headers.get("x-luminance") || "").split(" ").map(Number);
+  state.fullWidth = full[0];
+  $("image-info").textContent =
+    `${full[0]}×${full[1]} px · ${header("x-scale")} cd/m² per unit · luminance ` +
+    range.map((v) => v.toPrecision(3)).join(" / ") + " cd/m² (min / median / max)";
   return {
     linear: linear ? new Float32Array(await response.arrayBuffer()) : null,
     url: linear ? null : URL.createObjectURL(await response.blob()),
@@ -189,22 +197,22 @@ async function render() {
   updateCommand();
 }
 
-// ?selfcheck=1: the server's PNG of the same view against what this page
-// drew, the largest difference in 8-bit codes (the browser test reads it).
+// ?selfcheck=1: the server's picture of the same view against what this
+// page drew, the largest difference in 8-bit codes (the browser test reads
+// it).
 async function selfCheck(signal) {
-  const png = await fetchPicture(request(state.view === "split" ? "result" : state.view), signal);
-  const image = new Image();
-  image.src = png.url;
-  await image.decode();
-  const scratch = document.createElement("canvas");
-  scratch.width = png.width;
-  scratch.height = png.height;
-  const context = scratch.getContext("2d");
-  context.drawImage(image, 0, 0);
-  const theirs = context.getImageData(0, 0, png.width, png.height).data;
-  const ours = $("canvas").getContext("2d").getImageData(0, 0, png.width, png.height).data;
-  let worst = 0;
-  for (let i = 0; i < theirs.length; i++) worst = Math.max(worst, Math.abs(theirs[i] - ours[i]));
+  // The server's 8-bit codes come raw, so nothing but the fetch is waited on.
+  const body = { ...request(state.view === "split" ? "result" : state.view), format: "rgb8" };
+  const response = await fetch("/api/render", {
+    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body), signal,
+  });
+  const theirs = new Uint8Array(await response.arrayBuffer());
+  const canvas = $("canvas");
+  const ours = canvas.getContext("2d").getImageData(0, 0, canvas.width, canvas.height).data;
+  let worst = theirs.length === (ours.length / 4) * 3 ? 0 : 255;
+  for (let i = 0, j = 0; i < theirs.length && j < ours.length; i += 3, j += 4) {
+    for (let c = 0; c < 3; c++) worst = Math.max(worst, Math.abs(theirs[i + c] - ours[j + c]));
+  }
   document.body.dataset.displayMismatch = String(worst);
 }
 
@@ -266,12 +274,21 @@ async function start() {
     window.addEventListener("pointermove", move);
     window.addEventListener("pointerup", () => window.removeEventListener("pointermove", move), { once: true });
   });
+  $("output").value = defaultOutput();
+  $("image").addEventListener("change", () => { $("output").value = defaultOutput(); });
+  $("export").addEventListener("click", exportFull);
   $("copy-toml").addEventListener("click", () => navigator.clipboard.writeText($("config").value));
   $("download-toml").addEventListener("click", () => {
     const link = document.createElement("a");
     link.href = URL.createObjectURL(new Blob([$("config").value], { type: "application/toml" }));
     link.download = "camera.toml";
     link.click();
+  });
+  $("actual").addEventListener("click", () => {
+    state.actual = !state.actual;
+    $("actual").classList.toggle("on", state.actual);
+    document.body.classList.toggle("actual", state.actual);
+    render();
   });
   window.addEventListener("resize", schedule);
   window.addEventListener("resize", placeSplit);
@@ -302,6 +319,43 @@ function fromAddress() {
     state.view = view;
   }
   clearTimeout(state.timer);
+}
+
+function defaultOutput() {
+  const image = $("image").value;
+  if (image === "demo") return "street-aureole.exr";
+  return image.replace(/(\.[^./]*)?$/, (ext) => `-aureole${ext || ".exr"}`);
+}
+
+async function exportFull() {
+  const body = request(state.view === "glare" ? "glare" : "result");
+  delete body.width;
+  body.output = $("output").value;
+  const status = $("export-status");
+  const bar = $("export-progress");
+  status.textContent = "";
+  const started = await fetch("/api/export", {
+    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body),
+  });
+  const reply = await started.json();
+  if (!started.ok) { status.textContent = reply.error; status.className = "error"; return; }
+  status.className = "info";
+  bar.hidden = false;
+  $("cancel-export").hidden = false;
+  $("cancel-export").onclick = () => fetch(`/api/export/${reply.job}`, { method: "DELETE" });
+  for (;;) {
+    const progress = await (await fetch(`/api/export/${reply.job}`)).json();
+    bar.value = progress.fraction;
+    status.textContent = `${progress.stage} ${Math.round(100 * progress.fraction)} %`;
+    if (progress.done) {
+      status.textContent = progress.error ? progress.error : `wrote ${progress.output}`;
+      status.className = progress.error ? "error" : "info";
+      break;
+    }
+    await new Promise((resolve) => setTimeout(resolve, 250));
+  }
+  bar.hidden = true;
+  $("cancel-export").hidden = true;
 }
 
 function choosePreset() {

@@ -12,20 +12,23 @@
 //! - `POST /api/render` with a JSON [`render::RenderRequest`]: a PNG of the
 //!   requested width (or, with `"format": "linear"`, its f32 R, G, B in
 //!   cd/m²), with `X-Energy-In`, `X-Energy-Out`, `X-White`, `X-Render-Ms`,
-//!   `X-Preview-Size` and `X-Auto-White-{Filmic,Reinhard,Clip}` headers. A
+//!   `X-Preview-Size`, `X-Full-Size`, `X-Scale`, `X-Luminance` (min, median,
+//!   max of the full image) and `X-Auto-White-{Filmic,Reinhard,Clip}`
+//!   headers. A
 //!   refusal is a 4xx with `{"error": "one line"}`.
 
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod export;
 pub mod render;
 pub mod roots;
 
 use std::sync::Arc;
 
 use axum::body::Bytes;
-use axum::extract::{DefaultBodyLimit, State};
+use axum::extract::{DefaultBodyLimit, Path, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
@@ -42,8 +45,26 @@ const INDEX: &str = include_str!("../assets/index.html");
 const SCRIPT: &str = include_str!("../assets/app.js");
 const STYLE: &str = include_str!("../assets/app.css");
 
-/// The studio's routes, rendering with `renderer`.
-pub fn router(renderer: Arc<Renderer>) -> Router {
+/// What the routes share: previews and full-resolution exports.
+#[derive(Clone)]
+pub struct Studio {
+    renderer: Arc<Renderer>,
+    exports: Arc<export::Exports>,
+}
+
+impl Studio {
+    /// A studio reading (and exporting) under `roots`, each render within
+    /// `memory_limit` bytes.
+    pub fn new(roots: Roots, memory_limit: u64) -> Studio {
+        Studio {
+            renderer: Arc::new(Renderer::new(roots.clone(), memory_limit)),
+            exports: Arc::new(export::Exports::new(roots, memory_limit)),
+        }
+    }
+}
+
+/// The studio's routes.
+pub fn router(studio: Studio) -> Router {
     Router::new()
         .route(
             "/",
@@ -60,16 +81,49 @@ pub fn router(renderer: Arc<Renderer>) -> Router {
         .route("/api/presets", get(presets))
         .route("/api/images", get(images))
         .route("/api/render", post(render_picture))
+        .route("/api/export", post(start_export))
+        .route(
+            "/api/export/{id}",
+            get(export_progress).delete(cancel_export),
+        )
         .layer(DefaultBodyLimit::max(MAX_BODY))
-        .with_state(renderer)
+        .with_state(studio)
 }
 
 /// Serves the studio on `listener` until the process ends.
-pub async fn serve(
-    listener: tokio::net::TcpListener,
-    renderer: Arc<Renderer>,
-) -> std::io::Result<()> {
-    axum::serve(listener, router(renderer)).await
+pub async fn serve(listener: tokio::net::TcpListener, studio: Studio) -> std::io::Result<()> {
+    axum::serve(listener, router(studio)).await
+}
+
+async fn start_export(
+    State(studio): State<Studio>,
+    body: Bytes,
+) -> Result<Json<serde_json::Value>, StudioError> {
+    let request = export::ExportRequest::from_json(&body)?;
+    let id = studio.exports.start(request)?;
+    Ok(Json(serde_json::json!({ "job": id })))
+}
+
+async fn export_progress(
+    State(studio): State<Studio>,
+    Path(id): Path<u64>,
+) -> Result<Json<export::Progress>, StudioError> {
+    studio
+        .exports
+        .progress(id)
+        .map(Json)
+        .ok_or_else(|| StudioError::NotFound(format!("no export {id}")))
+}
+
+async fn cancel_export(
+    State(studio): State<Studio>,
+    Path(id): Path<u64>,
+) -> Result<Json<serde_json::Value>, StudioError> {
+    if studio.exports.cancel(id) {
+        Ok(Json(serde_json::json!({ "cancelled": id })))
+    } else {
+        Err(StudioError::NotFound(format!("no export {id}")))
+    }
 }
 
 fn page(text: &'static str, kind: &'static str) -> Response {
@@ -90,8 +144,8 @@ async fn presets() -> Json<serde_json::Value> {
     Json(serde_json::Value::Array(list))
 }
 
-async fn images(State(renderer): State<Arc<Renderer>>) -> Json<serde_json::Value> {
-    let roots = renderer.roots().clone();
+async fn images(State(studio): State<Studio>) -> Json<serde_json::Value> {
+    let roots = studio.renderer.roots().clone();
     let list = tokio::task::spawn_blocking(move || {
         let images: Vec<String> = roots
             .images()
@@ -111,18 +165,19 @@ async fn images(State(renderer): State<Arc<Renderer>>) -> Json<serde_json::Value
 }
 
 async fn render_picture(
-    State(renderer): State<Arc<Renderer>>,
+    State(studio): State<Studio>,
     body: Bytes,
 ) -> Result<Response, StudioError> {
     let request: RenderRequest = serde_json::from_slice(&body)
         .map_err(|e| StudioError::BadRequest(format!("the render request: {e}")))?;
+    let renderer = studio.renderer.clone();
     let rendered = tokio::task::spawn_blocking(move || renderer.render(&request))
         .await
         .map_err(|e| StudioError::Internal(e.to_string()))??;
-    let kind = if rendered.is_png {
-        "image/png"
-    } else {
-        "application/octet-stream"
+    let kind = match (rendered.is_png, rendered.is_raw) {
+        (true, _) => "image/png",
+        (false, true) => "application/x-rgb8",
+        (false, false) => "application/octet-stream",
     };
     let headers = [
         (header::CONTENT_TYPE, kind.to_string()),
@@ -135,6 +190,18 @@ async fn render_picture(
         ("x-energy-out", format!("{:.6e}", rendered.energy_out)),
         ("x-white", format!("{:.6}", rendered.white)),
         ("x-render-ms", format!("{:.1}", rendered.milliseconds)),
+        (
+            "x-full-size",
+            format!("{}x{}", rendered.full.size.0, rendered.full.size.1),
+        ),
+        ("x-scale", format!("{}", rendered.full.scale)),
+        (
+            "x-luminance",
+            format!(
+                "{:.6e} {:.6e} {:.6e}",
+                rendered.full.luminance[0], rendered.full.luminance[1], rendered.full.luminance[2]
+            ),
+        ),
         (
             "x-auto-white-filmic",
             format!("{:.6e}", rendered.auto_white[0]),

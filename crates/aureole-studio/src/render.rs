@@ -35,6 +35,8 @@ pub enum View {
     /// The kernel at the preview's pitch, log-scaled, its centre in the
     /// middle.
     Kernel,
+    /// The image dimmed, with the pixels the threshold spreads in magenta.
+    Spread,
 }
 
 /// `POST /api/render`.
@@ -81,6 +83,8 @@ pub enum Format {
     /// Little-endian f32 R, G, B per pixel, row by row from the top, in
     /// cd/m² (the kernel view is always a PNG).
     Linear,
+    /// The picture's 8-bit sRGB codes, R, G, B per pixel, uncompressed.
+    Rgb8,
 }
 
 /// A rendered picture and what the page shows beside it.
@@ -89,6 +93,8 @@ pub struct Rendered {
     pub bytes: Vec<u8>,
     /// Whether `bytes` is a PNG.
     pub is_png: bool,
+    /// Whether `bytes` are raw 8-bit codes.
+    pub is_raw: bool,
     /// The luminance auto exposure shows as white, per tone curve: filmic,
     /// Reinhard, clip (0 for the kernel).
     pub auto_white: [f64; 3],
@@ -104,12 +110,49 @@ pub struct Rendered {
     pub white: f64,
     /// How long the render took.
     pub milliseconds: f64,
+    /// The full image: width, height, cd/m² per unit, and its luminance's
+    /// minimum, median and maximum in cd/m².
+    pub full: Summary,
+}
+
+/// What the page says about the image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Summary {
+    /// Width and height in pixels.
+    pub size: (usize, usize),
+    /// cd/m² per file unit.
+    pub scale: f64,
+    /// Luminance minimum, median and maximum, cd/m².
+    pub luminance: [f64; 3],
+}
+
+impl Summary {
+    fn of(frame: &Frame) -> Summary {
+        let image = frame.image();
+        let mut luminance: Vec<f32> = image.luminance();
+        luminance.sort_by(f32::total_cmp);
+        let at = |i: usize| {
+            luminance
+                .get(i)
+                .map_or(0.0, |&v| f64::from(v) * frame.scale())
+        };
+        Summary {
+            size: (image.width, image.height),
+            scale: frame.scale(),
+            luminance: [
+                at(0),
+                at(luminance.len() / 2),
+                at(luminance.len().saturating_sub(1)),
+            ],
+        }
+    }
 }
 
 /// A full image in memory, with where it came from.
 struct Loaded {
     key: (String, Option<SystemTime>),
     frame: Arc<Frame>,
+    summary: Summary,
 }
 
 /// A preview image: (source key, width) and the resampled frame.
@@ -177,7 +220,7 @@ impl Renderer {
             )));
         }
         let display = display_options(request)?;
-        let full = self.load(&request.image)?;
+        let (full, summary) = self.load(&request.image)?;
         let preview = self.preview(&request.image, &full, request.width)?;
         let image = preview.image();
         let (width, height) = (image.width, image.height);
@@ -189,6 +232,18 @@ impl Renderer {
                 image.total_luminance(),
                 image.total_luminance(),
             ),
+            View::Spread => {
+                let threshold = match request.threshold {
+                    Some(t) => t,
+                    None => parse_config(&request.config)?.threshold,
+                };
+                let total = image.total_luminance();
+                (
+                    spread_overlay(image, preview.scale(), threshold),
+                    total,
+                    total,
+                )
+            }
             view => {
                 let mut camera = locked(&self.camera);
                 let key = (request.config.clone(), (width, height));
@@ -242,11 +297,17 @@ impl Renderer {
         } else {
             let picture = render(&shown, preview.scale(), &display);
             let white = picture.white;
-            (encode_png_picture(&picture)?, white)
+            let codes = codes(&picture.rgb);
+            let bytes = match request.format {
+                Format::Rgb8 => codes,
+                _ => png(picture.width, picture.height, &codes)?,
+            };
+            (bytes, white)
         };
         Ok(Rendered {
             bytes,
             is_png: kernel || request.format == Format::Png,
+            is_raw: !kernel && request.format == Format::Rgb8,
             auto_white,
             width,
             height,
@@ -254,11 +315,12 @@ impl Renderer {
             energy_out,
             white,
             milliseconds: start.elapsed().as_secs_f64() * 1e3,
+            full: summary,
         })
     }
 
     /// The full image `name` names, read once while it does not change.
-    fn load(&self, name: &str) -> Result<Arc<Frame>, StudioError> {
+    fn load(&self, name: &str) -> Result<(Arc<Frame>, Summary), StudioError> {
         let (path, modified) = if name == DEMO {
             (None, None)
         } else {
@@ -269,7 +331,7 @@ impl Renderer {
         let key = (name.to_string(), modified);
         let mut loaded = locked(&self.loaded);
         if let Some(hit) = loaded.as_ref().filter(|l| l.key == key) {
-            return Ok(hit.frame.clone());
+            return Ok((hit.frame.clone(), hit.summary));
         }
         let image = match &path {
             None => aureole_io::demo::night_street(1280, 720),
@@ -279,11 +341,13 @@ impl Renderer {
             Frame::new(image, &FrameOptions::default())
                 .map_err(|e| StudioError::Unprocessable(format!("{name}: {e}")))?,
         );
+        let summary = Summary::of(&frame);
         *loaded = Some(Loaded {
             key,
             frame: frame.clone(),
+            summary,
         });
-        Ok(frame)
+        Ok((frame, summary))
     }
 
     /// `full` resampled by area to `width` (no wider than it is).
@@ -329,7 +393,7 @@ pub fn parse_config(text: &str) -> Result<Config, StudioError> {
     Ok(config)
 }
 
-fn display_options(request: &RenderRequest) -> Result<DisplayOptions, StudioError> {
+pub(crate) fn display_options(request: &RenderRequest) -> Result<DisplayOptions, StudioError> {
     let exposure = match (&request.white, &request.exposure) {
         (Some(white), _) if white.is_finite() && *white > 0.0 => Exposure::White(*white),
         (Some(white), _) => {
@@ -388,6 +452,26 @@ fn kernel_picture(kernel: &aureole::Kernel, width: usize, height: usize) -> Imag
     image
 }
 
+/// `image` dimmed to a quarter, with the pixels above `threshold` cd/m²
+/// (those the camera spreads) in magenta at their own luminance.
+fn spread_overlay(image: &Image, scale: f64, threshold: f64) -> Image {
+    let luminance = image.luminance();
+    let mut shown = Image::filled(image.width, image.height, aureole::Layout::Rgb, 0.0);
+    shown.white_luminance = image.white_luminance;
+    for (i, &y) in luminance.iter().enumerate() {
+        let spread = f64::from(y) * scale > threshold;
+        for c in 0..3 {
+            let own = image.planes[c.min(image.planes.len() - 1)][i];
+            shown.planes[c][i] = match (spread, c) {
+                (true, 1) => 0.2 * y,
+                (true, _) => y,
+                (false, _) => 0.25 * own,
+            };
+        }
+    }
+    shown
+}
+
 /// The image in cd/m² as little-endian f32 R, G, B per pixel (a
 /// luminance image in all three).
 fn linear_bytes(image: &Image, scale: f64) -> Vec<u8> {
@@ -415,13 +499,12 @@ fn encode_png(image: &Image, level: impl Fn(f32) -> f32) -> Result<Vec<u8>, Stud
     png(image.width, image.height, &bytes)
 }
 
-fn encode_png_picture(picture: &aureole_io::display::Picture) -> Result<Vec<u8>, StudioError> {
-    let bytes: Vec<u8> = picture
-        .rgb
+/// Display levels (0…1) as 8-bit codes.
+fn codes(levels: &[f32]) -> Vec<u8> {
+    levels
         .iter()
         .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-        .collect();
-    png(picture.width, picture.height, &bytes)
+        .collect()
 }
 
 fn png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, StudioError> {

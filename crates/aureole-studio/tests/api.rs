@@ -3,14 +3,13 @@
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::path::Path;
-use std::sync::Arc;
 
-use aureole_studio::{Renderer, Roots};
+use aureole_studio::{Roots, Studio};
 
 /// A server reading from `root`, on a port of its own, for the test's life.
 fn server(root: &Path) -> SocketAddr {
     let roots = Roots::new(&[root.to_path_buf()]).unwrap();
-    let renderer = Arc::new(Renderer::new(roots, 4 << 30));
+    let studio = Studio::new(roots, 4 << 30);
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         let runtime = tokio::runtime::Builder::new_multi_thread()
@@ -21,7 +20,7 @@ fn server(root: &Path) -> SocketAddr {
         runtime.block_on(async {
             let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
             tx.send(listener.local_addr().unwrap()).unwrap();
-            aureole_studio::serve(listener, renderer).await.unwrap();
+            aureole_studio::serve(listener, studio).await.unwrap();
         });
     });
     rx.recv().unwrap()
@@ -464,4 +463,66 @@ fn changing_the_blade_count_from_7_to_8_changes_the_picture_and_its_rays() {
     assert_ne!(pictures[0], pictures[1]);
     // An odd stop of n blades gives 2n rays, an even one n.
     assert_eq!(counted, [14, 8], "rays counted for 7 and 8 blades");
+}
+
+#[test]
+fn a_full_resolution_render_is_written_under_the_roots_with_its_progress() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("street.exr");
+    aureole_io::write::write_linear(
+        &input,
+        &aureole_io::demo::night_street(320, 180),
+        Default::default(),
+    )
+    .unwrap();
+    std::fs::hard_link(&input, dir.path().join("same.exr")).unwrap();
+    let addr = server(dir.path());
+    let body = |output: &str| {
+        render_body("street.exr", preset("paper-fig5-both"), 1, "").replace(
+            r#", "width": 1"#,
+            &format!(r#", "output": {}"#, serde_json::to_string(output).unwrap()),
+        )
+    };
+    let started = http(addr, "POST", "/api/export", &body("camera.exr"));
+    assert_eq!(
+        started.status,
+        200,
+        "{}",
+        String::from_utf8_lossy(&started.body)
+    );
+    let job = started.json()["job"].as_u64().unwrap();
+    let progress = loop {
+        let progress = http(addr, "GET", &format!("/api/export/{job}"), "").json();
+        if progress["done"].as_bool() == Some(true) {
+            break progress;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    assert!(progress["error"].is_null(), "{progress}");
+    let written = aureole_io::read::read_image(
+        &dir.path().join("camera.exr"),
+        aureole_io::limits::Limits::NONE,
+    )
+    .unwrap()
+    .image;
+    assert_eq!((written.width, written.height), (320, 180));
+
+    for (output, status, words) in [
+        ("../escaped.exr", 403, "outside the folders"),
+        ("same.exr", 400, "overwrite the input"),
+        ("street.exr", 400, "overwrite the input"),
+        ("nowhere/out.exr", 404, "folder does not exist"),
+        ("out.gif", 400, "gif"),
+    ] {
+        let reply = http(addr, "POST", "/api/export", &body(output));
+        assert_eq!(
+            reply.status,
+            status,
+            "{output}: {}",
+            String::from_utf8_lossy(&reply.body)
+        );
+        assert!(reply.error().contains(words), "{output}: {}", reply.error());
+    }
+    assert!(!dir.path().parent().unwrap().join("escaped.exr").exists());
+    assert_eq!(http(addr, "GET", "/api/export/999", "").status, 404);
 }

@@ -8,9 +8,8 @@
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::Arc;
 
-use aureole_studio::{Renderer, Roots};
+use aureole_studio::{Roots, Studio};
 
 fn chromium() -> Option<PathBuf> {
     ["chromium", "chromium-browser", "google-chrome"]
@@ -26,7 +25,7 @@ fn chromium() -> Option<PathBuf> {
 
 fn server(root: &Path) -> SocketAddr {
     let roots = Roots::new(&[root.to_path_buf()]).unwrap();
-    let renderer = Arc::new(Renderer::new(roots, 4 << 30));
+    let studio = Studio::new(roots, 4 << 30);
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         let runtime = tokio::runtime::Builder::new_multi_thread()
@@ -37,7 +36,7 @@ fn server(root: &Path) -> SocketAddr {
         runtime.block_on(async {
             let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
             tx.send(listener.local_addr().unwrap()).unwrap();
-            aureole_studio::serve(listener, renderer).await.unwrap();
+            aureole_studio::serve(listener, studio).await.unwrap();
         });
     });
     rx.recv().unwrap()

@@ -1,0 +1,268 @@
+//! Full-resolution renders to a file under the roots, as jobs the page
+//! follows: the same session, options and writer as `aureole apply`, with
+//! the stage and fraction done, and a cancel.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+
+use aureole::{ApplyOptions, Cancel, Frame, FrameOptions, Method, Session};
+use aureole_io::display::DisplayOptions;
+use aureole_io::limits::Limits;
+use aureole_io::write::{output_format, write_image_into, WriteOptions};
+use serde::Serialize;
+
+use crate::error::StudioError;
+use crate::render::{display_options, parse_config, RenderRequest, DEMO};
+use crate::roots::Roots;
+
+/// `POST /api/export`: a render request's fields (without `width`) and
+/// `output`, where to write the full-resolution result.
+#[derive(Debug, Clone)]
+pub struct ExportRequest {
+    /// The camera, image and display settings, as for a preview.
+    pub render: RenderRequest,
+    /// The file to write, under a root (absolute, or relative to the first
+    /// root); its extension chooses the format, as for `aureole apply -o`.
+    pub output: String,
+}
+
+impl ExportRequest {
+    /// Reads the JSON of a request.
+    pub fn from_json(bytes: &[u8]) -> Result<ExportRequest, StudioError> {
+        let refuse = |e: String| StudioError::BadRequest(format!("the export request: {e}"));
+        let mut value: serde_json::Value =
+            serde_json::from_slice(bytes).map_err(|e| refuse(e.to_string()))?;
+        let fields = value
+            .as_object_mut()
+            .ok_or_else(|| refuse("expected a JSON object".into()))?;
+        let output = match fields.remove("output") {
+            Some(serde_json::Value::String(output)) => output,
+            _ => return Err(refuse("`output`, the file to write, is missing".into())),
+        };
+        // The full image is rendered: the preview's width does not apply.
+        fields.insert("width".into(), serde_json::Value::from(1));
+        let render = serde_json::from_value(value).map_err(|e| refuse(e.to_string()))?;
+        Ok(ExportRequest { render, output })
+    }
+}
+
+/// What a job has done so far.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Progress {
+    /// The stage, in words.
+    pub stage: String,
+    /// The fraction of the stage done, 0…1.
+    pub fraction: f64,
+    /// Whether it has ended, written or not.
+    pub done: bool,
+    /// Why it failed, in one line.
+    pub error: Option<String>,
+    /// The file written.
+    pub output: String,
+}
+
+struct Job {
+    progress: Mutex<Progress>,
+    cancel: Cancel,
+}
+
+/// The export jobs of a studio.
+pub struct Exports {
+    roots: Roots,
+    memory_limit: u64,
+    next: AtomicU64,
+    jobs: Mutex<HashMap<u64, Arc<Job>>>,
+}
+
+fn locked<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+impl Exports {
+    /// Jobs that read and write under `roots`.
+    pub fn new(roots: Roots, memory_limit: u64) -> Exports {
+        Exports {
+            roots,
+            memory_limit,
+            next: AtomicU64::new(1),
+            jobs: Mutex::new(HashMap::new()),
+        }
+    }
+
+    /// Checks `request` and starts it on a thread of its own; returns its
+    /// number.
+    pub fn start(&self, request: ExportRequest) -> Result<u64, StudioError> {
+        let config = parse_config(&request.render.config)?;
+        let display = display_options(&request.render)?;
+        let input = match request.render.image.as_str() {
+            DEMO => None,
+            name => Some(self.roots.resolve(name)?),
+        };
+        let output = self.output_path(&request.output)?;
+        if let Some(input) = &input {
+            if same_file(input, &output) {
+                return Err(StudioError::BadRequest(format!(
+                    "{}: the output would overwrite the input; write to another file",
+                    request.output
+                )));
+            }
+        }
+        let id = self.next.fetch_add(1, Ordering::Relaxed);
+        let job = Arc::new(Job {
+            progress: Mutex::new(Progress {
+                stage: "reading".into(),
+                output: output.display().to_string(),
+                ..Progress::default()
+            }),
+            cancel: Cancel::new(),
+        });
+        locked(&self.jobs).insert(id, job.clone());
+        let memory_limit = self.memory_limit;
+        std::thread::spawn(move || {
+            let outcome = run(
+                &job,
+                &request,
+                config,
+                display,
+                input.as_deref(),
+                &output,
+                memory_limit,
+            );
+            let mut progress = locked(&job.progress);
+            progress.done = true;
+            if let Err(error) = outcome {
+                progress.error = Some(error.to_string().replace('\n', " "));
+            } else {
+                progress.fraction = 1.0;
+                progress.stage = "written".into();
+            }
+        });
+        Ok(id)
+    }
+
+    /// Where job `id` stands.
+    pub fn progress(&self, id: u64) -> Option<Progress> {
+        let jobs = locked(&self.jobs);
+        let job = jobs.get(&id)?;
+        let progress = locked(&job.progress).clone();
+        Some(progress)
+    }
+
+    /// Stops job `id`; its file is not written.
+    pub fn cancel(&self, id: u64) -> bool {
+        match locked(&self.jobs).get(&id) {
+            Some(job) => {
+                job.cancel.cancel();
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The file `requested` names, in a folder under a root, in a format
+    /// we write.
+    fn output_path(&self, requested: &str) -> Result<PathBuf, StudioError> {
+        let path = Path::new(requested);
+        let path = match self.roots.folders().first() {
+            Some(root) if path.is_relative() => root.join(path),
+            _ => path.to_path_buf(),
+        };
+        output_format(&path).map_err(|e| StudioError::BadRequest(e.to_string()))?;
+        let folder = aureole_io::atomic::folder_of(&path);
+        let name = path
+            .file_name()
+            .ok_or_else(|| StudioError::BadRequest(format!("{requested}: names no file")))?;
+        let folder = folder.canonicalize().map_err(|_| {
+            StudioError::NotFound(format!("{requested}: its folder does not exist"))
+        })?;
+        if !self
+            .roots
+            .folders()
+            .iter()
+            .any(|root| folder.starts_with(root))
+        {
+            return Err(StudioError::Forbidden(format!(
+                "{requested}: is outside the folders the studio may write"
+            )));
+        }
+        let resolved = folder.join(name);
+        if resolved.exists() && !resolved.is_file() {
+            return Err(StudioError::BadRequest(format!(
+                "{requested}: exists and is not a plain file"
+            )));
+        }
+        Ok(resolved)
+    }
+}
+
+/// Whether `a` and `b` are one file (device and inode, links followed):
+/// a hard link to the input is the input.
+#[cfg(unix)]
+fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
+fn run(
+    job: &Job,
+    request: &ExportRequest,
+    config: aureole::Config,
+    display: DisplayOptions,
+    input: Option<&Path>,
+    output: &Path,
+    memory_limit: u64,
+) -> Result<(), StudioError> {
+    let (image, original) = match input {
+        None => (
+            aureole_io::demo::night_street(1280, 720),
+            Default::default(),
+        ),
+        Some(path) => {
+            let loaded = aureole_io::read::read_image(
+                path,
+                Limits {
+                    max_bytes: memory_limit,
+                },
+            )?;
+            (loaded.image, loaded.original)
+        }
+    };
+    let frame = Frame::new(image, &FrameOptions::default())?;
+    let mut session = Session::new(config).with_memory_limit(memory_limit);
+    session.set_cancel_token(job.cancel.clone());
+    let options = ApplyOptions {
+        threshold: request.render.threshold,
+        knee: request.render.knee,
+        glare_only: request.render.view == crate::render::View::Glare,
+        method: Method::Auto,
+    };
+    let applied = session.apply(&frame, &options, &mut |stage, fraction| {
+        let mut progress = locked(&job.progress);
+        progress.stage = stage.describe().to_string();
+        progress.fraction = fraction;
+    })?;
+    job.cancel.check()?;
+    locked(&job.progress).stage = "writing".into();
+    let write = WriteOptions {
+        linear: Default::default(),
+        display,
+        depth: None,
+    };
+    write_image_into(output, &applied.image, frame.scale(), &write, original)?;
+    Ok(())
+}
