@@ -171,9 +171,14 @@ async fn render_picture(
     let request: RenderRequest = serde_json::from_slice(&body)
         .map_err(|e| StudioError::BadRequest(format!("the render request: {e}")))?;
     let renderer = studio.renderer.clone();
-    let rendered = tokio::task::spawn_blocking(move || renderer.render(&request))
+    // When the page goes away (a closed tab) axum drops this future: the
+    // guard then stops the render within the session's next check.
+    let cancel = aureole::Cancel::new();
+    let guard = CancelOnDrop(Some(cancel.clone()));
+    let rendered = tokio::task::spawn_blocking(move || renderer.render(&request, cancel))
         .await
         .map_err(|e| StudioError::Internal(e.to_string()))??;
+    guard.disarm();
     let kind = match (rendered.is_png, rendered.is_raw) {
         (true, _) => "image/png",
         (false, true) => "application/x-rgb8",
@@ -224,4 +229,21 @@ async fn render_picture(
         }
     }
     Ok(response)
+}
+
+/// Cancels a render when dropped before [`CancelOnDrop::disarm`].
+struct CancelOnDrop(Option<aureole::Cancel>);
+
+impl CancelOnDrop {
+    fn disarm(mut self) {
+        self.0 = None;
+    }
+}
+
+impl Drop for CancelOnDrop {
+    fn drop(&mut self) {
+        if let Some(cancel) = &self.0 {
+            cancel.cancel();
+        }
+    }
 }

@@ -203,16 +203,16 @@ impl Renderer {
         &self.roots
     }
 
-    /// Renders `request`; a render still running is cancelled first, as the
-    /// newer request replaces it.
-    pub fn render(&self, request: &RenderRequest) -> Result<Rendered, StudioError> {
+    /// Renders `request`, stopping when `cancel` is set (the page went
+    /// away); a render still running is cancelled first, as the newer
+    /// request replaces it.
+    pub fn render(&self, request: &RenderRequest, cancel: Cancel) -> Result<Rendered, StudioError> {
         let start = Instant::now();
-        let cancel = {
+        {
             let mut running = locked(&self.running);
             running.cancel();
-            *running = Cancel::new();
-            running.clone()
-        };
+            *running = cancel.clone();
+        }
         if request.width == 0 || request.width > MAX_WIDTH {
             return Err(StudioError::BadRequest(format!(
                 "width {} is not allowed: from 1 to {MAX_WIDTH} px",
