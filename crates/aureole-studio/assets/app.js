@@ -57,6 +57,8 @@ async function fetchPicture(body, signal) {
     energyIn: header("x-energy-in"),
     energyOut: header("x-energy-out"),
     ms: header("x-render-ms"),
+    radial: (response.headers.get("x-profile-radial") || "").split(",").filter(Boolean).map(Number),
+    angular: (response.headers.get("x-profile-angular") || "").split(",").filter(Boolean).map(Number),
     autoWhite: {
       filmic: header("x-auto-white-filmic"),
       reinhard: header("x-auto-white-reinhard"),
@@ -149,6 +151,28 @@ function draw() {
   showNumbers();
 }
 
+// A line through `values`, spread over the canvas, with its range written.
+function plot(canvas, values) {
+  const context = canvas.getContext("2d");
+  context.clearRect(0, 0, canvas.width, canvas.height);
+  if (!values.length) return;
+  const finite = values.filter(Number.isFinite);
+  const low = Math.min(...finite), high = Math.max(...finite);
+  const span = high - low || 1;
+  context.strokeStyle = "#e0a040";
+  context.beginPath();
+  values.forEach((v, i) => {
+    const x = (i / Math.max(values.length - 1, 1)) * (canvas.width - 8) + 4;
+    const y = canvas.height - 6 - ((v - low) / span) * (canvas.height - 20);
+    if (i === 0) context.moveTo(x, y); else context.lineTo(x, y);
+  });
+  context.stroke();
+  context.fillStyle = "#8a8a8a";
+  context.font = "10px sans-serif";
+  context.fillText(`${high.toPrecision(3)}`, 4, 10);
+  context.fillText(`${low.toPrecision(3)}`, 4, canvas.height - 2);
+}
+
 function showNumbers() {
   const shown = state.shown;
   if (!shown) return;
@@ -180,8 +204,11 @@ async function render() {
     $("canvas").hidden = kernel;
     $("picture").hidden = !kernel;
     $("handle").hidden = view !== "split";
+    $("profiles").hidden = !kernel;
     if (kernel) {
       $("picture").src = shown.url;
+      plot($("radial"), shown.radial.map((v) => Math.log10(Math.max(v, 1e-30))));
+      plot($("angular"), shown.angular);
       showNumbers();
     } else {
       draw();

@@ -14,7 +14,8 @@
 //!   cd/m²), with `X-Energy-In`, `X-Energy-Out`, `X-White`, `X-Render-Ms`,
 //!   `X-Preview-Size`, `X-Full-Size`, `X-Scale`, `X-Luminance` (min, median,
 //!   max of the full image) and `X-Auto-White-{Filmic,Reinhard,Clip}`
-//!   headers. A
+//!   headers; the kernel view adds `X-Profile-Radial` and
+//!   `X-Profile-Angular`. A
 //!   refusal is a 4xx with `{"error": "one line"}`.
 
 #![deny(unsafe_code)]
@@ -226,6 +227,20 @@ async fn render_picture(
     ] {
         if let Ok(value) = header::HeaderValue::from_str(&value) {
             extra.insert(name, value);
+        }
+    }
+    if let Some((radial, angular)) = &rendered.profiles {
+        let list = |values: &[f64]| {
+            values
+                .iter()
+                .map(|v| format!("{v:.3e}"))
+                .collect::<Vec<_>>()
+                .join(",")
+        };
+        for (name, values) in [("x-profile-radial", radial), ("x-profile-angular", angular)] {
+            if let Ok(value) = header::HeaderValue::from_str(&list(values)) {
+                extra.insert(name, value);
+            }
         }
     }
     Ok(response)

@@ -113,6 +113,10 @@ pub struct Rendered {
     /// The full image: width, height, cd/m² per unit, and its luminance's
     /// minimum, median and maximum in cd/m².
     pub full: Summary,
+    /// For the kernel view: its radial profile (mean weight at 1, 2, …
+    /// px from the centre) and its angular profile (the light of a ring in
+    /// 2° steps, counter-clockwise from +x, divided by the ring's median).
+    pub profiles: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 /// What the page says about the image.
@@ -226,6 +230,7 @@ impl Renderer {
         let (width, height) = (image.width, image.height);
         let factor = width as f64 / full.image().width as f64;
 
+        let mut profiles = None;
         let (shown, energy_in, energy_out) = match request.view {
             View::Original => (
                 image.clone(),
@@ -270,6 +275,7 @@ impl Renderer {
                         .session
                         .plan()
                         .ok_or_else(|| StudioError::Internal("the kernel was not built".into()))?;
+                    profiles = Some(kernel_profiles(plan.kernel(), width.min(height) / 2));
                     kernel_picture(plan.kernel(), width, height)
                 } else {
                     applied.image
@@ -316,6 +322,7 @@ impl Renderer {
             white,
             milliseconds: start.elapsed().as_secs_f64() * 1e3,
             full: summary,
+            profiles,
         })
     }
 
@@ -428,6 +435,59 @@ pub(crate) fn display_options(request: &RenderRequest) -> Result<DisplayOptions,
         }
     };
     Ok(DisplayOptions { exposure, tone })
+}
+
+/// The kernel's radial profile out to `reach` px (at most 64 samples) and
+/// its angular profile on the ring from reach/8 to reach/2.
+fn kernel_profiles(kernel: &aureole::Kernel, reach: usize) -> (Vec<f64>, Vec<f64>) {
+    let (kw, kh) = (kernel.width(), kernel.height());
+    let (cx, cy) = kernel.centre();
+    let planes = kernel.planes();
+    let weight = |x: usize, y: usize| -> f64 {
+        planes.iter().map(|p| f64::from(p[y * kw + x])).sum::<f64>() / planes.len() as f64
+    };
+    let reach = reach
+        .min(cx)
+        .min(cy)
+        .min(kw - 1 - cx)
+        .min(kh - 1 - cy)
+        .max(2);
+    let step = (reach as f64 / 64.0).max(1.0);
+    let radial: Vec<f64> = (1..=reach.min(64))
+        .map(|k| {
+            let r = k as f64 * step;
+            let samples = (8.0 * r).ceil().max(8.0) as usize;
+            (0..samples)
+                .map(|j| {
+                    let a = j as f64 / samples as f64 * std::f64::consts::TAU;
+                    let x = (cx as f64 + r * a.cos()).round() as usize;
+                    let y = (cy as f64 - r * a.sin()).round() as usize;
+                    weight(x.min(kw - 1), y.min(kh - 1))
+                })
+                .sum::<f64>()
+                / samples as f64
+        })
+        .collect();
+    const BINS: usize = 180;
+    let mut angular = vec![0.0; BINS];
+    let (inner, outer) = ((reach / 8).max(2), (reach / 2).max(3));
+    for y in cy.saturating_sub(outer)..=(cy + outer).min(kh - 1) {
+        for x in cx.saturating_sub(outer)..=(cx + outer).min(kw - 1) {
+            let (dx, dy) = (x as f64 - cx as f64, cy as f64 - y as f64);
+            let r = dx.hypot(dy);
+            if r >= inner as f64 && r <= outer as f64 {
+                let a = dy.atan2(dx).rem_euclid(std::f64::consts::TAU);
+                let bin = ((a / std::f64::consts::TAU * BINS as f64) as usize).min(BINS - 1);
+                // Weighted by r so that each radius counts alike.
+                angular[bin] += weight(x, y) * r;
+            }
+        }
+    }
+    let mut sorted = angular.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[BINS / 2].max(1e-300);
+    angular.iter_mut().for_each(|v| *v /= median);
+    (radial, angular)
 }
 
 /// The kernel's central `width`×`height` as its log picture, as an RGB

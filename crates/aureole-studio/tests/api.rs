@@ -463,6 +463,33 @@ fn changing_the_blade_count_from_7_to_8_changes_the_picture_and_its_rays() {
     assert_ne!(pictures[0], pictures[1]);
     // An odd stop of n blades gives 2n rays, an even one n.
     assert_eq!(counted, [14, 8], "rays counted for 7 and 8 blades");
+
+    // The kernel view's angular profile shows them too: 2° bins, ÷ median.
+    for (blades, expected) in [(7, 14), (8, 8)] {
+        let config =
+            preset("camera-f8-7blade").replace("blades = 7", &format!("blades = {blades}"));
+        let reply = http(
+            addr,
+            "POST",
+            "/api/render",
+            &render_body("lamp.exr", &config, 256, r#", "view": "kernel""#),
+        );
+        let angular: Vec<f64> = reply
+            .header("x-profile-angular")
+            .unwrap()
+            .split(',')
+            .map(|v| v.parse().unwrap())
+            .collect();
+        assert_eq!(angular.len(), 180);
+        let peaks = (0..180)
+            .filter(|&k| {
+                let (before, after) = (angular[(k + 179) % 180], angular[(k + 1) % 180]);
+                angular[k] > 3.0 && angular[k] > before && angular[k] >= after
+            })
+            .count();
+        assert_eq!(peaks, expected, "{blades} blades: {angular:?}");
+        assert!(reply.header("x-profile-radial").unwrap().split(',').count() > 10);
+    }
 }
 
 #[test]
