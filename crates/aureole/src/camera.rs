@@ -3,7 +3,6 @@
 
 use serde::Deserialize;
 
-use crate::check;
 use crate::error::{Error, Result};
 
 /// The camera that recorded (or renders) the image. Every field is optional
@@ -23,21 +22,17 @@ impl Camera {
     /// Checks every given field: positive and finite, f-number at least 0.5
     /// (the limit of a lens in air).
     pub fn validate(&self) -> Result<()> {
-        let positive = "a finite number above 0";
-        if let Some(v) = self.sensor_width_mm {
-            check::range("camera", "sensor_width_mm", v, v > 0.0, positive)?;
-        }
-        if let Some(v) = self.focal_length_mm {
-            check::range("camera", "focal_length_mm", v, v > 0.0, positive)?;
-        }
-        if let Some(v) = self.f_number {
-            check::range(
-                "camera",
-                "f_number",
-                v,
-                v >= 0.5,
-                "a finite number of at least 0.5",
-            )?;
+        let [sensor, focal, stop] = crate::schema::CAMERA else {
+            return Ok(());
+        };
+        for (parameter, value) in [
+            (sensor, self.sensor_width_mm),
+            (focal, self.focal_length_mm),
+            (stop, self.f_number),
+        ] {
+            if let Some(v) = value {
+                parameter.check("camera", v)?;
+            }
         }
         Ok(())
     }

@@ -34,19 +34,3 @@ pub(crate) fn count(
         })
     }
 }
-
-/// Refuses an ε outside [0, 1].
-pub(crate) fn epsilon(section: &str, epsilon: f64) -> Result<()> {
-    range(
-        section,
-        "epsilon",
-        epsilon,
-        (0.0..=1.0).contains(&epsilon),
-        "a fraction of the light from 0 to 1",
-    )
-}
-
-/// Refuses an angle in degrees unless it is finite.
-pub(crate) fn angle(section: &str, name: &'static str, degrees: f64) -> Result<()> {
-    range(section, name, degrees, true, "a finite angle in degrees")
-}

@@ -80,6 +80,7 @@ pub mod memory;
 pub mod optics;
 pub mod pipeline;
 pub mod presets;
+pub mod schema;
 pub mod units;
 
 pub use camera::Camera;

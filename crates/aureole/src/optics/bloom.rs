@@ -6,6 +6,8 @@
 
 use serde::Deserialize;
 
+use crate::schema::{Default, Kind, Parameter, EPSILON};
+
 use super::shape::{Grid, SpreadShape};
 use super::{Context, Model, Source};
 use crate::check;
@@ -24,8 +26,31 @@ pub struct Bloom {
     pub radius: Length,
 }
 
+const BETA: Parameter = Parameter {
+    name: "beta",
+    kind: Kind::Number,
+    low: Some((1.0, false)),
+    high: Some((100.0, true)),
+    default: Default::Required,
+    unit: "",
+    allowed: "a number above 1 and at most 100 (β ≤ 1 spreads infinite energy)",
+    about: "β: how fast the halo falls off, (1 + r²/R²)^-β",
+};
+
+const RADIUS: Parameter = Parameter {
+    name: "radius",
+    kind: Kind::Length,
+    low: Some((0.0, false)),
+    high: None,
+    default: Default::Required,
+    unit: "px, um or mm",
+    allowed: "a length above 0: px, or µm/mm on the sensor",
+    about: "R: the halo's width (30–120 µm on film)",
+};
+
 impl Model for Bloom {
     const KIND: &'static str = "bloom";
+    const PARAMETERS: &'static [Parameter] = &[EPSILON, BETA, RADIUS];
 
     fn scale_pixels(&mut self, factor: f64) {
         self.radius = self.radius.scaled_px(factor);
@@ -33,14 +58,8 @@ impl Model for Bloom {
 
     /// Checks ε ∈ [0, 1] and β > 1 (β ≤ 1 spreads infinite energy).
     fn validate(&self) -> Result<()> {
-        check::epsilon("bloom", self.epsilon)?;
-        check::range(
-            "bloom",
-            "beta",
-            self.beta,
-            self.beta > 1.0 && self.beta <= 100.0,
-            "a number above 1 and at most 100 (β ≤ 1 spreads infinite energy)",
-        )
+        EPSILON.check("bloom", self.epsilon)?;
+        BETA.check("bloom", self.beta)
     }
 
     fn source(&self, context: &Context) -> Result<Source> {

@@ -12,6 +12,8 @@ use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::Deserialize;
 
+use crate::schema::{Default, Kind, Parameter, EPSILON};
+
 use super::shape::{Grid, SpreadShape};
 use super::{Context, Model, Source};
 use crate::check;
@@ -87,8 +89,108 @@ pub struct RayFactors {
     pub intensity: f64,
 }
 
+const RAYS: Parameter = Parameter {
+    name: "rays",
+    kind: Kind::Whole,
+    low: Some((1.0, true)),
+    high: Some((MAX_RAYS as f64, true)),
+    default: Default::Required,
+    unit: "",
+    allowed: "a whole number of rays from 1 to 1024",
+    about: "k: a stop of n blades gives n rays when n is even, 2n when odd",
+};
+
+const LENGTH: Parameter = Parameter {
+    name: "length",
+    kind: Kind::Length,
+    low: Some((0.0, false)),
+    high: None,
+    default: Default::Required,
+    unit: "px, um or mm",
+    allowed: "a length above 0: px, or µm/mm on the sensor",
+    about: "l: the mean ray length",
+};
+
+const FADEOUT: Parameter = Parameter {
+    name: "fadeout",
+    kind: Kind::Number,
+    low: Some((0.0, false)),
+    high: None,
+    default: Default::Number(1.0),
+    unit: "",
+    allowed: "a number above 0 (without fade-out a ray carries infinite energy)",
+    about: "σ: a ray fades by e^-σ over its length",
+};
+
+const WIDTH: Parameter = Parameter {
+    name: "width",
+    kind: Kind::Length,
+    low: Some((0.0, false)),
+    high: None,
+    default: Default::Length("3px"),
+    unit: "px, um or mm",
+    allowed: "a length above 0: px, or µm/mm on the sensor",
+    about: "w: a ray's width",
+};
+
+const SPREAD: Parameter = Parameter {
+    name: "spread",
+    kind: Kind::Number,
+    low: Some((-10.0, true)),
+    high: Some((10.0, true)),
+    default: Default::Number(1.0),
+    unit: "",
+    allowed: "a number from -10 to 10",
+    about: "s: 0 rays of constant width, < 0 converging, > 0 diverging",
+};
+
+const fn jitter(name: &'static str, default: f64, about: &'static str) -> Parameter {
+    Parameter {
+        name,
+        kind: Kind::Number,
+        low: Some((0.0, true)),
+        high: Some((1.0, true)),
+        default: Default::Number(default),
+        unit: "",
+        allowed: "a relative deviation from 0 to 1",
+        about,
+    }
+}
+
+const LENGTH_JITTER: Parameter = jitter(
+    "length_jitter",
+    0.25,
+    "each ray's length varies by this, relative",
+);
+const WIDTH_JITTER: Parameter = jitter(
+    "width_jitter",
+    0.0,
+    "each ray's width varies by this, relative",
+);
+const INTENSITY_JITTER: Parameter = jitter(
+    "intensity_jitter",
+    0.0,
+    "each ray's brightness varies by this, relative",
+);
+const ROTATION: Parameter = crate::schema::angle(
+    "rotation_deg",
+    "the first ray's angle, counter-clockwise from +x",
+);
+
 impl Model for Corona {
     const KIND: &'static str = "corona";
+    const PARAMETERS: &'static [Parameter] = &[
+        EPSILON,
+        RAYS,
+        LENGTH,
+        FADEOUT,
+        WIDTH,
+        SPREAD,
+        LENGTH_JITTER,
+        WIDTH_JITTER,
+        INTENSITY_JITTER,
+        ROTATION,
+    ];
 
     fn scale_pixels(&mut self, factor: f64) {
         self.length = self.length.scaled_px(factor);
@@ -98,51 +200,20 @@ impl Model for Corona {
     /// Checks every parameter's range.
     fn validate(&self) -> Result<()> {
         const NAME: &str = "corona";
-        check::epsilon(NAME, self.epsilon)?;
+        EPSILON.check(NAME, self.epsilon)?;
         check::count(
             NAME,
-            "rays",
+            RAYS.name,
             self.rays,
-            (1..=MAX_RAYS).contains(&self.rays),
-            "a whole number of rays from 1 to 1024",
+            RAYS.admits(f64::from(self.rays)),
+            RAYS.allowed,
         )?;
-        check::range(
-            NAME,
-            "fadeout",
-            self.fadeout,
-            self.fadeout > 0.0,
-            "a number above 0 (without fade-out a ray carries infinite energy)",
-        )?;
-        check::range(
-            NAME,
-            "spread",
-            self.spread,
-            self.spread.abs() <= 10.0,
-            "a number from -10 to 10",
-        )?;
-        let jitter = "a relative deviation from 0 to 1";
-        check::range(
-            NAME,
-            "length_jitter",
-            self.length_jitter,
-            (0.0..=1.0).contains(&self.length_jitter),
-            jitter,
-        )?;
-        check::range(
-            NAME,
-            "width_jitter",
-            self.width_jitter,
-            (0.0..=1.0).contains(&self.width_jitter),
-            jitter,
-        )?;
-        check::range(
-            NAME,
-            "intensity_jitter",
-            self.intensity_jitter,
-            (0.0..=1.0).contains(&self.intensity_jitter),
-            jitter,
-        )?;
-        check::angle(NAME, "rotation_deg", self.rotation_deg)
+        FADEOUT.check(NAME, self.fadeout)?;
+        SPREAD.check(NAME, self.spread)?;
+        LENGTH_JITTER.check(NAME, self.length_jitter)?;
+        WIDTH_JITTER.check(NAME, self.width_jitter)?;
+        INTENSITY_JITTER.check(NAME, self.intensity_jitter)?;
+        ROTATION.check(NAME, self.rotation_deg)
     }
 
     fn source(&self, context: &Context) -> Result<Source> {

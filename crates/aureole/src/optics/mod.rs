@@ -68,6 +68,10 @@ pub(crate) trait Model:
     /// The `type` a config file names it by.
     const KIND: &'static str;
 
+    /// Its parameters, in the order a config lists them: what `validate`
+    /// checks and what a front end shows.
+    const PARAMETERS: &'static [crate::schema::Parameter];
+
     /// Checks every parameter against its allowed range.
     fn validate(&self) -> Result<()>;
 
@@ -105,6 +109,10 @@ macro_rules! effects {
 
         /// The effect types a config file may name.
         pub const EFFECT_TYPES: &[&str] = &[$(<$model as Model>::KIND,)*];
+
+        /// Each effect type with its parameters.
+        pub const EFFECT_PARAMETERS: &[(&str, &[crate::schema::Parameter])] =
+            &[$((<$model as Model>::KIND, <$model as Model>::PARAMETERS),)*];
 
         impl Effect {
             /// The effect's type as written in a config file.

@@ -7,10 +7,11 @@
 
 use serde::Deserialize;
 
+use crate::schema::{Default, Kind, Parameter, EPSILON};
+
 use super::shape::{Grid, SpreadShape};
 use super::{Context, Model, Source};
 use crate::camera::Camera;
-use crate::check;
 use crate::error::{Error, Result};
 
 /// Vos glare parameters, as in an `[[effect]]` table with `type = "vos"`.
@@ -28,19 +29,25 @@ fn two() -> f64 {
     2.0
 }
 
+const EXPONENT: Parameter = Parameter {
+    name: "exponent",
+    kind: Kind::Number,
+    low: Some((1.5, true)),
+    high: Some((3.0, true)),
+    default: Default::Number(2.0),
+    unit: "",
+    allowed: "a number from 1.5 to 3 (Vos's range for k/θⁿ)",
+    about: "n in k/θⁿ: how fast the glare falls off with the angle",
+};
+
 impl Model for Vos {
     const KIND: &'static str = "vos";
+    const PARAMETERS: &'static [Parameter] = &[EPSILON, EXPONENT];
 
     /// Checks ε ∈ [0, 1] and n ∈ [1.5, 3].
     fn validate(&self) -> Result<()> {
-        check::epsilon("vos", self.epsilon)?;
-        check::range(
-            "vos",
-            "exponent",
-            self.exponent,
-            (1.5..=3.0).contains(&self.exponent),
-            "a number from 1.5 to 3 (Vos's range for k/θⁿ)",
-        )
+        EPSILON.check("vos", self.epsilon)?;
+        EXPONENT.check("vos", self.exponent)
     }
 
     fn source(&self, context: &Context) -> Result<Source> {

@@ -13,6 +13,8 @@ use std::f64::consts::{PI, TAU};
 
 use serde::Deserialize;
 
+use crate::schema::{Default, Kind, Parameter};
+
 use super::{Context, Model, Source};
 use crate::camera::Camera;
 use crate::check;
@@ -102,54 +104,127 @@ pub struct Optics {
     pub orders: Vec<([f64; 2], f64)>,
 }
 
+const BLADES: Parameter = Parameter {
+    name: "blades",
+    kind: Kind::Whole,
+    low: Some((0.0, true)),
+    high: Some((MAX_BLADES as f64, true)),
+    default: Default::Required,
+    unit: "",
+    allowed: "0 (a circular stop) or 3 to 64 blades",
+    about: "straight blades of the stop; 0 for a circle",
+};
+
+const fn fraction(
+    name: &'static str,
+    (low, high): ((f64, bool), (f64, bool)),
+    default: f64,
+    allowed: &'static str,
+    about: &'static str,
+) -> Parameter {
+    Parameter {
+        name,
+        kind: Kind::Number,
+        low: Some(low),
+        high: Some(high),
+        default: Default::Number(default),
+        unit: "",
+        allowed,
+        about,
+    }
+}
+
+const ROUNDNESS: Parameter = fraction(
+    "roundness",
+    ((0.0, true), (1.0, true)),
+    0.0,
+    "0 (straight blades) to 1 (a circle)",
+    "0 straight blades … 1 a circle through their tips",
+);
+const SPECTRAL: Parameter = Parameter {
+    name: "spectral",
+    kind: Kind::Flag,
+    low: None,
+    high: None,
+    default: Default::Flag(true),
+    unit: "",
+    allowed: "true or false",
+    about: "17 wavelengths into R, G, B; false: one, wavelength_nm",
+};
+const WAVELENGTH: Parameter = Parameter {
+    name: "wavelength_nm",
+    kind: Kind::Number,
+    low: Some((380.0, true)),
+    high: Some((780.0, true)),
+    default: Default::Number(550.0),
+    unit: "nm",
+    allowed: "a visible wavelength from 380 to 780 nm",
+    about: "the wavelength of an achromatic kernel (spectral = false)",
+};
+const OBSTRUCTION: Parameter = fraction(
+    "obstruction",
+    ((0.0, true), (0.95, false)),
+    0.0,
+    "a fraction of the diameter from 0 to below 0.95",
+    "a central obstruction (mirror lenses), of the diameter",
+);
+const VANES: Parameter = Parameter {
+    name: "vanes",
+    kind: Kind::Whole,
+    low: Some((0.0, true)),
+    high: Some((16.0, true)),
+    default: Default::Number(0.0),
+    unit: "",
+    allowed: "0 to 16 spider vanes",
+    about: "spider vanes holding the obstruction",
+};
+const VANE_WIDTH: Parameter = fraction(
+    "vane_width",
+    ((0.0, false), (0.2, true)),
+    0.02,
+    "a fraction of the diameter above 0 and at most 0.2",
+    "each vane's width, of the diameter",
+);
+const ROTATION: Parameter = crate::schema::angle(
+    "rotation_deg",
+    "the stop's rotation; at 0 a blade tip points along +x",
+);
+
 impl Model for Aperture {
     const KIND: &'static str = "aperture";
+    const PARAMETERS: &'static [Parameter] = &[
+        BLADES,
+        ROTATION,
+        ROUNDNESS,
+        SPECTRAL,
+        WAVELENGTH,
+        OBSTRUCTION,
+        VANES,
+        VANE_WIDTH,
+    ];
 
     /// Checks every parameter.
     fn validate(&self) -> Result<()> {
         const NAME: &str = "aperture";
+        // One or two blades make no stop: the range has a hole.
         check::count(
             NAME,
-            "blades",
+            BLADES.name,
             self.blades,
-            self.blades == 0 || (3..=MAX_BLADES).contains(&self.blades),
-            "0 (a circular stop) or 3 to 64 blades",
+            BLADES.admits(f64::from(self.blades)) && !(1..3).contains(&self.blades),
+            BLADES.allowed,
         )?;
-        check::angle(NAME, "rotation_deg", self.rotation_deg)?;
-        check::range(
-            NAME,
-            "roundness",
-            self.roundness,
-            (0.0..=1.0).contains(&self.roundness),
-            "0 (straight blades) to 1 (a circle)",
-        )?;
-        check::range(
-            NAME,
-            "wavelength_nm",
-            self.wavelength_nm,
-            (380.0..=780.0).contains(&self.wavelength_nm),
-            "a visible wavelength from 380 to 780 nm",
-        )?;
-        check::range(
-            NAME,
-            "obstruction",
-            self.obstruction,
-            (0.0..0.95).contains(&self.obstruction),
-            "a fraction of the diameter from 0 to below 0.95",
-        )?;
-        check::range(
-            NAME,
-            "vane_width",
-            self.vane_width,
-            self.vane_width > 0.0 && self.vane_width <= 0.2,
-            "a fraction of the diameter above 0 and at most 0.2",
-        )?;
+        ROTATION.check(NAME, self.rotation_deg)?;
+        ROUNDNESS.check(NAME, self.roundness)?;
+        WAVELENGTH.check(NAME, self.wavelength_nm)?;
+        OBSTRUCTION.check(NAME, self.obstruction)?;
+        VANE_WIDTH.check(NAME, self.vane_width)?;
         check::count(
             NAME,
-            "vanes",
+            VANES.name,
             self.vanes,
-            self.vanes <= 16,
-            "0 to 16 spider vanes",
+            VANES.admits(f64::from(self.vanes)),
+            VANES.allowed,
         )?;
         check::count(
             NAME,
@@ -159,7 +234,7 @@ impl Model for Aperture {
             "at most 6 families of lines",
         )?;
         for f in &self.filters {
-            check::angle("aperture filter", "angle_deg", f.angle_deg)?;
+            crate::schema::angle("angle_deg", "").check("aperture filter", f.angle_deg)?;
             check::range(
                 "aperture filter",
                 "spacing_um",
