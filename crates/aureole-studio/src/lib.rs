@@ -21,6 +21,7 @@
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod camera;
 pub mod error;
 pub mod export;
 pub mod render;
@@ -81,6 +82,9 @@ pub fn router(studio: Studio) -> Router {
         )
         .route("/api/presets", get(presets))
         .route("/api/images", get(images))
+        .route("/api/schema", get(|| async { Json(camera::schema()) }))
+        .route("/api/config/read", post(read_config))
+        .route("/api/config/write", post(write_config))
         .route("/api/render", post(render_picture))
         .route("/api/export", post(start_export))
         .route(
@@ -94,6 +98,23 @@ pub fn router(studio: Studio) -> Router {
 /// Serves the studio on `listener` until the process ends.
 pub async fn serve(listener: tokio::net::TcpListener, studio: Studio) -> std::io::Result<()> {
     axum::serve(listener, router(studio)).await
+}
+
+async fn read_config(body: Bytes) -> Result<Json<serde_json::Value>, StudioError> {
+    let text = std::str::from_utf8(&body)
+        .map_err(|_| StudioError::BadRequest("the config is not UTF-8 text".into()))?;
+    camera::read(text).map(Json)
+}
+
+async fn write_config(body: Bytes) -> Result<Response, StudioError> {
+    let value: serde_json::Value = serde_json::from_slice(&body)
+        .map_err(|e| StudioError::BadRequest(format!("the camera: {e}")))?;
+    let text = camera::write(value)?;
+    Ok((
+        [(header::CONTENT_TYPE, "application/toml; charset=utf-8")],
+        text,
+    )
+        .into_response())
 }
 
 async fn start_export(

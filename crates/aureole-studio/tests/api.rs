@@ -553,3 +553,57 @@ fn a_full_resolution_render_is_written_under_the_roots_with_its_progress() {
     assert!(!dir.path().parent().unwrap().join("escaped.exr").exists());
     assert_eq!(http(addr, "GET", "/api/export/999", "").status, 404);
 }
+
+#[test]
+fn the_camera_panels_come_from_the_library_schema_and_round_trip_the_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = server(dir.path());
+    let schema = http(addr, "GET", "/api/schema", "").json();
+    let effects = schema["effects"].as_array().unwrap();
+    let types: Vec<&str> = effects
+        .iter()
+        .map(|e| e["type"].as_str().unwrap())
+        .collect();
+    assert_eq!(types, aureole::optics::EFFECT_TYPES);
+    let aperture = effects.iter().find(|e| e["type"] == "aperture").unwrap();
+    let blades = aperture["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "blades")
+        .unwrap();
+    assert_eq!(blades["kind"], "whole");
+    assert_eq!(blades["high"]["value"], 64.0);
+    assert!(blades["allowed"].as_str().unwrap().contains("3 to 64"));
+    // Each effect comes with an example to add it from, which the library
+    // accepts.
+    for effect in effects {
+        assert!(effect["example"]["type"] == effect["type"], "{effect}");
+    }
+    assert_eq!(schema["camera"][2]["name"], "f_number");
+
+    // TOML → table → TOML is the same camera.
+    let toml = preset("camera-f8-7blade");
+    let read = http(addr, "POST", "/api/config/read", toml);
+    assert_eq!(read.status, 200);
+    let mut table = read.json();
+    assert_eq!(table["effect"][0]["blades"], 7);
+    table["effect"][0]["blades"] = 8.into();
+    let written = http(addr, "POST", "/api/config/write", &table.to_string());
+    assert_eq!(written.status, 200);
+    let text = String::from_utf8(written.body).unwrap();
+    let config = aureole::config::ConfigFile::parse(&text, "written").unwrap();
+    match &config.effects[0] {
+        aureole::Effect::Aperture(a) => assert_eq!(a.blades, 8),
+        other => panic!("{other:?}"),
+    }
+    // A camera the library refuses is refused with its one line.
+    let refused = http(
+        addr,
+        "POST",
+        "/api/config/read",
+        "[[effect]]\ntype = \"bloom\"\nepsilon = 2\nbeta = 2\nradius = \"3px\"\n",
+    );
+    assert_eq!(refused.status, 400);
+    assert!(refused.error().contains("epsilon"), "{}", refused.error());
+}

@@ -132,6 +132,13 @@ fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
         "{}",
         first.text_of("numbers")
     );
+    // The camera's panels, from the library's schema.
+    for parameter in ["sensor_width_mm", "blades", "roundness", "wavelength_nm"] {
+        assert!(
+            first.dom.contains(&format!(r#"data-param="{parameter}""#)),
+            "no control for {parameter}"
+        );
+    }
     let errors: Vec<&String> = first
         .console
         .iter()

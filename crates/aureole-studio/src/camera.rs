@@ -1,0 +1,89 @@
+//! The camera as the page's panels see it: the library's schema of every
+//! parameter, and a config's TOML read into a table and written back.
+
+use aureole::schema::{Default, Kind, Parameter, CAMERA};
+use serde_json::{json, Value};
+
+use crate::error::StudioError;
+
+fn parameter(p: &Parameter) -> Value {
+    let bound =
+        |b: Option<(f64, bool)>| b.map(|(v, closed)| json!({ "value": v, "closed": closed }));
+    json!({
+        "name": p.name,
+        "kind": match p.kind {
+            Kind::Number => "number",
+            Kind::Whole => "whole",
+            Kind::Angle => "angle",
+            Kind::Length => "length",
+            Kind::Flag => "flag",
+        },
+        "low": bound(p.low),
+        "high": bound(p.high),
+        "default": match p.default {
+            Default::Required => Value::Null,
+            Default::Number(v) => json!(v),
+            Default::Length(text) => json!(text),
+            Default::Flag(flag) => json!(flag),
+        },
+        "unit": p.unit,
+        "allowed": p.allowed,
+        "about": p.about,
+    })
+}
+
+/// `GET /api/schema`: the camera's and every effect's parameters, and for
+/// each effect an example table to add it from (the first preset that has
+/// one).
+pub fn schema() -> Value {
+    let effects: Vec<Value> = aureole::optics::EFFECT_PARAMETERS
+        .iter()
+        .map(|(kind, parameters)| {
+            json!({
+                "type": kind,
+                "parameters": parameters.iter().map(parameter).collect::<Vec<_>>(),
+                "example": example(kind),
+            })
+        })
+        .collect();
+    json!({
+        "camera": CAMERA.iter().map(parameter).collect::<Vec<_>>(),
+        "effects": effects,
+    })
+}
+
+fn example(kind: &str) -> Value {
+    let Some(preset) =
+        aureole::presets::example_of(kind).and_then(|n| aureole::presets::find(n).ok())
+    else {
+        return Value::Null;
+    };
+    let Ok(table) = toml::from_str::<toml::Table>(preset.toml) else {
+        return Value::Null;
+    };
+    let effects = table.get("effect").and_then(toml::Value::as_array);
+    let found = effects.and_then(|e| {
+        e.iter()
+            .find(|t| t.get("type").and_then(toml::Value::as_str) == Some(kind))
+    });
+    found
+        .and_then(|t| serde_json::to_value(t).ok())
+        .unwrap_or(Value::Null)
+}
+
+/// `POST /api/config/read`: a config's TOML as a JSON table, once the
+/// library accepts it (so the panels never show a camera that would be
+/// refused).
+pub fn read(text: &str) -> Result<Value, StudioError> {
+    crate::render::parse_config(text)?;
+    let table: toml::Table = toml::from_str(text)
+        .map_err(|e| StudioError::BadRequest(format!("config: {}", e.message())))?;
+    serde_json::to_value(table).map_err(|e| StudioError::Internal(e.to_string()))
+}
+
+/// `POST /api/config/write`: a JSON table as a config's TOML.
+pub fn write(value: Value) -> Result<String, StudioError> {
+    let table: toml::Table = serde_json::from_value(value)
+        .map_err(|e| StudioError::BadRequest(format!("the camera: {e}")))?;
+    toml::to_string(&table).map_err(|e| StudioError::BadRequest(format!("the camera: {e}")))
+}
