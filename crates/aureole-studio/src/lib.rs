@@ -83,6 +83,10 @@ pub fn router(studio: Studio) -> Router {
         .route("/api/presets", get(presets))
         .route("/api/images", get(images))
         .route("/api/schema", get(|| async { Json(camera::schema()) }))
+        .route(
+            "/api/status",
+            get(|State(studio): State<Studio>| async move { Json(studio.renderer.status()) }),
+        )
         .route("/api/config/read", post(read_config))
         .route("/api/config/write", post(write_config))
         .route("/api/render", post(render_picture))

@@ -181,6 +181,18 @@ pub struct Renderer {
     preview: Mutex<Option<Preview>>,
     camera: Mutex<Option<Camera>>,
     running: Mutex<Cancel>,
+    /// Renders under way, and renders that ended cancelled.
+    active: std::sync::atomic::AtomicUsize,
+    cancelled: std::sync::atomic::AtomicU64,
+}
+
+/// What the renderer is doing, for `GET /api/status`.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Status {
+    /// Renders under way.
+    pub rendering: usize,
+    /// Renders that ended cancelled (replaced, or their page went away).
+    pub cancelled: u64,
 }
 
 fn locked<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -199,6 +211,8 @@ impl Renderer {
             preview: Mutex::new(None),
             camera: Mutex::new(None),
             running: Mutex::new(Cancel::new()),
+            active: std::sync::atomic::AtomicUsize::new(0),
+            cancelled: std::sync::atomic::AtomicU64::new(0),
         }
     }
 
@@ -211,6 +225,30 @@ impl Renderer {
     /// away); a render still running is cancelled first, as the newer
     /// request replaces it.
     pub fn render(&self, request: &RenderRequest, cancel: Cancel) -> Result<Rendered, StudioError> {
+        use std::sync::atomic::Ordering;
+        self.active.fetch_add(1, Ordering::SeqCst);
+        let outcome = self.render_counted(request, cancel);
+        if matches!(outcome, Err(StudioError::Superseded)) {
+            self.cancelled.fetch_add(1, Ordering::SeqCst);
+        }
+        self.active.fetch_sub(1, Ordering::SeqCst);
+        outcome
+    }
+
+    /// What the renderer is doing.
+    pub fn status(&self) -> Status {
+        use std::sync::atomic::Ordering;
+        Status {
+            rendering: self.active.load(Ordering::SeqCst),
+            cancelled: self.cancelled.load(Ordering::SeqCst),
+        }
+    }
+
+    fn render_counted(
+        &self,
+        request: &RenderRequest,
+        cancel: Cancel,
+    ) -> Result<Rendered, StudioError> {
         let start = Instant::now();
         {
             let mut running = locked(&self.running);

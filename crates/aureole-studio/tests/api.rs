@@ -607,3 +607,32 @@ fn the_camera_panels_come_from_the_library_schema_and_round_trip_the_toml() {
     assert_eq!(refused.status, 400);
     assert!(refused.error().contains("epsilon"), "{}", refused.error());
 }
+
+#[test]
+fn a_render_whose_page_goes_away_is_cancelled() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = server(dir.path());
+    // A spectral aperture at 1280 px: seconds of work.
+    let body = render_body("demo", preset("camera-f8-7blade"), 1280, "");
+    let mut stream = TcpStream::connect(addr).unwrap();
+    write!(
+        stream,
+        "POST /api/render HTTP/1.1\r\nHost: {addr}\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
+        body.len()
+    )
+    .unwrap();
+    // Once the render is under way, the page goes.
+    while http(addr, "GET", "/api/status", "").json()["rendering"] == 0 {
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    drop(stream);
+    // The render ends, and it ends cancelled rather than finished.
+    let status = loop {
+        let status = http(addr, "GET", "/api/status", "").json();
+        if status["rendering"] == 0 {
+            break status;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    assert_eq!(status["cancelled"], 1, "{status}");
+}
