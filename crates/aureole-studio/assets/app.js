@@ -508,6 +508,26 @@ function buildPanels() {
     set.classList.toggle("off", !effect.on);
     const kind = state.schema.effects.find((e) => e.type === effect.table.type);
     for (const p of kind ? kind.parameters : []) set.append(control(p, effect.table, writeConfig));
+    // Sub-tables (an aperture's star-filter families): each with its
+    // controls and a remove, and one to add.
+    for (const [name, parameters] of Object.entries((kind && kind.tables) || {})) {
+      const families = effect.table[name] || [];
+      families.forEach((family, f) => {
+        const sub = document.createElement("fieldset");
+        const legend = document.createElement("legend");
+        legend.textContent = `${name} ${f + 1} `;
+        legend.append(button("✕", `remove this ${name} family`, () => {
+          families.splice(f, 1);
+          if (!families.length) delete effect.table[name];
+        }));
+        sub.append(legend);
+        for (const p of parameters) sub.append(control(p, family, writeConfig));
+        set.append(sub);
+      });
+      set.append(button(`+ ${name}`, `add a ${name} family of lines`, () => {
+        effect.table[name] = families.concat([{ angle_deg: 0, spacing_um: 20, width_um: 10 }]);
+      }));
+    }
   });
 }
 

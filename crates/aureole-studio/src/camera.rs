@@ -39,9 +39,17 @@ pub fn schema() -> Value {
     let effects: Vec<Value> = aureole::optics::EFFECT_PARAMETERS
         .iter()
         .map(|(kind, parameters)| {
+            // The aperture's star-filter families are tables of their own.
+            let tables = if *kind == "aperture" {
+                let filter = aureole::optics::aperture::FILTER_PARAMETERS;
+                json!({ "filter": filter.iter().map(parameter).collect::<Vec<_>>() })
+            } else {
+                json!({})
+            };
             json!({
                 "type": kind,
                 "parameters": parameters.iter().map(parameter).collect::<Vec<_>>(),
+                "tables": tables,
                 "example": example(kind),
             })
         })

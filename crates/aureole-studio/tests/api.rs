@@ -575,6 +575,13 @@ fn the_camera_panels_come_from_the_library_schema_and_round_trip_the_toml() {
     assert_eq!(blades["kind"], "whole");
     assert_eq!(blades["high"]["value"], 64.0);
     assert!(blades["allowed"].as_str().unwrap().contains("3 to 64"));
+    let filter: Vec<&str> = aperture["tables"]["filter"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(filter, ["angle_deg", "spacing_um", "width_um"]);
     // Each effect comes with an example to add it from, which the library
     // accepts.
     for effect in effects {

@@ -190,6 +190,34 @@ const ROTATION: Parameter = crate::schema::angle(
     "the stop's rotation; at 0 a blade tip points along +x",
 );
 
+/// The parameters of one `[[effect.filter]]` family of lines.
+pub const FILTER_PARAMETERS: &[Parameter] = &[
+    crate::schema::angle(
+        "angle_deg",
+        "the lines' direction; their rays run perpendicular to them",
+    ),
+    Parameter {
+        name: "spacing_um",
+        kind: Kind::Number,
+        low: Some((1.0, true)),
+        high: Some((10_000.0, true)),
+        default: Default::Required,
+        unit: "µm",
+        allowed: "a line spacing d from 1 to 10000 µm",
+        about: "d: the distance between lines; the rays' orders lie λ/d apart",
+    },
+    Parameter {
+        name: "width_um",
+        kind: Kind::Number,
+        low: Some((0.0, false)),
+        high: None,
+        default: Default::Required,
+        unit: "µm",
+        allowed: "a line width e above 0 and below the spacing",
+        about: "e: each line's width; e/d sets how the light splits among the orders",
+    },
+];
+
 impl Model for Aperture {
     const KIND: &'static str = "aperture";
     const PARAMETERS: &'static [Parameter] = &[
@@ -233,21 +261,19 @@ impl Model for Aperture {
             self.filters.len() <= MAX_FILTERS,
             "at most 6 families of lines",
         )?;
+        let [angle, spacing, width] = FILTER_PARAMETERS else {
+            return Ok(());
+        };
         for f in &self.filters {
-            crate::schema::angle("angle_deg", "").check("aperture filter", f.angle_deg)?;
+            angle.check("aperture filter", f.angle_deg)?;
+            spacing.check("aperture filter", f.spacing_um)?;
+            // The width is bounded by this family's own spacing too.
             check::range(
                 "aperture filter",
-                "spacing_um",
-                f.spacing_um,
-                f.spacing_um >= 1.0 && f.spacing_um <= 10_000.0,
-                "a line spacing d from 1 to 10000 µm",
-            )?;
-            check::range(
-                "aperture filter",
-                "width_um",
+                width.name,
                 f.width_um,
-                f.width_um > 0.0 && f.width_um < f.spacing_um,
-                "a line width e above 0 and below the spacing",
+                width.admits(f.width_um) && f.width_um < f.spacing_um,
+                width.allowed,
             )?;
         }
         Ok(())
