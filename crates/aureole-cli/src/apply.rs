@@ -214,11 +214,11 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         .with_frames_in_flight(in_flight);
     // A frame too large for the memory or the kernel is refused from its
     // header, before it is decoded.
+    let choice = Choice {
+        layer: args.layer.clone(),
+        part: args.part.clone(),
+    };
     if let Some(job) = todo.first() {
-        let choice = Choice {
-            layer: args.layer.clone(),
-            part: args.part.clone(),
-        };
         let limits = Limits { max_bytes: limit };
         if let Some(shape) = aureole_io::read::probe(&job.input, limits, &choice)? {
             session
@@ -240,6 +240,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     }
     let run = Run {
         args,
+        choice,
         kernel_width,
         limit,
         quiet,
@@ -287,6 +288,8 @@ fn refuse_unsigned(output: &std::path::Path) -> Result<(), Failure> {
 /// What every frame of a batch is read and written with.
 struct Run<'a> {
     args: &'a Args,
+    /// The EXR layer and part each frame is read from.
+    choice: Choice,
     /// The image width the --kernel was built for, to be held to.
     kernel_width: Option<usize>,
     limit: u64,
@@ -387,11 +390,8 @@ impl Run<'_> {
         let limits = Limits {
             max_bytes: self.limit,
         };
-        let choice = Choice {
-            layer: self.args.layer.clone(),
-            part: self.args.part.clone(),
-        };
-        let (frame, original) = input::read(&job.input, &options, (limits, &choice), self.quiet)?;
+        let (frame, original) =
+            input::read(&job.input, &options, (limits, &self.choice), self.quiet)?;
         Ok(Read {
             job,
             frame,

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use anyhow::anyhow;
 use aureole::Image;
-use aureole_io::atomic::folder_of;
+use aureole_io::atomic::{folder_of, same_file};
 use aureole_io::formats::{Note, Original};
 use aureole_io::write::{output_format, write_image_into, LinearOptions, WriteOptions, Written};
 
@@ -85,26 +85,6 @@ pub fn tidy<'a>(outputs: impl IntoIterator<Item = &'a Path>, quiet: bool) {
                 names.join(", ")
             );
         }
-    }
-}
-
-/// Whether writing `b` would replace the file `a`: the same file by its
-/// identity (device and inode, links followed), however it is named: a
-/// symbolic or hard link to it, `./a`, an absolute path.
-#[cfg(unix)]
-fn same_file(a: &Path, b: &Path) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    match (std::fs::metadata(a), std::fs::metadata(b)) {
-        (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
-        _ => false,
-    }
-}
-
-#[cfg(not(unix))]
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => false,
     }
 }
 

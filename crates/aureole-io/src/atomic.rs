@@ -54,6 +54,27 @@ where
     Ok(())
 }
 
+/// Whether writing `b` would replace the file `a`: the same file by its
+/// identity (device and inode, links followed), however it is named: a
+/// symbolic or hard link to it, `./a`, an absolute path.
+#[cfg(unix)]
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+        _ => false,
+    }
+}
+
+/// Whether writing `b` would replace the file `a` (by canonical path).
+#[cfg(not(unix))]
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
 /// The names of our temporary files: prefix and suffix.
 const TEMPORARY: (&str, &str) = (".aureole-", ".part");
 

@@ -1,7 +1,7 @@
 //! The display path (docs/physics.md §9): no display shows 10⁵ cd/m², so
 //! luminance is exposed, passed through a tone curve and sRGB-encoded.
 
-use aureole::image::{Image, Layout};
+use aureole::image::{Image, Layout, PixelLuminance};
 
 /// How bright the picture is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -15,6 +15,18 @@ pub enum Exposure {
     Ev(f64),
     /// The luminance in cd/m² shown as white.
     White(f64),
+}
+
+impl Exposure {
+    /// The luminance (cd/m²) this exposure shows as white on `image`
+    /// (`scale` cd/m² per unit) through `tone`.
+    pub fn white(self, image: &Image, scale: f64, tone: ToneCurve) -> f64 {
+        match self {
+            Exposure::Auto => meter(image, scale, tone).white,
+            Exposure::Ev(ev) => 1.2 * ev.exp2(),
+            Exposure::White(white) => white,
+        }
+    }
 }
 
 /// The curve from exposed linear light (1 = white) to display light.
@@ -116,7 +128,7 @@ pub struct Metering {
 pub fn meter(image: &Image, scale: f64, curve: ToneCurve) -> Metering {
     let n = image.width * image.height;
     let stride = n.div_ceil(1 << 21).max(1);
-    let luminance = image.luminance();
+    let luminance = PixelLuminance::of(image);
     let brightest = |i: usize| match image.layout {
         Layout::Luminance => image.planes[0][i],
         Layout::Rgb => image.planes[0][i]
@@ -127,7 +139,7 @@ pub fn meter(image: &Image, scale: f64, curve: ToneCurve) -> Metering {
         .step_by(stride)
         .map(|i| {
             let cd = |v: f32| (f64::from(v) * scale).max(0.0);
-            (cd(luminance[i]), cd(brightest(i)))
+            (cd(luminance.at(i)), cd(brightest(i)))
         })
         .filter(|(l, m)| l.is_finite() && m.is_finite())
         .collect();
@@ -205,11 +217,7 @@ fn tone(curve: ToneCurve, x: f32) -> f32 {
 
 /// Renders `image` (file units, `scale` cd/m² per unit) for a display.
 pub fn render(image: &Image, scale: f64, options: &DisplayOptions) -> Picture {
-    let white = match options.exposure {
-        Exposure::Auto => meter(image, scale, options.tone).white,
-        Exposure::Ev(ev) => 1.2 * ev.exp2(),
-        Exposure::White(white) => white,
-    };
+    let white = options.exposure.white(image, scale, options.tone);
     let gain = (scale / white) as f32;
     let n = image.width * image.height;
     let mut rgb = Vec::with_capacity(n * 3);

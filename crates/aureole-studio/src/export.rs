@@ -14,6 +14,7 @@ use aureole_io::write::{output_format, write_image_into, WriteOptions};
 use serde::Serialize;
 
 use crate::error::StudioError;
+use crate::locked;
 use crate::render::{display_options, parse_config, RenderRequest, DEMO};
 use crate::roots::Roots;
 
@@ -76,12 +77,6 @@ pub struct Exports {
     jobs: Mutex<HashMap<u64, Arc<Job>>>,
 }
 
-fn locked<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    mutex
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
 impl Exports {
     /// Jobs that read and write under `roots`.
     pub fn new(roots: Roots, memory_limit: u64) -> Exports {
@@ -104,7 +99,7 @@ impl Exports {
         };
         let output = self.output_path(&request.output)?;
         if let Some(input) = &input {
-            if same_file(input, &output) {
+            if aureole_io::atomic::same_file(input, &output) {
                 return Err(StudioError::BadRequest(format!(
                     "{}: the output would overwrite the input; write to another file",
                     request.output
@@ -196,25 +191,6 @@ impl Exports {
             )));
         }
         Ok(resolved)
-    }
-}
-
-/// Whether `a` and `b` are one file (device and inode, links followed):
-/// a hard link to the input is the input.
-#[cfg(unix)]
-fn same_file(a: &Path, b: &Path) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    match (std::fs::metadata(a), std::fs::metadata(b)) {
-        (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
-        _ => false,
-    }
-}
-
-#[cfg(not(unix))]
-fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => false,
     }
 }
 

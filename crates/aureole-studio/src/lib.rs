@@ -205,13 +205,8 @@ async fn render_picture(
         .await
         .map_err(|e| StudioError::Internal(e.to_string()))??;
     guard.disarm();
-    let kind = match (rendered.is_png, rendered.is_raw) {
-        (true, _) => "image/png",
-        (false, true) => "application/x-rgb8",
-        (false, false) => "application/octet-stream",
-    };
     let headers = [
-        (header::CONTENT_TYPE, kind.to_string()),
+        (header::CONTENT_TYPE, rendered.content_type.to_string()),
         (header::CACHE_CONTROL, "no-store".to_string()),
     ];
     let mut response = (headers, rendered.bytes).into_response();
@@ -269,6 +264,15 @@ async fn render_picture(
         }
     }
     Ok(response)
+}
+
+/// A mutex's guard, also after a thread panicked holding it: the studio's
+/// caches and jobs stay usable, as a failed render leaves the server
+/// running.
+pub(crate) fn locked<T>(mutex: &std::sync::Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 /// Cancels a render when dropped before [`CancelOnDrop::disarm`].

@@ -13,6 +13,7 @@ use aureole_io::limits::Limits;
 use serde::Deserialize;
 
 use crate::error::StudioError;
+use crate::locked;
 use crate::roots::Roots;
 
 /// The widest preview: a 4K view at 1:1.
@@ -91,10 +92,8 @@ pub enum Format {
 pub struct Rendered {
     /// The picture (PNG) or the linear samples.
     pub bytes: Vec<u8>,
-    /// Whether `bytes` is a PNG.
-    pub is_png: bool,
-    /// Whether `bytes` are raw 8-bit codes.
-    pub is_raw: bool,
+    /// What `bytes` hold, as a content type.
+    pub content_type: &'static str,
     /// The luminance auto exposure shows as white, per tone curve: filmic,
     /// Reinhard, clip (0 for the kernel).
     pub auto_white: [f64; 3],
@@ -159,9 +158,11 @@ struct Loaded {
     summary: Summary,
 }
 
-/// A preview image: (source key, width) and the resampled frame.
+/// A preview: the full frame it was made from, its width, and the
+/// resampled frame.
 struct Preview {
-    key: ((String, Option<SystemTime>), usize),
+    source: Arc<Frame>,
+    width: usize,
     frame: Arc<Frame>,
 }
 
@@ -193,12 +194,6 @@ pub struct Status {
     pub rendering: usize,
     /// Renders that ended cancelled (replaced, or their page went away).
     pub cancelled: u64,
-}
-
-fn locked<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    mutex
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 impl Renderer {
@@ -263,7 +258,7 @@ impl Renderer {
         }
         let display = display_options(request)?;
         let (full, summary) = self.load(&request.image)?;
-        let preview = self.preview(&request.image, &full, request.width)?;
+        let preview = self.preview(&full, request.width)?;
         let image = preview.image();
         let (width, height) = (image.width, image.height);
         let factor = width as f64 / full.image().width as f64;
@@ -322,36 +317,42 @@ impl Renderer {
             }
         };
         cancel.check()?;
-        let kernel = request.view == View::Kernel;
-        let auto_white = if kernel {
-            [0.0; 3]
+        let (bytes, content_type, auto_white, white) = if request.view == View::Kernel {
+            (encode_png(&shown)?, "image/png", [0.0; 3], 0.0)
         } else {
-            [ToneCurve::Filmic, ToneCurve::Reinhard, ToneCurve::Clip]
-                .map(|curve| meter(&shown, preview.scale(), curve).white)
-        };
-        let (bytes, white) = if kernel {
-            (encode_png(&shown, |v| v)?, 0.0)
-        } else if request.format == Format::Linear {
+            // Metered once per curve: the page switches curves without asking.
+            let curves = [ToneCurve::Filmic, ToneCurve::Reinhard, ToneCurve::Clip];
+            let auto_white = curves.map(|curve| meter(&shown, preview.scale(), curve).white);
             let white = match display.exposure {
-                Exposure::Auto => meter(&shown, preview.scale(), display.tone).white,
-                Exposure::Ev(ev) => 1.2 * ev.exp2(),
-                Exposure::White(white) => white,
+                Exposure::Auto => curves
+                    .iter()
+                    .zip(auto_white)
+                    .find(|(curve, _)| **curve == display.tone)
+                    .map_or(0.0, |(_, white)| white),
+                exposure => exposure.white(&shown, preview.scale(), display.tone),
             };
-            (linear_bytes(&shown, preview.scale()), white)
-        } else {
-            let picture = render(&shown, preview.scale(), &display);
-            let white = picture.white;
-            let codes = codes(&picture.rgb);
-            let bytes = match request.format {
-                Format::Rgb8 => codes,
-                _ => png(picture.width, picture.height, &codes)?,
+            let (bytes, content_type) = if request.format == Format::Linear {
+                (
+                    linear_bytes(&shown, preview.scale()),
+                    "application/octet-stream",
+                )
+            } else {
+                let display = DisplayOptions {
+                    exposure: Exposure::White(white),
+                    ..display
+                };
+                let picture = render(&shown, preview.scale(), &display);
+                let codes = codes(&picture.rgb);
+                match request.format {
+                    Format::Rgb8 => (codes, "application/x-rgb8"),
+                    _ => (png(picture.width, picture.height, &codes)?, "image/png"),
+                }
             };
-            (bytes, white)
+            (bytes, content_type, auto_white, white)
         };
         Ok(Rendered {
             bytes,
-            is_png: kernel || request.format == Format::Png,
-            is_raw: !kernel && request.format == Format::Rgb8,
+            content_type,
             auto_white,
             width,
             height,
@@ -396,15 +397,14 @@ impl Renderer {
     }
 
     /// `full` resampled by area to `width` (no wider than it is).
-    fn preview(&self, name: &str, full: &Frame, width: usize) -> Result<Arc<Frame>, StudioError> {
+    fn preview(&self, full: &Arc<Frame>, width: usize) -> Result<Arc<Frame>, StudioError> {
         let image = full.image();
         let width = width.min(image.width);
         let height =
             ((image.height as f64 * width as f64 / image.width as f64).round() as usize).max(1);
-        let modified = locked(&self.loaded).as_ref().and_then(|l| l.key.1);
-        let key = ((name.to_string(), modified), width);
         let mut preview = locked(&self.preview);
-        if let Some(hit) = preview.as_ref().filter(|p| p.key == key) {
+        let hit = |p: &&Preview| Arc::ptr_eq(&p.source, full) && p.width == width;
+        if let Some(hit) = preview.as_ref().filter(hit) {
             return Ok(hit.frame.clone());
         }
         let options = FrameOptions {
@@ -413,7 +413,8 @@ impl Renderer {
         };
         let frame = Arc::new(Frame::new(image.resampled(width, height), &options)?);
         *preview = Some(Preview {
-            key,
+            source: full.clone(),
+            width,
             frame: frame.clone(),
         });
         Ok(frame)
@@ -585,13 +586,13 @@ fn linear_bytes(image: &Image, scale: f64) -> Vec<u8> {
 }
 
 /// An RGB image of display levels (0…1) as a PNG.
-fn encode_png(image: &Image, level: impl Fn(f32) -> f32) -> Result<Vec<u8>, StudioError> {
+fn encode_png(image: &Image) -> Result<Vec<u8>, StudioError> {
     let n = image.width * image.height;
     let mut bytes = Vec::with_capacity(n * 3);
     for i in 0..n {
         for c in 0..3 {
             let plane = &image.planes[c.min(image.planes.len() - 1)];
-            bytes.push((level(plane[i]).clamp(0.0, 1.0) * 255.0).round() as u8);
+            bytes.push((plane[i].clamp(0.0, 1.0) * 255.0).round() as u8);
         }
     }
     png(image.width, image.height, &bytes)

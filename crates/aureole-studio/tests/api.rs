@@ -2,29 +2,10 @@
 
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
-use std::path::Path;
 
-use aureole_studio::{Roots, Studio};
+mod common;
 
-/// A server reading from `root`, on a port of its own, for the test's life.
-fn server(root: &Path) -> SocketAddr {
-    let roots = Roots::new(&[root.to_path_buf()]).unwrap();
-    let studio = Studio::new(roots, 4 << 30);
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let runtime = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(2)
-            .enable_all()
-            .build()
-            .unwrap();
-        runtime.block_on(async {
-            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-            tx.send(listener.local_addr().unwrap()).unwrap();
-            aureole_studio::serve(listener, studio).await.unwrap();
-        });
-    });
-    rx.recv().unwrap()
-}
+use common::server;
 
 struct Reply {
     status: u16,
@@ -42,6 +23,14 @@ impl Reply {
 
     fn json(&self) -> serde_json::Value {
         serde_json::from_slice(&self.body).unwrap()
+    }
+
+    /// A linear render's samples.
+    fn floats(&self) -> Vec<f32> {
+        self.body
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect()
     }
 
     fn error(&self) -> String {
@@ -200,11 +189,7 @@ fn a_render_is_a_png_of_the_width_asked_with_its_energy() {
         Some("application/octet-stream")
     );
     assert_eq!(linear.body.len(), 320 * 180 * 12);
-    let samples: Vec<f32> = linear
-        .body
-        .chunks_exact(4)
-        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect();
+    let samples = linear.floats();
     let brightest = samples.iter().copied().fold(0f32, f32::max);
     assert!(brightest > 1e3, "the lamps are in cd/m²: {brightest}");
     for curve in ["filmic", "reinhard", "clip"] {
@@ -452,11 +437,7 @@ fn changing_the_blade_count_from_7_to_8_changes_the_picture_and_its_rays() {
             "{}",
             String::from_utf8_lossy(&reply.body)
         );
-        let samples: Vec<f32> = reply
-            .body
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
+        let samples = reply.floats();
         counted.push(rays(&samples, 512, 512, (12, 40)));
         pictures.push(reply.body);
     }

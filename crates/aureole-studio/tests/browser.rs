@@ -5,11 +5,12 @@
 //! roots shows its one line.
 //! Screenshots are saved in `target/studio-screenshots/`.
 
-use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use aureole_studio::{Roots, Studio};
+mod common;
+
+use common::server;
 
 fn chromium() -> Option<PathBuf> {
     ["chromium", "chromium-browser", "google-chrome"]
@@ -21,25 +22,6 @@ fn chromium() -> Option<PathBuf> {
                 .output()
                 .is_ok_and(|o| o.status.success())
         })
-}
-
-fn server(root: &Path) -> SocketAddr {
-    let roots = Roots::new(&[root.to_path_buf()]).unwrap();
-    let studio = Studio::new(roots, 4 << 30);
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        let runtime = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(2)
-            .enable_all()
-            .build()
-            .unwrap();
-        runtime.block_on(async {
-            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-            tx.send(listener.local_addr().unwrap()).unwrap();
-            aureole_studio::serve(listener, studio).await.unwrap();
-        });
-    });
-    rx.recv().unwrap()
 }
 
 /// What the page shows after its scripts ran: its DOM, what the console

@@ -248,13 +248,17 @@ impl Image {
 }
 
 /// The luminance of an image's pixels, computed where it is needed rather
-/// than kept as a plane.
-pub(crate) enum PixelLuminance<'a> {
+/// than kept as a plane (a meter that samples every k-th pixel needs no
+/// copy of the frame).
+pub enum PixelLuminance<'a> {
+    /// R, G, B planes and their luminance weights.
     Rgb([f32; 3], [&'a [f32]; 3]),
+    /// A luminance plane.
     Plane(&'a [f32]),
 }
 
 impl<'a> PixelLuminance<'a> {
+    /// The luminance of `image`'s pixels.
     pub fn of(image: &'a Image) -> PixelLuminance<'a> {
         match (image.layout, image.planes.as_slice()) {
             (Layout::Rgb, [r, g, b]) => PixelLuminance::Rgb(image.luminance_weights(), [r, g, b]),

@@ -103,6 +103,20 @@ pub(crate) const fn angle(name: &'static str, about: &'static str) -> Parameter 
     }
 }
 
+/// A length in px, or µm/mm on the sensor: any above 0.
+pub(crate) const fn length(name: &'static str, default: Default, about: &'static str) -> Parameter {
+    Parameter {
+        name,
+        kind: Kind::Length,
+        low: Some((0.0, false)),
+        high: None,
+        default,
+        unit: "px, um or mm",
+        allowed: "a length above 0: px, or µm/mm on the sensor",
+        about,
+    }
+}
+
 /// The `[camera]` table's parameters.
 pub const CAMERA: &[Parameter] = &[
     Parameter {

@@ -406,23 +406,17 @@ fn no_colour(parts: &[Part]) -> String {
 }
 
 /// The layers and parts besides `chosen`, for a note: a few names.
-fn other_layers(image: &FlatImage, chosen: &Candidate) -> String {
+fn other_layers(parts: &[Part], chosen: &Candidate) -> String {
     let mut names = Vec::new();
-    for (part, layer) in image.layer_data.iter().enumerate() {
-        let channels: Vec<String> = layer
-            .channel_data
-            .list
-            .iter()
-            .map(|c| c.name.to_string())
-            .collect();
-        let groups = by_prefix(channels.iter().map(|n| (n.as_str(), SampleType::F32)));
+    for (index, part) in parts.iter().enumerate() {
+        let groups = by_prefix(part.channels.iter().map(|n| (n.as_str(), ())));
         for prefix in groups.keys() {
-            if part == chosen.part && *prefix == chosen.prefix {
+            if index == chosen.part && *prefix == chosen.prefix {
                 continue;
             }
             let name = layer_name(prefix);
-            names.push(match &layer.attributes.layer_name {
-                Some(part_name) if image.layer_data.len() > 1 => format!("{part_name}: {name}"),
+            names.push(match &part.name {
+                Some(part_name) if parts.len() > 1 => format!("{part_name}: {name}"),
                 _ => name,
             });
         }
@@ -527,9 +521,10 @@ pub(crate) fn decode(
         .from_buffered(Cursor::new(bytes))
         .map_err(|e| explain("OpenEXR", e.to_string()))?;
 
-    let chosen = choose(&parts_of_image(&image), choice)?;
+    let parts = parts_of_image(&image);
+    let chosen = choose(&parts, choice)?;
     let mut notes = Vec::new();
-    let others = other_layers(&image, &chosen);
+    let others = other_layers(&parts, &chosen);
     if !others.is_empty() {
         notes.push(format!(
             "spreading layer {}; the others ({others}) go back unchanged into an EXR output",

@@ -6,7 +6,7 @@
 
 use serde::Deserialize;
 
-use crate::schema::{Default, Kind, Parameter, EPSILON};
+use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
 use super::shape::{Grid, SpreadShape};
 use super::{Context, Model, Source};
@@ -37,16 +37,11 @@ const BETA: Parameter = Parameter {
     about: "β: how fast the halo falls off, (1 + r²/R²)^-β",
 };
 
-const RADIUS: Parameter = Parameter {
-    name: "radius",
-    kind: Kind::Length,
-    low: Some((0.0, false)),
-    high: None,
-    default: Default::Required,
-    unit: "px, um or mm",
-    allowed: "a length above 0: px, or µm/mm on the sensor",
-    about: "R: the halo's width (30–120 µm on film)",
-};
+const RADIUS: Parameter = length(
+    "radius",
+    Default::Required,
+    "R: the halo's width (30–120 µm on film)",
+);
 
 impl Model for Bloom {
     const KIND: &'static str = "bloom";

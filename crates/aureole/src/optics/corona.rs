@@ -12,7 +12,7 @@ use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::Deserialize;
 
-use crate::schema::{Default, Kind, Parameter, EPSILON};
+use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
 use super::shape::{Grid, SpreadShape};
 use super::{Context, Model, Source};
@@ -100,16 +100,7 @@ const RAYS: Parameter = Parameter {
     about: "k: a stop of n blades gives n rays when n is even, 2n when odd",
 };
 
-const LENGTH: Parameter = Parameter {
-    name: "length",
-    kind: Kind::Length,
-    low: Some((0.0, false)),
-    high: None,
-    default: Default::Required,
-    unit: "px, um or mm",
-    allowed: "a length above 0: px, or µm/mm on the sensor",
-    about: "l: the mean ray length",
-};
+const LENGTH: Parameter = length("length", Default::Required, "l: the mean ray length");
 
 const FADEOUT: Parameter = Parameter {
     name: "fadeout",
@@ -122,16 +113,7 @@ const FADEOUT: Parameter = Parameter {
     about: "σ: a ray fades by e^-σ over its length",
 };
 
-const WIDTH: Parameter = Parameter {
-    name: "width",
-    kind: Kind::Length,
-    low: Some((0.0, false)),
-    high: None,
-    default: Default::Length("3px"),
-    unit: "px, um or mm",
-    allowed: "a length above 0: px, or µm/mm on the sensor",
-    about: "w: a ray's width",
-};
+const WIDTH: Parameter = length("width", Default::Length("3px"), "w: a ray's width");
 
 const SPREAD: Parameter = Parameter {
     name: "spread",

@@ -1,0 +1,26 @@
+//! What the studio's tests share: a real server on a port of its own.
+
+use std::net::SocketAddr;
+use std::path::Path;
+
+use aureole_studio::{Roots, Studio};
+
+/// A server reading from `root`, on an ephemeral port, for the test's life.
+pub fn server(root: &Path) -> SocketAddr {
+    let roots = Roots::new(&[root.to_path_buf()]).unwrap();
+    let studio = Studio::new(roots, 4 << 30);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .unwrap();
+        runtime.block_on(async {
+            let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+            tx.send(listener.local_addr().unwrap()).unwrap();
+            aureole_studio::serve(listener, studio).await.unwrap();
+        });
+    });
+    rx.recv().unwrap()
+}
