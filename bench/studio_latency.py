@@ -29,7 +29,9 @@ def main():
         presets = {p["name"]: p["toml"] for p in json.load(urllib.request.urlopen(url + "api/presets"))}
 
         def render(config, **extra):
-            body = json.dumps({"image": "demo", "config": config, "width": 1280, **extra}).encode()
+            # As the page asks: the linear preview, which it tone-maps itself.
+            body = json.dumps({"image": "demo", "config": config, "width": 1280,
+                               "format": "linear", **extra}).encode()
             request = urllib.request.Request(url + "api/render", data=body,
                                              headers={"content-type": "application/json"})
             start = time.time()

@@ -22,7 +22,7 @@ impl Exposure {
     /// (`scale` cd/m² per unit) through `tone`.
     pub fn white(self, image: &Image, scale: f64, tone: ToneCurve) -> f64 {
         match self {
-            Exposure::Auto => meter(image, scale, tone).white,
+            Exposure::Auto => meter(image, scale).white(tone),
             Exposure::Ev(ev) => 1.2 * ev.exp2(),
             Exposure::White(white) => white,
         }
@@ -100,8 +100,6 @@ const MEDIAN_AT: f64 = 0.12;
 /// What the auto exposure meter found, cd/m².
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Metering {
-    /// The luminance shown as white.
-    pub white: f64,
     /// The median of the lit scene.
     pub median: f64,
     /// Pixels brighter than this count as light sources and may clip.
@@ -111,8 +109,18 @@ pub struct Metering {
     pub highlights: f64,
 }
 
-/// The auto exposure of `image` (`scale` cd/m² per unit) for `curve`, a
-/// percentile meter on the lit scene (docs/physics.md §9):
+impl Metering {
+    /// The luminance shown as white under `curve`: the lit median at
+    /// [`MEDIAN_AT`] of white, unless the highlights would clip.
+    pub fn white(&self, curve: ToneCurve) -> f64 {
+        (self.median / MEDIAN_AT)
+            .max(self.highlights / clipping_point(curve))
+            .max(DARKEST_WHITE)
+    }
+}
+
+/// The auto exposure of `image` (`scale` cd/m² per unit), a percentile
+/// meter on the lit scene (docs/physics.md §9):
 ///
 /// - the lit scene is every pixel within ten stops of the highlights
 ///   (L ≥ P99.9 / 1000): a black sky or a dark table does not count;
@@ -125,7 +133,7 @@ pub struct Metering {
 ///
 /// Percentiles are taken on at most about two million pixels, every k-th,
 /// so a 4K frame meters in milliseconds and always alike.
-pub fn meter(image: &Image, scale: f64, curve: ToneCurve) -> Metering {
+pub fn meter(image: &Image, scale: f64) -> Metering {
     let n = image.width * image.height;
     let stride = n.div_ceil(1 << 21).max(1);
     let luminance = PixelLuminance::of(image);
@@ -155,11 +163,7 @@ pub fn meter(image: &Image, scale: f64, curve: ToneCurve) -> Metering {
         .collect();
     // Just inside 1 %, so that sampling never tips it over.
     let highlights = percentile(&mut others, 0.991);
-    let white = (median / MEDIAN_AT)
-        .max(highlights / clipping_point(curve))
-        .max(DARKEST_WHITE);
     Metering {
-        white,
         median,
         sources_above,
         highlights,
@@ -331,6 +335,6 @@ mod tests {
     #[test]
     fn a_black_frame_meters_to_the_darkest_white() {
         let image = Image::filled(8, 8, Layout::Rgb, 0.0);
-        assert_eq!(meter(&image, 1.0, ToneCurve::Filmic).white, DARKEST_WHITE);
+        assert_eq!(meter(&image, 1.0).white(ToneCurve::Filmic), DARKEST_WHITE);
     }
 }

@@ -322,7 +322,8 @@ impl Renderer {
         } else {
             // Metered once per curve: the page switches curves without asking.
             let curves = [ToneCurve::Filmic, ToneCurve::Reinhard, ToneCurve::Clip];
-            let auto_white = curves.map(|curve| meter(&shown, preview.scale(), curve).white);
+            let metering = meter(&shown, preview.scale());
+            let auto_white = curves.map(|curve| metering.white(curve));
             let white = match display.exposure {
                 Exposure::Auto => curves
                     .iter()

@@ -27,6 +27,12 @@ pub const MAX_RAYS: u32 = 1024;
 /// there its pixels are sampled once.
 const FADED: f64 = 1e-9;
 
+/// Where every ray has faded below this fraction of the brightest ray's
+/// start, the kernel holds 0. The light beyond, e^(−x)(1 + x) of a ray's
+/// with x = ln 10¹², is below 3·10⁻¹¹ of it, far under the f32 kernel's own
+/// rounding (6·10⁻⁸), and computing it cost most of a corona's time.
+const DARK: f64 = 1e-12;
+
 /// A jittered factor never goes below this fraction of its mean, so that a
 /// ray's length, width and intensity stay positive.
 const JITTER_FLOOR: f64 = 0.05;
@@ -245,19 +251,32 @@ impl Corona {
                 intensity: f.intensity,
             })
             .collect::<Vec<Ray>>();
-        Ok(CoronaShape {
-            slowest_fade: rays
-                .iter()
-                .map(|r| r.fade_per_px)
-                .fold(f64::INFINITY, f64::min),
-            brightest: rays.iter().map(|r| r.intensity).fold(0.0, f64::max),
+        let slowest_fade = rays
+            .iter()
+            .map(|r| r.fade_per_px)
+            .fold(f64::INFINITY, f64::min);
+        let brightest = rays.iter().map(|r| r.intensity).fold(0.0, f64::max);
+        // f ≤ brightest·e^(−σr/l) since the lobe is at most 1; √2/2 is the
+        // pixel's half diagonal.
+        let dark_radius = -libm::log(DARK) / slowest_fade + FRAC_1_SQRT_2;
+        let mut shape = CoronaShape {
+            slowest_fade,
+            brightest,
             widest: rays.iter().map(|r| r.width).fold(0.0, f64::max),
             narrowest: rays.iter().map(|r| r.width).fold(f64::INFINITY, f64::min),
             k: f64::from(self.rays),
             rotation: self.rotation_deg.to_radians(),
             spread: self.spread,
+            unit_spread_exponent: 1.0 / neg_ln_cos(1.0),
+            dark_radius,
+            lobes_never_dark: false,
+            faded_radius: (libm::log(brightest) - libm::log(FADED)) / slowest_fade,
             rays,
-        })
+        };
+        // The dark angle is least at infinite radius.
+        shape.lobes_never_dark = shape.spread == 1.0
+            && shape.dark_angle(shape.unit_spread_exponent, f64::INFINITY) >= 0.5 * TAU / shape.k;
+        Ok(shape)
     }
 }
 
@@ -315,6 +334,16 @@ struct CoronaShape {
     k: f64,
     rotation: f64,
     spread: f64,
+    /// n for s = 1, the same at every radius and for every ray.
+    unit_spread_exponent: f64,
+    /// Beyond this distance (pixel centres, px) every sample of a pixel is
+    /// below [`DARK`] of the brightest ray's start: the kernel holds 0.
+    dark_radius: f64,
+    /// Whether every direction may be lit at every radius: s = 1, where n
+    /// stays too small for the lobes to underflow between the rays.
+    lobes_never_dark: bool,
+    /// Where the brightest ray falls below [`FADED`] of its start.
+    faded_radius: f64,
     rays: Vec<Ray>,
 }
 
@@ -359,7 +388,7 @@ impl CoronaShape {
         let omega = if self.spread == 0.0 {
             width / r
         } else if self.spread == 1.0 {
-            1.0
+            return self.unit_spread_exponent;
         } else {
             libm::pow(r / width, self.spread - 1.0)
         };
@@ -373,30 +402,10 @@ impl CoronaShape {
             1.0 / g
         }
     }
-}
 
-/// −ln cos x for |x| ≤ π/2. Where x is small (the far, thin parts of the
-/// rays, millions of samples) its Taylor series, whose next term is below
-/// 10⁻¹⁸ of the sum there; up to 1, ln(1 − 2 sin²(x/2)), which keeps the
-/// digits a cosine near 1 loses; beyond, ln cos x itself, exact where cos x
-/// nears 0.
-fn neg_ln_cos(x: f64) -> f64 {
-    let x2 = x * x;
-    if x2 <= 0.0025 {
-        x2 * (1.0 / 2.0
-            + x2 * (1.0 / 12.0
-                + x2 * (1.0 / 45.0
-                    + x2 * (17.0 / 2520.0 + x2 * (31.0 / 14175.0 + x2 * (691.0 / 467_775.0))))))
-    } else if x2 <= 1.0 {
-        let half = libm::sin(0.5 * x);
-        -libm::log1p(-2.0 * half * half)
-    } else {
-        -libm::log(libm::fabs(libm::cos(x)))
-    }
-}
-
-impl SpreadShape for CoronaShape {
-    fn lit_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
+    /// The spans of `lit_spans` that the rays' angular lobes leave lit, or
+    /// `None` where the lobes are too wide to bound.
+    fn ray_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
         // Every pixel of the row lies at r ≥ |y|. Where n grows with r
         // (s ≤ 1) the least exponent on the row is at |y| − √2/2, and the
         // bound of `vanishes_over_pixel` then holds for every direction
@@ -444,10 +453,53 @@ impl SpreadShape for CoronaShape {
         }
         Some(spans)
     }
+}
+
+/// −ln cos x for |x| ≤ π/2. Where x is small (the far, thin parts of the
+/// rays, millions of samples) its Taylor series, whose next term is below
+/// 10⁻¹⁸ of the sum there; up to 1, ln(1 − 2 sin²(x/2)), which keeps the
+/// digits a cosine near 1 loses; beyond, ln cos x itself, exact where cos x
+/// nears 0.
+fn neg_ln_cos(x: f64) -> f64 {
+    let x2 = x * x;
+    if x2 <= 0.0025 {
+        x2 * (1.0 / 2.0
+            + x2 * (1.0 / 12.0
+                + x2 * (1.0 / 45.0
+                    + x2 * (17.0 / 2520.0 + x2 * (31.0 / 14175.0 + x2 * (691.0 / 467_775.0))))))
+    } else if x2 <= 1.0 {
+        let half = libm::sin(0.5 * x);
+        -libm::log1p(-2.0 * half * half)
+    } else {
+        -libm::log(libm::fabs(libm::cos(x)))
+    }
+}
+
+impl SpreadShape for CoronaShape {
+    fn lit_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
+        if y.abs() > self.dark_radius {
+            return Some(Vec::new());
+        }
+        // Pixel centres farther out than this are beyond `dark_radius`.
+        let half = (self.dark_radius * self.dark_radius - y * y).sqrt();
+        let Some(spans) = self.ray_spans(y) else {
+            return Some(vec![(-half, half)]);
+        };
+        Some(
+            spans
+                .into_iter()
+                .map(|(a, b)| (a.max(-half), b.min(half)))
+                .filter(|(a, b)| a <= b)
+                .collect(),
+        )
+    }
 
     fn vanishes_over_pixel(&self, x: f64, y: f64) -> bool {
         let r = (x * x + y * y).sqrt();
-        if r < 2.0 {
+        if r > self.dark_radius {
+            return true;
+        }
+        if r < 2.0 || self.lobes_never_dark {
             return false;
         }
         let (_, offset) = self.nearest_ray(fast_atan2(y, x));
@@ -474,7 +526,14 @@ impl SpreadShape for CoronaShape {
             // Every ray meets here, within a pixel or two.
             return Grid::square(8);
         }
-        if libm::exp(-self.slowest_fade * r) * self.brightest < FADED {
+        // The same test as exp(−σr/l)·brightest < FADED, its exp taken
+        // only within a hair of the radius where it turns.
+        let faded = if (r - self.faded_radius).abs() > 1e-6 * self.faded_radius {
+            r > self.faded_radius
+        } else {
+            libm::exp(-self.slowest_fade * r) * self.brightest < FADED
+        };
+        if faded {
             return Grid::square(1);
         }
         let phi = libm::atan2(y, x);
@@ -550,15 +609,48 @@ mod tests {
         assert_eq!(neg_ln_cos(0.0), 0.0);
     }
 
-    /// f is exactly 0 at 5×5 points over the pixel centred at (x, y),
-    /// its corners and edges included.
+    /// f is 0, or below [`DARK`] of the brightest ray's start, at 5×5
+    /// points over the pixel centred at (x, y), its corners and edges
+    /// included.
     fn assert_dark(shape: &CoronaShape, x: f64, y: f64, spread: f64) {
         for a in 0..=4 {
             for b in 0..=4 {
                 let (sx, sy) = (x - 0.5 + 0.25 * f64::from(b), y - 0.5 + 0.25 * f64::from(a));
-                assert_eq!(shape.density(sx, sy), 0.0, "s = {spread} at ({sx}, {sy})");
+                let f = shape.density(sx, sy);
+                assert!(
+                    f <= DARK * shape.brightest,
+                    "s = {spread} at ({sx}, {sy}): {f}"
+                );
             }
         }
+    }
+
+    #[test]
+    fn a_short_corona_is_dark_beyond_its_dark_radius_and_loses_no_light_there() {
+        let c = Corona {
+            length: Length::px(3.0),
+            intensity_jitter: 0.5,
+            ..corona()
+        };
+        let shape = c.shape(None, 5, 0).unwrap();
+        let (mut kept, mut dropped, mut dark) = (0.0, 0.0, 0);
+        for j in -400..=400 {
+            let y = f64::from(j);
+            let spans = shape.lit_spans(y).unwrap();
+            for i in -400..=400 {
+                let x = f64::from(i);
+                let f = shape.density(x, y);
+                if spans.iter().any(|&(a, b)| a <= x && x <= b) {
+                    kept += f;
+                } else {
+                    dark += 1;
+                    dropped += f;
+                    assert_dark(&shape, x, y, c.spread);
+                }
+            }
+        }
+        assert!(dark > 400_000, "{dark}");
+        assert!(dropped < 1e-10 * kept, "{dropped} of {kept}");
     }
 
     #[test]
