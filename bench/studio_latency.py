@@ -5,12 +5,21 @@ Starts `target/release/aureole studio` on a free port, then for each chain
 (bloom, corona, Vos, a spectral aperture) renders a 1280-wide preview of the
 demo street five times, changing one parameter each time, and prints the
 median of the last four (the first also loads the image). Then the same
-camera with only the exposure changed. Standard library only:
+camera with only the exposure changed. Then, where Chromium is installed,
+the page's own redraw when only the exposure moves (tone mapping in WebGL2,
+and on a 2D canvas): the median of 60 redraws, each waited for, driven over
+the DevTools protocol. Standard library only:
 
     cargo build --release && python3 bench/studio_latency.py
 """
+import base64
 import json
 import os
+import re
+import shutil
+import socket
+import struct
+import tempfile
 import statistics
 import subprocess
 import sys
@@ -57,8 +66,87 @@ def main():
         render(camera)
         times = [render(camera, exposure=ev) for ev in (1, 2, 3, 4)]
         print(f"  {'exposure only':20s} {statistics.median(times):6.0f}")
+        browser = shutil.which("chromium") or shutil.which("google-chrome")
+        if browser:
+            print("In the page, exposure only (no server), median of 60 redraws (ms):")
+            for display in ("webgl2", "2d"):
+                ms = page_redraw(browser, f"{url}?drawbench=1&display={display}")
+                print(f"  {display:20s} {ms:6.2f}")
     finally:
         server.terminate()
+
+
+def page_redraw(browser, url):
+    """The page's data-draw-ms, read over the DevTools protocol: the page's
+    clocks must run in real time, which --dump-dom's virtual time does not."""
+    profile = tempfile.mkdtemp()
+    chrome = subprocess.Popen(
+        [browser, "--headless=new", "--no-sandbox", "--enable-unsafe-swiftshader",
+         "--window-size=1400,860", "--remote-debugging-port=0", f"--user-data-dir={profile}",
+         url], stderr=subprocess.PIPE, text=True)
+    try:
+        for line in chrome.stderr:
+            found = re.search(r"ws://127.0.0.1:(\d+)/", line)
+            if found:
+                port = int(found.group(1))
+                break
+        pages = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list"))
+        page = next(p for p in pages if p["type"] == "page")
+        socket_ = devtools(page["webSocketDebuggerUrl"])
+        for _ in range(120):
+            value = evaluate(socket_, "document.body.dataset.drawMs || ''")
+            if value:
+                return float(value)
+            time.sleep(0.5)
+        raise RuntimeError(f"{url}: the page never reported its redraw time")
+    finally:
+        chrome.terminate()
+        chrome.wait()
+        shutil.rmtree(profile, ignore_errors=True)
+
+
+def devtools(address):
+    """A WebSocket to a DevTools target (RFC 6455, client side, text only)."""
+    host, port, path = re.match(r"ws://([^:/]+):(\d+)(/.*)", address).groups()
+    connection = socket.create_connection((host, int(port)))
+    key = base64.b64encode(os.urandom(16)).decode()
+    connection.sendall((f"GET {path} HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
+                        f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+                        "Sec-WebSocket-Version: 13\r\n\r\n").encode())
+    reply = b""
+    while b"\r\n\r\n" not in reply:
+        reply += connection.recv(4096)
+    return connection
+
+
+def evaluate(connection, expression, ids=iter(range(1, 1 << 30))):
+    message = json.dumps({"id": next(ids), "method": "Runtime.evaluate",
+                          "params": {"expression": expression, "returnByValue": True}}).encode()
+    mask = os.urandom(4)
+    length = len(message)
+    header = struct.pack("!BB", 0x81, 0x80 | length) if length < 126 else \
+        struct.pack("!BBH", 0x81, 0x80 | 126, length)
+    connection.sendall(header + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(message)))
+    while True:
+        first, second = struct.unpack("!BB", receive(connection, 2))
+        length = second & 0x7F
+        if length == 126:
+            length = struct.unpack("!H", receive(connection, 2))[0]
+        elif length == 127:
+            length = struct.unpack("!Q", receive(connection, 8))[0]
+        reply = json.loads(receive(connection, length))
+        if "id" in reply:
+            return reply["result"]["result"].get("value")
+
+
+def receive(connection, count):
+    data = b""
+    while len(data) < count:
+        chunk = connection.recv(count - len(data))
+        if not chunk:
+            raise ConnectionError("DevTools closed the connection")
+        data += chunk
+    return data
 
 
 if __name__ == "__main__":

@@ -118,37 +118,178 @@ function white(shown) {
   return $("auto").checked ? shown.autoWhite[tone] : 1.2 * Math.pow(2, Number($("ev").value));
 }
 
+// The display: WebGL2 where the browser has it, so that the tone mapping
+// runs per pixel on the GPU at the display's frame rate, else a 2D canvas
+// (also with ?display=2d), where codes are looked up in a table of the same
+// transform.
+const VERTEX = `#version 300 es
+in vec2 corner;
+void main() { gl_Position = vec4(corner, 0.0, 1.0); }`;
+// The curves and the sRGB encoding of display.rs, in f32 as there.
+const FRAGMENT = `#version 300 es
+precision highp float;
+precision highp int;
+uniform highp sampler2D shown;
+uniform highp sampler2D under;
+uniform float gain;
+uniform int curve;
+uniform int split;
+uniform int height;
+out vec4 colour;
+vec3 tone(vec3 x) {
+  x = max(x, 0.0);
+  if (curve == 0) return min(x, 1.0);
+  if (curve == 1) return min(x * (1.0 + x / 4.0) / (1.0 + x), 1.0);
+  return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+}
+vec3 srgb(vec3 v) {
+  return mix(1.055 * pow(v, vec3(1.0 / 2.4)) - 0.055, 12.92 * v, lessThanEqual(v, vec3(0.0031308)));
+}
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  p.y = height - 1 - p.y;
+  vec3 v = p.x < split ? texelFetch(under, p, 0).rgb : texelFetch(shown, p, 0).rgb;
+  colour = vec4(srgb(tone(v * gain)), 1.0);
+}`;
+const CURVE_NUMBERS = { clip: 0, reinhard: 1, filmic: 2 };
+
+function makeDisplay(canvas, wanted) {
+  const gl = wanted === "2d" ? null : canvas.getContext("webgl2", { preserveDrawingBuffer: true, antialias: false });
+  if (!gl) return canvasDisplay(canvas);
+  const compile = (type, text) => {
+    const shader = gl.createShader(type);
+    gl.shaderSource(shader, text);
+    gl.compileShader(shader);
+    if (!gl.getShaderParameter(shader, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(shader));
+    return shader;
+  };
+  const program = gl.createProgram();
+  gl.attachShader(program, compile(gl.VERTEX_SHADER, VERTEX));
+  gl.attachShader(program, compile(gl.FRAGMENT_SHADER, FRAGMENT));
+  gl.linkProgram(program);
+  if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(program));
+  gl.useProgram(program);
+  gl.bindBuffer(gl.ARRAY_BUFFER, gl.createBuffer());
+  gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 1, -1, -1, 1, 1, 1]), gl.STATIC_DRAW);
+  const corner = gl.getAttribLocation(program, "corner");
+  gl.enableVertexAttribArray(corner);
+  gl.vertexAttribPointer(corner, 2, gl.FLOAT, false, 0, 0);
+  gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+  const uniform = (name) => gl.getUniformLocation(program, name);
+  const texture = (unit, name) => {
+    const t = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE0 + unit);
+    gl.bindTexture(gl.TEXTURE_2D, t);
+    for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D, p, gl.NEAREST);
+    gl.uniform1i(uniform(name), unit);
+    return t;
+  };
+  const textures = { shown: texture(0, "shown"), under: texture(1, "under") };
+  const loaded = { shown: null, under: null };
+  const upload = (unit, name, picture) => {
+    if (loaded[name] === picture) return;
+    loaded[name] = picture;
+    gl.activeTexture(gl.TEXTURE0 + unit);
+    gl.bindTexture(gl.TEXTURE_2D, textures[name]);
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGB32F, picture.width, picture.height, 0, gl.RGB, gl.FLOAT, picture.linear);
+  };
+  return {
+    kind: "webgl2",
+    draw(shown, under, curve, white, split) {
+      upload(0, "shown", shown);
+      upload(1, "under", under || shown);
+      gl.viewport(0, 0, shown.width, shown.height);
+      gl.uniform1f(uniform("gain"), 1 / white);
+      gl.uniform1i(uniform("curve"), CURVE_NUMBERS[curve]);
+      gl.uniform1i(uniform("split"), split);
+      gl.uniform1i(uniform("height"), shown.height);
+      gl.drawArrays(gl.TRIANGLE_STRIP, 0, 4);
+    },
+    finish() {
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+    },
+    pixels() {
+      const data = new Uint8Array(canvas.width * canvas.height * 4);
+      gl.readPixels(0, 0, canvas.width, canvas.height, gl.RGBA, gl.UNSIGNED_BYTE, data);
+      // Rows come bottom first.
+      const row = canvas.width * 4;
+      const flipped = new Uint8Array(data.length);
+      for (let y = 0; y < canvas.height; y++) flipped.set(data.subarray(y * row, (y + 1) * row), (canvas.height - 1 - y) * row);
+      return flipped;
+    },
+  };
+}
+
+function canvasDisplay(canvas) {
+  const context = canvas.getContext("2d");
+  return {
+    kind: "2d",
+    draw(shown, under, curve, white, split) {
+      const { width, height } = shown;
+      const picture = context.createImageData(width, height);
+      const data = picture.data;
+      const { table, perUnit } = codeTable(curve);
+      const gain = perUnit / white;
+      for (let y = 0; y < height; y++) {
+        for (let x = 0; x < width; x++) {
+          const i = y * width + x;
+          const source = x < split ? under.linear : shown.linear;
+          for (let c = 0; c < 3; c++) {
+            const k = source[3 * i + c] * gain;
+            data[4 * i + c] = k > 0 ? (k < CODE_STEPS ? table[Math.round(k)] : 255) : 0;
+          }
+          data[4 * i + 3] = 255;
+        }
+      }
+      context.putImageData(picture, 0, 0);
+    },
+    finish() {},
+    pixels() {
+      return context.getImageData(0, 0, canvas.width, canvas.height).data;
+    },
+  };
+}
+
 function draw() {
   const shown = state.shown;
   if (!shown || !shown.linear) return;
   const started = performance.now();
-  const { width, height } = shown;
   const canvas = $("canvas");
-  if (canvas.width !== width || canvas.height !== height) {
-    canvas.width = width;
-    canvas.height = height;
+  if (canvas.width !== shown.width || canvas.height !== shown.height) {
+    canvas.width = shown.width;
+    canvas.height = shown.height;
   }
-  const context = canvas.getContext("2d");
-  const picture = context.createImageData(width, height);
-  const data = picture.data;
-  const { table, perUnit } = codeTable($("tonemap").value);
-  const gain = perUnit / white(shown);
-  const split = state.view === "split" && state.under ? Math.round(state.split * width) : -1;
-  for (let y = 0; y < height; y++) {
-    for (let x = 0; x < width; x++) {
-      const i = y * width + x;
-      const source = x < split ? state.under.linear : shown.linear;
-      for (let c = 0; c < 3; c++) {
-        const k = source[3 * i + c] * gain;
-        data[4 * i + c] = k > 0 ? (k < CODE_STEPS ? table[Math.round(k)] : 255) : 0;
-      }
-      data[4 * i + 3] = 255;
-    }
-  }
-  context.putImageData(picture, 0, 0);
+  const split = state.view === "split" && state.under ? Math.round(state.split * shown.width) : -1;
+  state.display.draw(shown, state.under, $("tonemap").value, white(shown), split);
   placeSplit();
   state.drawMs = performance.now() - started;
   showNumbers();
+}
+
+// Controls move many times a frame: one draw per frame.
+function drawSoon() {
+  if (state.drawing) return;
+  state.drawing = true;
+  requestAnimationFrame(() => { state.drawing = false; draw(); });
+}
+
+// ?drawbench=1: 60 redraws at as many exposures, each waited for (a pixel
+// read back), the median time per redraw in data-draw-ms.
+function drawBench() {
+  const times = [];
+  const ev = $("ev");
+  const before = ev.value;
+  $("auto").checked = false;
+  for (let i = 0; i < 60; i++) {
+    ev.value = String(-2 + (i % 12) * 0.5);
+    const started = performance.now();
+    draw();
+    state.display.finish();
+    times.push(performance.now() - started);
+  }
+  ev.value = before;
+  times.sort((a, b) => a - b);
+  document.body.dataset.drawMs = times[30].toFixed(2);
 }
 
 // A line through `values`, spread over the canvas, with its range written.
@@ -216,6 +357,7 @@ async function render() {
     showError("");
     document.body.dataset.rendered = String(Number(document.body.dataset.rendered || 0) + 1);
     if (state.selfCheck && !kernel) await selfCheck(controller.signal);
+    if (state.drawBench && !kernel) drawBench();
   } catch (error) {
     if (error.name === "AbortError" || error.status === 409) return;
     showError(error.message);
@@ -234,8 +376,7 @@ async function selfCheck(signal) {
     method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body), signal,
   });
   const theirs = new Uint8Array(await response.arrayBuffer());
-  const canvas = $("canvas");
-  const ours = canvas.getContext("2d").getImageData(0, 0, canvas.width, canvas.height).data;
+  const ours = state.display.pixels();
   let worst = theirs.length === (ours.length / 4) * 3 ? 0 : 255;
   for (let i = 0, j = 0; i < theirs.length && j < ours.length; i += 3, j += 4) {
     for (let c = 0; c < 3; c++) worst = Math.max(worst, Math.abs(theirs[i + c] - ours[j + c]));
@@ -298,9 +439,9 @@ async function start() {
     schedule();
   });
   // Exposure and tone curve are the page's own: redrawn without the server.
-  $("tonemap").addEventListener("input", () => { draw(); updateCommand(); });
-  $("auto").addEventListener("change", () => { $("ev").disabled = $("auto").checked; draw(); updateCommand(); });
-  $("ev").addEventListener("input", () => { $("ev-value").textContent = Number($("ev").value).toFixed(1); draw(); updateCommand(); });
+  $("tonemap").addEventListener("input", () => { drawSoon(); updateCommand(); });
+  $("auto").addEventListener("change", () => { $("ev").disabled = $("auto").checked; drawSoon(); updateCommand(); });
+  $("ev").addEventListener("input", () => { $("ev-value").textContent = Number($("ev").value).toFixed(1); drawSoon(); updateCommand(); });
   for (const button of document.querySelectorAll("#views button")) {
     button.addEventListener("click", () => {
       for (const b of document.querySelectorAll("#views button")) b.classList.toggle("on", b === button);
@@ -310,7 +451,7 @@ async function start() {
   }
   $("handle").addEventListener("pointerdown", (down) => {
     const frame = $("frame").getBoundingClientRect();
-    const move = (e) => { state.split = Math.min(1, Math.max(0, (e.clientX - frame.left) / frame.width)); draw(); };
+    const move = (e) => { state.split = Math.min(1, Math.max(0, (e.clientX - frame.left) / frame.width)); drawSoon(); };
     move(down);
     window.addEventListener("pointermove", move);
     window.addEventListener("pointerup", () => window.removeEventListener("pointermove", move), { once: true });
@@ -338,14 +479,33 @@ async function start() {
 }
 
 // A link can open the studio on an image, a preset or config, and a view:
-// ?image=PATH&preset=NAME&config=TOML&view=split
+// ?image=PATH&preset=NAME&config=TOML&view=split&tonemap=reinhard&ev=3
 function fromAddress() {
   const query = new URLSearchParams(location.search);
   state.selfCheck = query.get("selfcheck") === "1";
+  state.drawBench = query.get("drawbench") === "1";
+  try {
+    state.display = makeDisplay($("canvas"), query.get("display"));
+  } catch (error) {
+    // A GPU that will not compile the shader: draw on the CPU instead.
+    console.warn(`WebGL display unavailable: ${error.message}`);
+    const fresh = $("canvas").cloneNode();
+    $("canvas").replaceWith(fresh);
+    state.display = canvasDisplay(fresh);
+  }
+  document.body.dataset.display = state.display.kind;
   const image = query.get("image");
   if (image) {
     if (![...$("image").options].some((o) => o.value === image)) $("image").add(new Option(image, image));
     $("image").value = image;
+  }
+  const tone = query.get("tonemap");
+  if (tone && [...$("tonemap").options].some((o) => o.value === tone)) $("tonemap").value = tone;
+  if (query.get("ev") !== null && Number.isFinite(Number(query.get("ev")))) {
+    $("auto").checked = false;
+    $("ev").disabled = false;
+    $("ev").value = query.get("ev");
+    $("ev-value").textContent = Number($("ev").value).toFixed(1);
   }
   const preset = query.get("preset");
   if (preset && state.presets.some((p) => p.name === preset)) {

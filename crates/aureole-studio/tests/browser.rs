@@ -36,6 +36,8 @@ fn visit(browser: &Path, url: &str, name: &str) -> Visit {
         "--headless=new",
         "--no-sandbox",
         "--disable-gpu",
+        // WebGL2 on the CPU (SwiftShader), as on a machine without a GPU.
+        "--enable-unsafe-swiftshader",
         "--hide-scrollbars",
         "--window-size=1400,860",
         "--virtual-time-budget=30000",
@@ -127,12 +129,24 @@ fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
         .filter(|l| l.contains("ERROR") || l.contains("Uncaught"))
         .collect();
     assert!(errors.is_empty(), "console: {errors:?}");
+    assert!(
+        first.dom.contains(r#"data-display="webgl2""#),
+        "the page does not tone-map in WebGL2"
+    );
 
-    // The page tone-maps the linear preview itself; what it draws is what
-    // the server's display path (aureole-io) draws, within a code.
+    // The page tone-maps the linear preview itself, in WebGL2 or on a 2D
+    // canvas; what it draws is what the server's display path (aureole-io)
+    // draws, within a code, for every curve.
     for (query, name) in [
         ("selfcheck=1", "selfcheck"),
         ("selfcheck=1&view=glare", "selfcheck-glare"),
+        ("selfcheck=1&tonemap=reinhard&ev=3", "selfcheck-reinhard"),
+        ("selfcheck=1&tonemap=clip&ev=1", "selfcheck-clip"),
+        ("selfcheck=1&display=2d", "selfcheck-canvas"),
+        (
+            "selfcheck=1&display=2d&tonemap=reinhard&ev=3",
+            "selfcheck-canvas-reinhard",
+        ),
     ] {
         // The dump may come before the page's second fetch is decoded: a
         // few tries.
