@@ -40,6 +40,21 @@ pub enum ToneCurve {
     Filmic,
 }
 
+impl ToneCurve {
+    /// The curve a name (`filmic`, `reinhard`, `clip`) names, or the
+    /// one-line refusal listing them.
+    pub fn parse(name: &str) -> Result<ToneCurve, String> {
+        match name {
+            "filmic" => Ok(ToneCurve::Filmic),
+            "reinhard" => Ok(ToneCurve::Reinhard),
+            "clip" => Ok(ToneCurve::Clip),
+            other => Err(format!(
+                "tonemap {other:?} is not allowed: filmic, reinhard or clip"
+            )),
+        }
+    }
+}
+
 /// Bits per sample of the picture.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Depth {
@@ -82,6 +97,15 @@ pub struct Picture {
 }
 
 impl Picture {
+    /// Its samples as 8-bit codes (RGB, row-major), as PNG and JPEG store
+    /// them.
+    pub fn eight_bit(&self) -> Vec<u8> {
+        self.rgb
+            .iter()
+            .map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
+            .collect()
+    }
+
     /// The exposure value (EV100) that shows `white` as white.
     pub fn ev100(&self) -> f64 {
         (self.white / 1.2).log2()

@@ -43,6 +43,7 @@ pub mod formats;
 pub mod fuzzing;
 pub mod kernel;
 pub mod limits;
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod read;
 pub mod write;

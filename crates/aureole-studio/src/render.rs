@@ -343,7 +343,7 @@ impl Renderer {
                     ..display
                 };
                 let picture = render(&shown, preview.scale(), &display);
-                let codes = codes(&picture.rgb);
+                let codes = picture.eight_bit();
                 match request.format {
                     Format::Rgb8 => (codes, "application/x-rgb8"),
                     _ => (png(picture.width, picture.height, &codes)?, "image/png"),
@@ -464,16 +464,8 @@ pub(crate) fn display_options(request: &RenderRequest) -> Result<DisplayOptions,
             )))
         }
     };
-    let tone = match request.tonemap.as_deref().unwrap_or("filmic") {
-        "filmic" => ToneCurve::Filmic,
-        "reinhard" => ToneCurve::Reinhard,
-        "clip" => ToneCurve::Clip,
-        other => {
-            return Err(StudioError::BadRequest(format!(
-                "tonemap {other:?} is not allowed: filmic, reinhard or clip"
-            )))
-        }
-    };
+    let tone = ToneCurve::parse(request.tonemap.as_deref().unwrap_or("filmic"))
+        .map_err(StudioError::BadRequest)?;
     Ok(DisplayOptions { exposure, tone })
 }
 
@@ -597,14 +589,6 @@ fn encode_png(image: &Image) -> Result<Vec<u8>, StudioError> {
         }
     }
     png(image.width, image.height, &bytes)
-}
-
-/// Display levels (0…1) as 8-bit codes.
-fn codes(levels: &[f32]) -> Vec<u8> {
-    levels
-        .iter()
-        .map(|&v| (v.clamp(0.0, 1.0) * 255.0).round() as u8)
-        .collect()
 }
 
 fn png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, StudioError> {

@@ -104,23 +104,15 @@ pub(crate) fn encode(
     let size = (picture.width, picture.height);
     match depth {
         Depth::Sixteen => {
-            let samples = quantise(picture, |v| (v * 65535.0).round() as u16);
+            let samples: Vec<u16> = picture
+                .rgb
+                .iter()
+                .map(|v| (v.clamp(0.0, 1.0) * 65535.0).round() as u16)
+                .collect();
             encode_samples(path, size, samples, format, name)
         }
-        Depth::Eight => {
-            let samples = quantise(picture, |v| (v * 255.0).round() as u8);
-            encode_samples(path, size, samples, format, name)
-        }
+        Depth::Eight => encode_samples(path, size, picture.eight_bit(), format, name),
     }
-}
-
-/// The picture's 0…1 values through `sample`.
-fn quantise<T>(picture: &Picture, sample: impl Fn(f32) -> T) -> Vec<T> {
-    picture
-        .rgb
-        .iter()
-        .map(|v| sample(v.clamp(0.0, 1.0)))
-        .collect()
 }
 
 /// Encodes RGB samples (row-major, top row first) in `format`, atomically;

@@ -1,0 +1,400 @@
+//! `aureole.Camera`: a composed configuration, its TOML, and the sessions
+//! that keep a plan (kernel and spectra) per image size between calls.
+
+use std::path::PathBuf;
+use std::sync::Mutex;
+
+use aureole::{ApplyOptions, Cancel, Config, ConfigFile, Control, Extent, Frame, FrameOptions};
+use aureole::{Method, Session};
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::prelude::*;
+
+use aureole_io::compression::Compression;
+use aureole_io::display::{DisplayOptions, Exposure, ToneCurve};
+use aureole_io::formats::Samples;
+use aureole_io::limits::{default_memory_limit, Limits};
+use aureole_io::read::{read_image_with, Choice};
+use aureole_io::write::{write_image_into, LinearOptions, WriteOptions, Written};
+use pyo3::types::{PyDict, PyDictMethods};
+
+use crate::arrays::{float32, to_array, to_image};
+use crate::run::file_error;
+use crate::run::{interruptible, one_line, value_error, Latest};
+
+/// The most sessions a camera keeps: one per thread applying it at once.
+const KEPT_SESSIONS: usize = 4;
+
+/// A camera: the optical chain of presets and config files composed in
+/// order, as on the command line (later settings replace earlier ones,
+/// effects are appended).
+#[pyclass(frozen, module = "aureole")]
+pub struct Camera {
+    config: Config,
+    toml: toml::Table,
+    /// Idle sessions, each holding the plan of the last image size it
+    /// applied; a call takes one (or makes one) and puts it back.
+    sessions: Mutex<Vec<Session>>,
+}
+
+impl Camera {
+    fn new(config: Config, toml: toml::Table) -> Camera {
+        Camera {
+            config,
+            toml,
+            sessions: Mutex::new(Vec::new()),
+        }
+    }
+
+    fn parse(text: &str, source_name: &str) -> PyResult<Camera> {
+        let file = ConfigFile::parse(text, source_name).map_err(value_error)?;
+        let table: toml::Table = toml::from_str(text)
+            .map_err(|e| PyValueError::new_err(one_line(&format!("{source_name}: {e}"))))?;
+        let mut config = Config::default();
+        config.apply(file);
+        Ok(Camera::new(config, table))
+    }
+
+    /// A session for `size`: an idle one that holds its plan first.
+    fn session(&self, size: (usize, usize)) -> Session {
+        let mut idle = self.sessions.lock().unwrap_or_else(|p| p.into_inner());
+        let found = idle
+            .iter()
+            .position(|s| s.plan().is_some_and(|p| p.size() == size));
+        match found.or_else(|| idle.len().checked_sub(1)) {
+            Some(i) => idle.swap_remove(i),
+            None => Session::new(self.config.clone()).with_memory_limit(default_memory_limit()),
+        }
+    }
+
+    fn put_back(&self, session: Session) {
+        let mut idle = self.sessions.lock().unwrap_or_else(|p| p.into_inner());
+        if idle.len() < KEPT_SESSIONS {
+            idle.push(session);
+        }
+    }
+}
+
+/// Settings of the later table replace the earlier's, `[camera]` merges
+/// key by key and `[[effect]]` tables are appended: how [`Config::apply`]
+/// composes, in TOML.
+fn merge(into: &mut toml::Table, table: &toml::Table) {
+    for (key, value) in table {
+        match (key.as_str(), into.get_mut(key), value) {
+            ("effect", Some(toml::Value::Array(ours)), toml::Value::Array(theirs)) => {
+                ours.extend(theirs.iter().cloned());
+            }
+            ("camera", Some(toml::Value::Table(ours)), toml::Value::Table(theirs)) => {
+                ours.extend(theirs.iter().map(|(k, v)| (k.clone(), v.clone())));
+            }
+            _ => {
+                into.insert(key.clone(), value.clone());
+            }
+        }
+    }
+}
+
+/// A library error about the file `path`, as the command line words it.
+fn value_error_about(path: &std::path::Path, error: aureole::Error) -> PyErr {
+    match error {
+        aureole::Error::Cancelled => value_error(error),
+        other => value_error_from(format!("{}: {other}", path.display())),
+    }
+}
+
+fn value_error_from(message: String) -> PyErr {
+    PyValueError::new_err(one_line(&message))
+}
+
+fn method(name: &str) -> PyResult<Method> {
+    match name {
+        "auto" => Ok(Method::Auto),
+        "fft" => Ok(Method::Fft),
+        "splat" => Ok(Method::Splat),
+        other => Err(PyValueError::new_err(format!(
+            "method {other:?} is not allowed: auto, fft or splat"
+        ))),
+    }
+}
+
+/// Reports kernel building as its stage.
+fn kernel_report(latest: &Latest) -> impl FnMut(f64) + '_ {
+    move |fraction| {
+        *latest.lock().unwrap_or_else(|p| p.into_inner()) = Some(("building kernel", fraction));
+    }
+}
+
+#[pymethods]
+impl Camera {
+    /// A built-in preset by name (`aureole.presets()` lists them).
+    #[staticmethod]
+    fn preset(name: &str) -> PyResult<Camera> {
+        let preset = aureole::presets::find(name).map_err(value_error)?;
+        Camera::parse(preset.toml, &format!("preset {name}"))
+    }
+
+    /// A camera from TOML text, as in a config file; `name` starts its error
+    /// messages.
+    #[staticmethod]
+    #[pyo3(signature = (text, name = "<string>"))]
+    fn from_toml(text: &str, name: &str) -> PyResult<Camera> {
+        Camera::parse(text, name)
+    }
+
+    /// A camera from a TOML config file.
+    #[staticmethod]
+    fn from_file(path: PathBuf) -> PyResult<Camera> {
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            PyOSError::new_err(format!(
+                "{}: {}",
+                path.display(),
+                aureole::error::describe_io(&e)
+            ))
+        })?;
+        Camera::parse(&text, &path.display().to_string())
+    }
+
+    /// The cameras composed in order: later settings replace earlier ones,
+    /// effects follow one another (light passes through each).
+    #[staticmethod]
+    #[pyo3(signature = (*cameras))]
+    fn compose(cameras: Vec<PyRef<'_, Camera>>) -> PyResult<Camera> {
+        let mut table = toml::Table::new();
+        for camera in &cameras {
+            merge(&mut table, &camera.toml);
+        }
+        table.remove("description");
+        let text = toml::to_string(&table)
+            .map_err(|e| PyValueError::new_err(one_line(&format!("composing: {e}"))))?;
+        Camera::parse(&text, "composed camera")
+    }
+
+    /// The camera as TOML: `aureole apply --config` with it gives the same
+    /// picture.
+    fn toml(&self) -> PyResult<String> {
+        toml::to_string(&self.toml).map_err(|e| PyValueError::new_err(one_line(&e.to_string())))
+    }
+
+    /// The camera's threshold, cd/m² (pixels at or below it are not
+    /// spread).
+    #[getter]
+    fn threshold(&self) -> f64 {
+        self.config.threshold
+    }
+
+    /// The seed of the random ray lengths.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.config.seed
+    }
+
+    /// The kernel (PSF) of the whole chain, width × height pixels,
+    /// normalised to sum 1 per channel, its centre at (height // 2,
+    /// width // 2): float32 (H, W), or (H, W, 3) where it differs by
+    /// colour. `image_width` sets the pixel pitch (sensor width / image
+    /// width) that turns µm and mm into pixels; by default the kernel's
+    /// width.
+    #[pyo3(signature = (width, height, image_width = None, progress = None))]
+    fn kernel<'py>(
+        &self,
+        py: Python<'py>,
+        width: usize,
+        height: usize,
+        image_width: Option<usize>,
+        progress: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let mut extent = Extent::new(width, height).map_err(value_error)?;
+        if let Some(n) = image_width {
+            extent = extent.with_image_width(n);
+        }
+        let cancel = Cancel::new();
+        let config = &self.config;
+        let kernel = interruptible(py, &cancel, progress, |latest| {
+            let mut report = kernel_report(&latest);
+            config.kernel_with(&extent, &mut Control::new(&cancel, &mut report))
+        })?
+        .map_err(value_error)?;
+        let planes = kernel.planes();
+        let (w, h) = (kernel.width(), kernel.height());
+        let data: Vec<f32> = if kernel.is_coloured() {
+            (0..w * h)
+                .flat_map(|i| planes.iter().map(move |p| p[i]))
+                .collect()
+        } else {
+            planes[0].clone()
+        };
+        let dims = if kernel.is_coloured() {
+            vec![h, w, planes.len()]
+        } else {
+            vec![h, w]
+        };
+        Ok(PyArray1::from_vec(py, data).reshape(dims)?.into_any())
+    }
+
+    /// The image the camera records of `image` (luminance in cd/m² ×
+    /// 1/input_scale): a new float32 array of the same shape, alpha
+    /// carried through. `threshold` (cd/m², default the camera's) and
+    /// `knee` choose what is spread; `glare_only` returns only the light
+    /// that moved; `method` is "auto", "fft" or "splat". One camera applied
+    /// to many frames of one size builds its kernel once.
+    #[pyo3(signature = (image, threshold = None, knee = 0.0, input_scale = 1.0,
+                        glare_only = false, method = "auto", progress = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn apply<'py>(
+        &self,
+        py: Python<'py>,
+        image: &Bound<'py, PyAny>,
+        threshold: Option<f64>,
+        knee: f64,
+        input_scale: f64,
+        glare_only: bool,
+        method: &str,
+        progress: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let options = ApplyOptions {
+            threshold,
+            knee,
+            glare_only,
+            method: self::method(method)?,
+        };
+        let (image, shape) = to_image(&float32(image)?)?;
+        let frame = Frame::new(
+            image,
+            &FrameOptions {
+                input_scale: Some(input_scale),
+                sanitize: false,
+            },
+        )
+        .map_err(value_error)?;
+        let size = (frame.image().width, frame.image().height);
+        let mut session = self.session(size);
+        let cancel = Cancel::new();
+        session.set_cancel_token(cancel.clone());
+        let (applied, session) = interruptible(py, &cancel, progress, move |latest| {
+            let applied = session.apply(&frame, &options, &mut |stage, fraction| {
+                *latest.lock().unwrap_or_else(|p| p.into_inner()) =
+                    Some((stage.describe(), fraction));
+            });
+            (applied, session)
+        })?;
+        let applied = applied.map_err(value_error);
+        self.put_back(session);
+        to_array(py, &applied?.image, shape)
+    }
+
+    /// `aureole apply INPUT -o OUTPUT` with this camera: the file read
+    /// (its `whiteLuminance` the scale unless `input_scale` is given, `layer`
+    /// and `part` chosen as there), the camera applied, the result written
+    /// atomically into a copy of the input (an EXR keeps its other layers,
+    /// parts, windows, attributes, sample types and compression unless
+    /// `half` or `compression` say otherwise; a picture is exposed
+    /// automatically and tone-mapped filmic). The same bytes as the command
+    /// line. Returns energy_in, energy_out (file units), spread_pixels,
+    /// threshold (cd/m²), scale and notes.
+    #[pyo3(signature = (input, output, threshold = None, knee = 0.0, input_scale = None,
+                        glare_only = false, method = "auto", half = None, compression = None,
+                        layer = None, part = None, progress = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn apply_file<'py>(
+        &self,
+        py: Python<'py>,
+        input: PathBuf,
+        output: PathBuf,
+        threshold: Option<f64>,
+        knee: f64,
+        input_scale: Option<f64>,
+        glare_only: bool,
+        method: &str,
+        half: Option<bool>,
+        compression: Option<&str>,
+        layer: Option<String>,
+        part: Option<String>,
+        progress: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        if aureole_io::atomic::same_file(&input, &output) {
+            return Err(PyValueError::new_err(format!(
+                "{}: the output would overwrite the input; write to another file",
+                output.display()
+            )));
+        }
+        aureole_io::write::output_format(&output).map_err(file_error)?;
+        let options = ApplyOptions {
+            threshold,
+            knee,
+            glare_only,
+            method: self::method(method)?,
+        };
+        let compression = compression
+            .map(|n| Compression::parse(n).map_err(PyValueError::new_err))
+            .transpose()?;
+        let write_options = WriteOptions {
+            linear: LinearOptions {
+                samples: half.map(|h| if h { Samples::Half } else { Samples::Float }),
+                compression,
+            },
+            display: DisplayOptions {
+                exposure: Exposure::Auto,
+                tone: ToneCurve::Filmic,
+            },
+            depth: None,
+        };
+        let choice = Choice { layer, part };
+        let limits = Limits {
+            max_bytes: default_memory_limit(),
+        };
+        let mut loaded = py
+            .detach(|| read_image_with(&input, limits, &choice))
+            .map_err(file_error)?;
+        let original = std::mem::take(&mut loaded.original);
+        let mut notes = loaded.notes;
+        let frame = Frame::new(
+            loaded.image,
+            &FrameOptions {
+                input_scale,
+                sanitize: false,
+            },
+        )
+        .map_err(|e| value_error_about(&input, e))?;
+        let scale = frame.scale();
+        let size = (frame.image().width, frame.image().height);
+        let mut session = self.session(size);
+        let cancel = Cancel::new();
+        session.set_cancel_token(cancel.clone());
+        let (outcome, session) = interruptible(py, &cancel, progress, move |latest| {
+            let outcome = session
+                .apply(&frame, &options, &mut |stage, fraction| {
+                    *latest.lock().unwrap_or_else(|p| p.into_inner()) =
+                        Some((stage.describe(), fraction));
+                })
+                .map_err(|e| value_error_about(&input, e))
+                .and_then(|applied| {
+                    write_image_into(&output, &applied.image, scale, &write_options, original)
+                        .map_err(file_error)
+                        .map(|written| (applied, written))
+                });
+            (outcome, session)
+        })?;
+        self.put_back(session);
+        let (applied, written) = outcome?;
+        if let Written::Linear(more) = written {
+            notes.extend(more.iter().map(ToString::to_string));
+        }
+        let report = PyDict::new(py);
+        report.set_item("energy_in", applied.energy_in)?;
+        report.set_item("energy_out", applied.energy_out)?;
+        report.set_item("spread_pixels", applied.spread_pixels)?;
+        report.set_item("threshold", applied.threshold)?;
+        report.set_item("scale", scale)?;
+        report.set_item("notes", notes)?;
+        Ok(report)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<aureole.Camera: {} effect(s), seed {}, threshold {} cd/m²>",
+            self.config.effects.len(),
+            self.config.seed,
+            self.config.threshold
+        )
+    }
+}

@@ -1,0 +1,31 @@
+//! The Python package `aureole`: physically based bloom, corona and glare
+//! on numpy arrays, a thin shell over the library's session API, so that
+//! it gives the bytes the command line gives. Its Python half
+//! (`python/aureole`) converts arrays and holds the docstrings' stubs.
+
+mod arrays;
+mod camera;
+mod files;
+mod run;
+
+use pyo3::prelude::*;
+
+/// The built-in presets: (name, one-line description) pairs.
+#[pyfunction]
+fn presets() -> Vec<(&'static str, String)> {
+    aureole::presets::PRESETS
+        .iter()
+        .map(|p| (p.name, p.description()))
+        .collect()
+}
+
+#[pymodule]
+fn _aureole(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    module.add_class::<camera::Camera>()?;
+    module.add_function(wrap_pyfunction!(presets, module)?)?;
+    module.add_function(wrap_pyfunction!(files::read, module)?)?;
+    module.add_function(wrap_pyfunction!(files::write, module)?)?;
+    module.add_function(wrap_pyfunction!(files::render, module)?)?;
+    module.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

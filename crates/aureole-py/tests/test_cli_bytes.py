@@ -1,0 +1,60 @@
+"""camera.apply on an array gives the command line's bytes, for a bloom, a
+corona and a spectral aperture, with and without a threshold."""
+
+import subprocess
+
+import numpy as np
+import pytest
+
+import aureole
+
+from conftest import run
+
+CAMERAS = ["paper-fig4-bloom", "paper-fig5-corona", "camera-f8-7blade"]
+
+
+@pytest.mark.parametrize("preset", CAMERAS)
+@pytest.mark.parametrize("threshold", [None, 300.0])
+def test_apply_on_an_array_equals_aureole_apply_on_the_file(cli, street, tmp_path, preset, threshold):
+    _, pfm = street
+    out = tmp_path / "out.pfm"
+    args = ["apply", pfm, "-o", out, "--preset", preset]
+    if threshold is not None:
+        args += ["--threshold", threshold]
+    run(cli, *args)
+    expected, _ = aureole.read(out)
+
+    image, meta = aureole.read(pfm)
+    got = aureole.Camera.preset(preset).apply(image, threshold=threshold, input_scale=meta["scale"])
+    assert got.dtype == expected.dtype and got.shape == expected.shape
+    assert got.tobytes() == expected.tobytes()
+
+
+@pytest.mark.parametrize("preset", CAMERAS)
+def test_apply_file_writes_the_command_lines_exr_byte_for_byte(cli, street, tmp_path, preset):
+    exr, _ = street
+    run(cli, "apply", exr, "-o", tmp_path / "cli.exr", "--preset", preset, "--threshold", "300")
+    report = aureole.Camera.preset(preset).apply_file(exr, tmp_path / "py.exr", threshold=300.0)
+    assert (tmp_path / "py.exr").read_bytes() == (tmp_path / "cli.exr").read_bytes()
+    assert report["energy_out"] <= report["energy_in"] * (1 + 1e-6)
+    assert report["threshold"] == 300.0
+
+
+def test_apply_file_refuses_to_overwrite_its_input(street, tmp_path):
+    exr, _ = street
+    copy = tmp_path / "in.exr"
+    copy.write_bytes(exr.read_bytes())
+    with pytest.raises(ValueError, match="overwrite the input"):
+        aureole.Camera.preset("paper-fig4-bloom").apply_file(copy, copy)
+    assert copy.read_bytes() == exr.read_bytes()
+
+
+def test_the_camera_toml_drives_the_cli_to_the_same_bytes(cli, street, tmp_path):
+    _, pfm = street
+    camera = aureole.Camera.compose(aureole.Camera.preset("paper-fig4-bloom"),
+                                    aureole.Camera.preset("star-filter-6pt"))
+    config = tmp_path / "camera.toml"
+    config.write_text(camera.toml())
+    run(cli, "apply", pfm, "-o", tmp_path / "out.pfm", "--config", config)
+    image, _ = aureole.read(pfm)
+    assert camera.apply(image).tobytes() == aureole.read(tmp_path / "out.pfm")[0].tobytes()
