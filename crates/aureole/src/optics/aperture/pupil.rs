@@ -251,9 +251,10 @@ impl Pupil {
     }
 
     /// The offsets δ_k = (`dnu_x`[k], `dnu_y`[k]) (cycles/mm) of the
-    /// samples of a pixel, with their share of every polygon edge's phases,
-    /// for [`Pupil::intensity_sums`]: computed once, used for every pixel.
-    pub fn offsets(&self, dnu_x: Vec<f64>, dnu_y: Vec<f64>) -> Offsets {
+    /// samples of a pixel and their quadrature `weights`, with their share
+    /// of every polygon edge's phases, for [`Pupil::intensity_sums`]:
+    /// computed once, used for every pixel.
+    pub fn offsets(&self, dnu_x: Vec<f64>, dnu_y: Vec<f64>, weights: Vec<f64>) -> Offsets {
         let phases = self
             .polygon_edges()
             .map(|e| {
@@ -267,6 +268,7 @@ impl Pupil {
         Offsets {
             x: dnu_x,
             y: dnu_y,
+            weights,
             phases,
         }
     }
@@ -280,7 +282,7 @@ impl Pupil {
             })
     }
 
-    /// Σ_k |Â(ν_i + δ_k)|² for every point ν_i = (`nu_x`[i], `nu_y`) of a
+    /// Σ_k w_k |Â(ν_i + δ_k)|² for every point ν_i = (`nu_x`[i], `nu_y`) of a
     /// row and the `offsets` δ_k shared by all of them (the samples of a
     /// pixel), into `out`[i]. The same values as [`Pupil::intensity`], at a
     /// fraction of the cost for polygons: their edge phases e^(−iq·m) and
@@ -352,7 +354,11 @@ impl Pupil {
             }
         }
         for (o, point) in out.iter_mut().zip(total.chunks(count)) {
-            *o = point.iter().map(|[re, im]| re * re + im * im).sum();
+            *o = point
+                .iter()
+                .zip(&offsets.weights)
+                .map(|([re, im], w)| w * (re * re + im * im))
+                .sum();
         }
     }
 }
@@ -363,6 +369,8 @@ impl Pupil {
 pub struct Offsets {
     x: Vec<f64>,
     y: Vec<f64>,
+    /// The quadrature weight of each offset.
+    weights: Vec<f64>,
     /// Per polygon edge, per offset, [`edge_phases`].
     phases: Vec<Vec<EdgePhases>>,
 }
