@@ -134,7 +134,7 @@ mod tests {
     const SIDE: usize = 141;
 
     /// A stop of `blades` (0: round) at f/`f_number` on a 50 mm lens.
-    fn stop(blades: u32, roundness: f64, f_number: f64) -> Optics {
+    pub(super) fn stop(blades: u32, roundness: f64, f_number: f64) -> Optics {
         let aperture = Aperture {
             blades,
             rotation_deg: 5.0,

@@ -176,30 +176,9 @@ fn legendre(n: usize, x: f64) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::stop;
     use super::*;
     use crate::optics::aperture::spectrum::Light;
-    use crate::optics::Aperture;
-
-    /// A stop of `blades` (0: round) at f/`f_number` on a 50 mm lens.
-    fn stop(blades: u32, roundness: f64, f_number: f64) -> Optics {
-        let aperture = Aperture {
-            blades,
-            rotation_deg: 5.0,
-            roundness,
-            spectral: false,
-            wavelength_nm: 550.0,
-            obstruction: 0.0,
-            vanes: 0,
-            vane_width: 0.02,
-            filters: Vec::new(),
-        };
-        let camera = crate::Camera {
-            sensor_width_mm: Some(36.0),
-            focal_length_mm: Some(50.0),
-            f_number: Some(f_number),
-        };
-        aperture.optics(&camera, 1.0).unwrap()
-    }
 
     /// The pixels within `reach` px of the centre, row by row.
     fn rasterise(near: &NearField<'_>, pitch: f64, reach: i32) -> Vec<f64> {
