@@ -11,9 +11,30 @@ use crate::optics::aperture::pupil::EdgeTerm;
 use crate::optics::aperture::Optics;
 
 /// The far field: incoherent sums over edges, curved sides and discs.
+/// Two equal, opposite edges sharing a ray.
+struct Pair {
+    /// The first edge's index.
+    first: usize,
+    /// The separation d of their midpoints over λf, cycles/mm.
+    wave: [f64; 2],
+    /// The mean of e^(i2πx·d/(λf)) over a pixel centred at 0: the product
+    /// of the sincs of its two sides.
+    pixel: f64,
+}
+
+/// Pairs whose first edge's term is kept from the edge sum instead of
+/// computed again.
+const KEPT_PAIRS: usize = 32;
+
 pub(super) struct FarField {
     /// (L², normal, unit direction along, L/f) per straight edge.
     edges: Vec<(f64, [f64; 2], [f64; 2], f64)>,
+    /// In monochromatic light, pairs of equal, opposite straight edges of
+    /// one polygon, whose rays coincide and interfere.
+    pairs: Vec<Pair>,
+    /// For each straight edge, the pair it is first of.
+    pair_of: Vec<Option<usize>>,
+
     /// Pieces of curved sides: the light they fan out, by direction.
     fans: Fans,
     discs: Vec<f64>,
@@ -92,7 +113,12 @@ impl Cumulative {
 }
 
 impl FarField {
-    pub fn new(optics: &Optics, spectrum: &Spectrum, weights_total: &[f64]) -> FarField {
+    pub fn new(
+        optics: &Optics,
+        spectrum: &Spectrum,
+        weights_total: &[f64],
+        pitch: f64,
+    ) -> FarField {
         let (edges, discs) = optics.pupil.far_field_terms();
         let f = optics.focal_mm;
         let planes = weights_total.len();
@@ -101,7 +127,36 @@ impl FarField {
         };
         let (curved, straight): (Vec<EdgeTerm>, Vec<EdgeTerm>) =
             edges.into_iter().partition(|e| e.fan.is_some());
+        // In one wavelength a pair's fringes along its ray are the
+        // pattern; over a spectrum their phases drift apart with distance
+        // (docs/physics.md §6), and the pairs are left out.
+        let pairs: Vec<Pair> = match spectrum.as_slice() {
+            [(lambda_nm, _)] => {
+                let lf = lambda_nm * 1e-6 * f;
+                let sinc = |z: f64| if z.abs() < 1e-12 { 1.0 } else { z.sin() / z };
+                parallel_pairs(&straight)
+                    .into_iter()
+                    .map(|(first, d)| {
+                        let wave = [d[0] / lf, d[1] / lf];
+                        let pi = std::f64::consts::PI;
+                        Pair {
+                            first,
+                            wave,
+                            pixel: sinc(pi * pitch * wave[0]) * sinc(pi * pitch * wave[1]),
+                        }
+                    })
+                    .collect()
+            }
+            _ => Vec::new(),
+        };
+        let mut pair_of = vec![None; straight.len()];
+        for (slot, pair) in pairs.iter().enumerate().take(KEPT_PAIRS) {
+            pair_of[pair.first] = Some(slot);
+        }
         FarField {
+            pairs,
+            pair_of,
+
             edges: straight
                 .into_iter()
                 .map(|e| (e.length * e.length, e.normal, e.along, e.length / f))
@@ -136,18 +191,28 @@ impl FarField {
         let planes = out.len().min(PLANES);
         let r2 = x * x + y * y;
         let mut sums = [0.0; PLANES];
-        for (l2, n, a, l_over_f) in &self.edges {
-            let along = x * n[0] + y * n[1];
-            let across = x * a[0] + y * a[1];
-            // The pixel spans this much across the ray (a strip as wide as
-            // the square's projection).
-            let half = 0.5 * pitch * (a[0].abs() + a[1].abs());
-            let (u1, u2) = ((across - half) * l_over_f, (across + half) * l_over_f);
-            let (a1, a2) = (u1.abs(), u2.abs());
-            let (i1, i2) = (1.0 / a1, 1.0 / a2);
-            for (sum, table) in sums.iter_mut().zip(&self.tables[..planes]) {
-                let mean = (table.at(u2, a2, i2) - table.at(u1, a1, i1)) / (u2 - u1);
-                *sum += l2 * along * along * mean;
+        let mut kept = [[0.0; PLANES]; KEPT_PAIRS];
+        for (edge, slot) in self.edges.iter().zip(&self.pair_of) {
+            let term = self.edge_term(edge, x, y, pitch, planes);
+            for (sum, t) in sums.iter_mut().zip(term) {
+                *sum += t;
+            }
+            if let Some(slot) = slot {
+                kept[*slot] = term;
+            }
+        }
+        // The cross term of a pair, whose fields F and −F·e^(iq·d) share a
+        // ray: |F|² + |F|² becomes 2|F|²(1 − cos q·d), the cosine averaged
+        // over the square pixel exactly (a product of two sincs).
+        for (slot, pair) in self.pairs.iter().enumerate() {
+            let term = match kept.get(slot) {
+                Some(term) => *term,
+                None => self.edge_term(&self.edges[pair.first], x, y, pitch, planes),
+            };
+            let phase = std::f64::consts::TAU * (x * pair.wave[0] + y * pair.wave[1]);
+            let mean_cos = phase.cos() * pair.pixel;
+            for (sum, t) in sums.iter_mut().zip(term) {
+                *sum -= 2.0 * t * mean_cos;
             }
         }
         let r = r2.sqrt();
@@ -175,6 +240,49 @@ impl FarField {
             *value_out = weights[c] * (value / self.area * pitch * pitch);
         }
     }
+}
+
+impl FarField {
+    /// One straight edge's L²(x·n̂)²⟨sinc²⟩ per plane in the pixel at
+    /// (x, y): the sinc² averaged across the ray over the strip the pixel
+    /// covers (as wide as the square's projection).
+    fn edge_term(
+        &self,
+        &(l2, n, a, l_over_f): &(f64, [f64; 2], [f64; 2], f64),
+        x: f64,
+        y: f64,
+        pitch: f64,
+        planes: usize,
+    ) -> [f64; 3] {
+        let along = x * n[0] + y * n[1];
+        let across = x * a[0] + y * a[1];
+        let half = 0.5 * pitch * (a[0].abs() + a[1].abs());
+        let (u1, u2) = ((across - half) * l_over_f, (across + half) * l_over_f);
+        let (a1, a2) = (u1.abs(), u2.abs());
+        let (i1, i2) = (1.0 / a1, 1.0 / a2);
+        let mut term = [0.0; 3];
+        for (t, table) in term.iter_mut().zip(&self.tables[..planes]) {
+            let mean = (table.at(u2, a2, i2) - table.at(u1, a1, i1)) / (u2 - u1);
+            *t = l2 * along * along * mean;
+        }
+        term
+    }
+}
+
+/// Pairs of straight edges of one polygon with equal lengths and opposite
+/// normals: the first's index and the separation of their midpoints, mm.
+fn parallel_pairs(edges: &[EdgeTerm]) -> Vec<(usize, [f64; 2])> {
+    let mut pairs = Vec::new();
+    for (k, a) in edges.iter().enumerate() {
+        for b in &edges[k + 1..] {
+            let opposite = a.normal[0] * b.normal[0] + a.normal[1] * b.normal[1] < -1.0 + 1e-9;
+            let equal = (a.length - b.length).abs() <= 1e-9 * a.length;
+            if a.polygon == b.polygon && opposite && equal {
+                pairs.push((k, [a.middle[0] - b.middle[0], a.middle[1] - b.middle[1]]));
+            }
+        }
+    }
+    pairs
 }
 
 /// The light the pieces of curved sides fan out, as a density over the

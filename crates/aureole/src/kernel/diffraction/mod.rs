@@ -61,7 +61,7 @@ fn pattern_with(
         .map(|c| spectrum.iter().map(|(_, w)| w[c]).sum::<f64>())
         .collect();
     let near = NearField::new(optics, spectrum, pitch_mm);
-    let far = FarField::new(optics, spectrum, &weights_total);
+    let far = FarField::new(optics, spectrum, &weights_total, pitch_mm);
     let filtered = optics.orders.len() > 1;
 
     // Pixel by pixel, the planes' values side by side.
@@ -137,14 +137,8 @@ mod tests {
     pub(super) fn stop(blades: u32, roundness: f64, f_number: f64) -> Optics {
         let aperture = Aperture {
             blades,
-            rotation_deg: 5.0,
             roundness,
-            spectral: true,
-            wavelength_nm: 550.0,
-            obstruction: 0.0,
-            vanes: 0,
-            vane_width: 0.02,
-            filters: Vec::new(),
+            ..stop_parameters()
         };
         let camera = crate::Camera {
             sensor_width_mm: Some(36.0),
@@ -152,6 +146,21 @@ mod tests {
             f_number: Some(f_number),
         };
         aperture.optics(&camera, 1.0).unwrap()
+    }
+
+    /// A stop's parameters: straight blades turned by 5°, no obstruction.
+    fn stop_parameters() -> Aperture {
+        Aperture {
+            blades: 7,
+            rotation_deg: 5.0,
+            roundness: 0.0,
+            spectral: true,
+            wavelength_nm: 550.0,
+            obstruction: 0.0,
+            vanes: 0,
+            vane_width: 0.02,
+            filters: Vec::new(),
+        }
     }
 
     /// The 17 wavelengths and their R, G, B weights.
@@ -280,5 +289,61 @@ mod tests {
                 "{blades} blades, roundness {roundness}: {misplaced:.3} of the light misplaced\n{a:?}\n{b:?}"
             );
         }
+    }
+
+    #[test]
+    fn parallel_edges_in_one_wavelength_interfere_along_their_ray() {
+        // In 550 nm light at the 4K pitch, opposite blades of an even stop
+        // share a ray and draw fringes along it; rings one pixel wide beyond
+        // the far field's start (112 px at f/32, 77 px at f/22) against the
+        // exact transform. Without the pairs' cross terms the 8-blade ring
+        // at 120 px held 63 % too much light (angular L2 80 %).
+        let pitch = 36.0 / 3840.0;
+        let side = 301;
+        let light = Light::Monochrome(550.0);
+        for (optics, radii, what) in [
+            (stop(8, 0.0, 32.0), [120.0, 140.0], "8 blades at f/32"),
+            (stop(6, 0.0, 22.0), [100.0, 140.0], "6 blades at f/22"),
+        ] {
+            let extent = Extent::new(side, side).unwrap();
+            let cancel = Cancel::new();
+            let mut control = Control::quiet(&cancel);
+            let fast = pattern(&optics, light, &extent, pitch, &mut control)
+                .unwrap()
+                .swap_remove(0);
+            let spectrum = light.wavelengths();
+            let exact =
+                rasterise_with(&optics, &spectrum, &extent, pitch, f64::INFINITY).swap_remove(0);
+            for r in radii {
+                let (a, b) = (ring(&fast, side, r, 180), ring(&exact, side, r, 180));
+                let total = a.iter().sum::<f64>() / b.iter().sum::<f64>();
+                let l2 = a
+                    .iter()
+                    .zip(&b)
+                    .map(|(x, y)| (x - y).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+                    / b.iter().map(|y| y * y).sum::<f64>().sqrt();
+                assert!(
+                    (total - 1.0).abs() < 0.02 && l2 < 0.03,
+                    "{what}, ring {r} px: light ×{total:.3}, angular L2 {l2:.3}"
+                );
+            }
+        }
+    }
+
+    /// The light of `plane` (`side` px square) on the ring of width 1 px
+    /// at `r0` px, in `bins` sectors from the +x axis.
+    fn ring(plane: &[f64], side: usize, r0: f64, bins: usize) -> Vec<f64> {
+        let mut out = vec![0.0; bins];
+        let c = (side / 2) as f64;
+        for (i, v) in plane.iter().enumerate() {
+            let (dx, dy) = ((i % side) as f64 - c, c - (i / side) as f64);
+            if (dx.hypot(dy) - r0).abs() < 0.5 {
+                let t = dy.atan2(dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
+                out[((t * bins as f64) as usize).min(bins - 1)] += v;
+            }
+        }
+        out
     }
 }

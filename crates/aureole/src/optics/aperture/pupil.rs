@@ -20,6 +20,11 @@ pub(crate) struct EdgeTerm {
     pub normal: [f64; 2],
     /// Unit direction along the edge.
     pub along: [f64; 2],
+    /// Its midpoint, mm.
+    pub middle: [f64; 2],
+    /// Which polygon of the pupil it bounds (edges of one polygon share its
+    /// sign: both transmit, or both block).
+    pub polygon: usize,
     /// For a piece of a curved side: the angles (rad) by which the curve's
     /// normal turns before and after this piece, counter-clockwise, half of
     /// each turn to its neighbours. Its light fans over that range of
@@ -226,7 +231,7 @@ impl Pupil {
     pub(crate) fn far_field_terms(&self) -> (Vec<EdgeTerm>, Vec<f64>) {
         let mut edges = Vec::new();
         let mut discs = Vec::new();
-        for element in &self.elements {
+        for (polygon, element) in self.elements.iter().enumerate() {
             match &element.shape {
                 Shape::Polygon { edges: list, .. } => {
                     for e in list {
@@ -234,6 +239,8 @@ impl Pupil {
                             length: e.length,
                             normal: e.normal,
                             along: [e.delta[0] / e.length, e.delta[1] / e.length],
+                            middle: e.middle,
+                            polygon,
                             fan: e.fan,
                         });
                     }
