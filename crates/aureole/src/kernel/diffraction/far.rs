@@ -11,10 +11,8 @@ use crate::optics::aperture::pupil::EdgeTerm;
 use crate::optics::aperture::Optics;
 
 /// The far field: incoherent sums over edges, curved sides and discs.
-/// Two equal, opposite edges sharing a ray.
+/// Two equal, opposite edges sharing a ray, as the first of them sees it.
 struct Pair {
-    /// The first edge's index.
-    first: usize,
     /// The separation d of their midpoints over λf, cycles/mm.
     wave: [f64; 2],
     /// The mean of e^(i2πx·d/(λf)) over a pixel centred at 0: the product
@@ -22,19 +20,13 @@ struct Pair {
     pixel: f64,
 }
 
-/// Pairs whose first edge's term is kept from the edge sum instead of
-/// computed again.
-const KEPT_PAIRS: usize = 32;
-
 pub(super) struct FarField {
     /// (L², normal, unit direction along, L/f) per straight edge.
     edges: Vec<(f64, [f64; 2], [f64; 2], f64)>,
-    /// In monochromatic light, pairs of equal, opposite straight edges of
-    /// one polygon, whose rays coincide and interfere.
-    pairs: Vec<Pair>,
-    /// For each straight edge, the pair it is first of.
-    pair_of: Vec<Option<usize>>,
-
+    /// In monochromatic light, for each straight edge that is the first of
+    /// a pair of equal, opposite edges of one polygon (whose rays coincide
+    /// and interfere), the pair.
+    pairs: Vec<Option<Pair>>,
     /// Pieces of curved sides: the light they fan out, by direction.
     fans: Fans,
     discs: Vec<f64>,
@@ -130,32 +122,21 @@ impl FarField {
         // In one wavelength a pair's fringes along its ray are the
         // pattern; over a spectrum their phases drift apart with distance
         // (docs/physics.md §6), and the pairs are left out.
-        let pairs: Vec<Pair> = match spectrum.as_slice() {
-            [(lambda_nm, _)] => {
-                let lf = lambda_nm * 1e-6 * f;
-                let sinc = |z: f64| if z.abs() < 1e-12 { 1.0 } else { z.sin() / z };
-                parallel_pairs(&straight)
-                    .into_iter()
-                    .map(|(first, d)| {
-                        let wave = [d[0] / lf, d[1] / lf];
-                        let pi = std::f64::consts::PI;
-                        Pair {
-                            first,
-                            wave,
-                            pixel: sinc(pi * pitch * wave[0]) * sinc(pi * pitch * wave[1]),
-                        }
-                    })
-                    .collect()
+        let mut pairs: Vec<Option<Pair>> = straight.iter().map(|_| None).collect();
+        if let [(lambda_nm, _)] = spectrum.as_slice() {
+            let lf = lambda_nm * 1e-6 * f;
+            let sinc = |z: f64| if z.abs() < 1e-12 { 1.0 } else { z.sin() / z };
+            let pi = std::f64::consts::PI;
+            for (first, d) in parallel_pairs(&straight) {
+                let wave = [d[0] / lf, d[1] / lf];
+                pairs[first] = Some(Pair {
+                    wave,
+                    pixel: sinc(pi * pitch * wave[0]) * sinc(pi * pitch * wave[1]),
+                });
             }
-            _ => Vec::new(),
-        };
-        let mut pair_of = vec![None; straight.len()];
-        for (slot, pair) in pairs.iter().enumerate().take(KEPT_PAIRS) {
-            pair_of[pair.first] = Some(slot);
         }
         FarField {
             pairs,
-            pair_of,
 
             edges: straight
                 .into_iter()
@@ -191,28 +172,17 @@ impl FarField {
         let planes = out.len().min(PLANES);
         let r2 = x * x + y * y;
         let mut sums = [0.0; PLANES];
-        let mut kept = [[0.0; PLANES]; KEPT_PAIRS];
-        for (edge, slot) in self.edges.iter().zip(&self.pair_of) {
+        for (edge, pair) in self.edges.iter().zip(&self.pairs) {
             let term = self.edge_term(edge, x, y, pitch, planes);
+            // A pair's fields F and −F·e^(iq·d) share a ray: |F|² + |F|²
+            // becomes 2|F|²(1 − cos q·d), the cosine averaged over the
+            // square pixel exactly (a product of two sincs).
+            let interference = pair.as_ref().map_or(0.0, |pair| {
+                let phase = std::f64::consts::TAU * (x * pair.wave[0] + y * pair.wave[1]);
+                2.0 * phase.cos() * pair.pixel
+            });
             for (sum, t) in sums.iter_mut().zip(term) {
-                *sum += t;
-            }
-            if let Some(slot) = slot {
-                kept[*slot] = term;
-            }
-        }
-        // The cross term of a pair, whose fields F and −F·e^(iq·d) share a
-        // ray: |F|² + |F|² becomes 2|F|²(1 − cos q·d), the cosine averaged
-        // over the square pixel exactly (a product of two sincs).
-        for (slot, pair) in self.pairs.iter().enumerate() {
-            let term = match kept.get(slot) {
-                Some(term) => *term,
-                None => self.edge_term(&self.edges[pair.first], x, y, pitch, planes),
-            };
-            let phase = std::f64::consts::TAU * (x * pair.wave[0] + y * pair.wave[1]);
-            let mean_cos = phase.cos() * pair.pixel;
-            for (sum, t) in sums.iter_mut().zip(term) {
-                *sum -= 2.0 * t * mean_cos;
+                *sum += t * (1.0 - interference);
             }
         }
         let r = r2.sqrt();
