@@ -40,11 +40,18 @@ fn parse_exposure(text: &str) -> Result<ExposureArg, String> {
     if text.eq_ignore_ascii_case("auto") {
         return Ok(ExposureArg::Auto);
     }
+    let range = Exposure::EV100;
     text.parse::<f64>()
         .ok()
-        .filter(|v| v.is_finite() && v.abs() <= 40.0)
+        .filter(|v| Exposure::ev100(*v).is_some())
         .map(ExposureArg::Ev)
-        .ok_or_else(|| format!("{text:?} is not `auto` or an EV from -40 to 40"))
+        .ok_or_else(|| {
+            format!(
+                "{text:?} is not `auto` or an EV from {} to {}",
+                range.start(),
+                range.end()
+            )
+        })
 }
 
 pub fn parse_positive(text: &str) -> Result<f64, String> {

@@ -6,9 +6,11 @@ use std::time::Duration;
 
 use anyhow::anyhow;
 use aureole::Image;
-use aureole_io::atomic::{folder_of, same_file};
+use aureole_io::atomic::folder_of;
 use aureole_io::formats::{Note, Original};
-use aureole_io::write::{output_format, write_image_into, LinearOptions, WriteOptions, Written};
+use aureole_io::write::{
+    output_format, refuse_overwrite, write_image_into, LinearOptions, WriteOptions, Written,
+};
 
 use crate::display_args::DisplayArgs;
 use crate::progress::Progress;
@@ -20,12 +22,7 @@ use crate::Failure;
 pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
     output_format(output)?;
     if let Some(input) = input {
-        if same_file(input, output) {
-            return Err(Failure::Usage(anyhow!(
-                "{}: the output would overwrite the input; write to another file",
-                output.display()
-            )));
-        }
+        refuse_overwrite(output, input)?;
     }
     let folder = folder_of(output);
     if !folder.is_dir() {

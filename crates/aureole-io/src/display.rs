@@ -18,6 +18,23 @@ pub enum Exposure {
 }
 
 impl Exposure {
+    /// The EV100 every front end accepts for a picture.
+    pub const EV100: std::ops::RangeInclusive<f64> = -40.0..=40.0;
+
+    /// `Ev(ev)` for an EV100 within [`Exposure::EV100`].
+    pub fn ev100(ev: f64) -> Option<Exposure> {
+        (ev.is_finite() && Exposure::EV100.contains(&ev)).then_some(Exposure::Ev(ev))
+    }
+
+    /// The one-line refusal of `value` as an exposure.
+    pub fn refusal(value: impl std::fmt::Display) -> String {
+        format!(
+            "exposure {value} is not allowed: an EV100 from {} to {}, or \"auto\"",
+            Exposure::EV100.start(),
+            Exposure::EV100.end()
+        )
+    }
+
     /// The luminance (cd/m²) this exposure shows as white on `image`
     /// (`scale` cd/m² per unit) through `tone`.
     pub fn white(self, image: &Image, scale: f64, tone: ToneCurve) -> f64 {

@@ -48,6 +48,14 @@ pub enum Error {
         allowed: String,
     },
 
+    /// An output that is the input itself (by any path or link to it):
+    /// writing it would destroy what is being read.
+    #[error("{path}: the output would overwrite the input; write to another file")]
+    OverwritesInput {
+        /// The output path.
+        path: PathBuf,
+    },
+
     /// What a file holds is refused by the library (a kernel file whose
     /// weights are negative, say).
     #[error("{path}: {error}")]

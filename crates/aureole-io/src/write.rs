@@ -59,6 +59,16 @@ pub fn output_format(path: &Path) -> Result<&'static Format> {
     })
 }
 
+/// Refuses an `output` that is `input` itself, by any path or link to it.
+pub fn refuse_overwrite(output: &Path, input: &Path) -> Result<()> {
+    if crate::atomic::same_file(input, output) {
+        return Err(Error::OverwritesInput {
+            path: output.to_path_buf(),
+        });
+    }
+    Ok(())
+}
+
 /// Writes `image` (file units, `scale` cd/m² per unit) to `path`: linear
 /// formats keep its values, pictures go through exposure, tone curve and
 /// sRGB.

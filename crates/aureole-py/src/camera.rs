@@ -5,12 +5,11 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use aureole::{ApplyOptions, Cancel, Config, ConfigFile, Control, Extent, Frame, FrameOptions};
-use aureole::{Method, Session};
+use aureole::{Method, Session, Stage};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 
-use aureole_io::compression::Compression;
 use aureole_io::display::{DisplayOptions, Exposure, ToneCurve};
 use aureole_io::formats::Samples;
 use aureole_io::limits::{default_memory_limit, Limits};
@@ -73,6 +72,34 @@ impl Camera {
             idle.push(session);
         }
     }
+
+    /// `work` with a session for frames of `size`, off the GIL and
+    /// interruptible, its stages reported to `progress`; the session is
+    /// kept for the next call.
+    fn with_session<T: Send>(
+        &self,
+        py: Python<'_>,
+        size: (usize, usize),
+        progress: Option<&Bound<'_, PyAny>>,
+        work: impl FnOnce(&mut Session, &mut dyn FnMut(Stage, f64)) -> T + Send,
+    ) -> PyResult<T> {
+        let mut session = self.session(size);
+        let cancel = Cancel::new();
+        session.set_cancel_token(cancel.clone());
+        let (outcome, session) = interruptible(py, &cancel, progress, move |latest| {
+            let outcome = work(&mut session, &mut |stage, fraction| {
+                report(&latest, stage, fraction);
+            });
+            (outcome, session)
+        })?;
+        self.put_back(session);
+        Ok(outcome)
+    }
+}
+
+/// Records the work's progress for the waiting thread to report.
+fn report(latest: &Latest, stage: Stage, fraction: f64) {
+    *latest.lock().unwrap_or_else(|p| p.into_inner()) = Some((stage.describe(), fraction));
 }
 
 /// Settings of the later table replace the earlier's, `[camera]` merges
@@ -98,12 +125,8 @@ fn merge(into: &mut toml::Table, table: &toml::Table) {
 fn value_error_about(path: &std::path::Path, error: aureole::Error) -> PyErr {
     match error {
         aureole::Error::Cancelled => value_error(error),
-        other => value_error_from(format!("{}: {other}", path.display())),
+        other => PyValueError::new_err(one_line(&format!("{}: {other}", path.display()))),
     }
-}
-
-fn value_error_from(message: String) -> PyErr {
-    PyValueError::new_err(one_line(&message))
 }
 
 fn method(name: &str) -> PyResult<Method> {
@@ -114,13 +137,6 @@ fn method(name: &str) -> PyResult<Method> {
         other => Err(PyValueError::new_err(format!(
             "method {other:?} is not allowed: auto, fft or splat"
         ))),
-    }
-}
-
-/// Reports kernel building as its stage.
-fn kernel_report(latest: &Latest) -> impl FnMut(f64) + '_ {
-    move |fraction| {
-        *latest.lock().unwrap_or_else(|p| p.into_inner()) = Some(("building kernel", fraction));
     }
 }
 
@@ -210,8 +226,8 @@ impl Camera {
         let cancel = Cancel::new();
         let config = &self.config;
         let kernel = interruptible(py, &cancel, progress, |latest| {
-            let mut report = kernel_report(&latest);
-            config.kernel_with(&extent, &mut Control::new(&cancel, &mut report))
+            let mut building = |fraction| report(&latest, Stage::BuildingKernel, fraction);
+            config.kernel_with(&extent, &mut Control::new(&cancel, &mut building))
         })?
         .map_err(value_error)?;
         let planes = kernel.planes();
@@ -267,19 +283,10 @@ impl Camera {
         )
         .map_err(value_error)?;
         let size = (frame.image().width, frame.image().height);
-        let mut session = self.session(size);
-        let cancel = Cancel::new();
-        session.set_cancel_token(cancel.clone());
-        let (applied, session) = interruptible(py, &cancel, progress, move |latest| {
-            let applied = session.apply(&frame, &options, &mut |stage, fraction| {
-                *latest.lock().unwrap_or_else(|p| p.into_inner()) =
-                    Some((stage.describe(), fraction));
-            });
-            (applied, session)
+        let applied = self.with_session(py, size, progress, |session, report| {
+            session.apply(&frame, &options, report)
         })?;
-        let applied = applied.map_err(value_error);
-        self.put_back(session);
-        to_array(py, &applied?.image, shape)
+        to_array(py, &applied.map_err(value_error)?.image, shape)
     }
 
     /// `aureole apply INPUT -o OUTPUT` with this camera: the file read
@@ -311,12 +318,7 @@ impl Camera {
         part: Option<String>,
         progress: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        if aureole_io::atomic::same_file(&input, &output) {
-            return Err(PyValueError::new_err(format!(
-                "{}: the output would overwrite the input; write to another file",
-                output.display()
-            )));
-        }
+        aureole_io::write::refuse_overwrite(&output, &input).map_err(file_error)?;
         aureole_io::write::output_format(&output).map_err(file_error)?;
         let options = ApplyOptions {
             threshold,
@@ -324,9 +326,7 @@ impl Camera {
             glare_only,
             method: self::method(method)?,
         };
-        let compression = compression
-            .map(|n| Compression::parse(n).map_err(PyValueError::new_err))
-            .transpose()?;
+        let compression = crate::files::compression(compression)?;
         let write_options = WriteOptions {
             linear: LinearOptions {
                 samples: half.map(|h| if h { Samples::Half } else { Samples::Float }),
@@ -357,25 +357,16 @@ impl Camera {
         .map_err(|e| value_error_about(&input, e))?;
         let scale = frame.scale();
         let size = (frame.image().width, frame.image().height);
-        let mut session = self.session(size);
-        let cancel = Cancel::new();
-        session.set_cancel_token(cancel.clone());
-        let (outcome, session) = interruptible(py, &cancel, progress, move |latest| {
-            let outcome = session
-                .apply(&frame, &options, &mut |stage, fraction| {
-                    *latest.lock().unwrap_or_else(|p| p.into_inner()) =
-                        Some((stage.describe(), fraction));
-                })
+        let (applied, written) = self.with_session(py, size, progress, |session, report| {
+            session
+                .apply(&frame, &options, report)
                 .map_err(|e| value_error_about(&input, e))
                 .and_then(|applied| {
                     write_image_into(&output, &applied.image, scale, &write_options, original)
                         .map_err(file_error)
                         .map(|written| (applied, written))
-                });
-            (outcome, session)
-        })?;
-        self.put_back(session);
-        let (applied, written) = outcome?;
+                })
+        })??;
         if let Written::Linear(more) = written {
             notes.extend(more.iter().map(ToString::to_string));
         }

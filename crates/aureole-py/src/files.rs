@@ -58,7 +58,8 @@ pub fn read<'py>(
     Ok((to_array(py, &image, shape)?, metadata))
 }
 
-fn compression(name: Option<&str>) -> PyResult<Option<Compression>> {
+/// The OpenEXR compression `name` names, if any.
+pub(crate) fn compression(name: Option<&str>) -> PyResult<Option<Compression>> {
     name.map(|n| Compression::parse(n).map_err(PyValueError::new_err))
         .transpose()
 }
@@ -68,18 +69,11 @@ fn tone(name: &str) -> PyResult<ToneCurve> {
 }
 
 fn exposure(value: &Bound<'_, PyAny>) -> PyResult<Exposure> {
-    if let Ok(text) = value.extract::<String>() {
-        if text == "auto" {
-            return Ok(Exposure::Auto);
-        }
-    } else if let Ok(ev) = value.extract::<f64>() {
-        if ev.is_finite() && (-20.0..=30.0).contains(&ev) {
-            return Ok(Exposure::Ev(ev));
-        }
-    }
-    Err(PyValueError::new_err(format!(
-        "exposure {value} is not allowed: an EV100 from -20 to 30, or \"auto\""
-    )))
+    let chosen = match value.extract::<String>() {
+        Ok(text) => (text == "auto").then_some(Exposure::Auto),
+        Err(_) => value.extract::<f64>().ok().and_then(Exposure::ev100),
+    };
+    chosen.ok_or_else(|| PyValueError::new_err(Exposure::refusal(value)))
 }
 
 /// Writes `image` (a float32 array as `read` gives) to `path`, atomically,

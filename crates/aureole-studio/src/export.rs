@@ -99,12 +99,8 @@ impl Exports {
         };
         let output = self.output_path(&request.output)?;
         if let Some(input) = &input {
-            if aureole_io::atomic::same_file(input, &output) {
-                return Err(StudioError::BadRequest(format!(
-                    "{}: the output would overwrite the input; write to another file",
-                    request.output
-                )));
-            }
+            aureole_io::write::refuse_overwrite(&output, input)
+                .map_err(|e| StudioError::BadRequest(e.to_string()))?;
         }
         let id = self.next.fetch_add(1, Ordering::Relaxed);
         let job = Arc::new(Job {

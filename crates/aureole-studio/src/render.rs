@@ -450,19 +450,11 @@ pub(crate) fn display_options(request: &RenderRequest) -> Result<DisplayOptions,
         }
         (None, None) => Exposure::Auto,
         (None, Some(serde_json::Value::String(s))) if s == "auto" => Exposure::Auto,
-        (None, Some(serde_json::Value::Number(n))) => match n.as_f64() {
-            Some(ev) if ev.is_finite() && (-20.0..=30.0).contains(&ev) => Exposure::Ev(ev),
-            _ => {
-                return Err(StudioError::BadRequest(format!(
-                    "exposure {n} is not allowed: an EV100 from -20 to 30, or \"auto\""
-                )))
-            }
-        },
-        (None, Some(other)) => {
-            return Err(StudioError::BadRequest(format!(
-                "exposure {other} is not allowed: an EV100 from -20 to 30, or \"auto\""
-            )))
-        }
+        (None, Some(serde_json::Value::Number(n))) => n
+            .as_f64()
+            .and_then(Exposure::ev100)
+            .ok_or_else(|| StudioError::BadRequest(Exposure::refusal(n)))?,
+        (None, Some(other)) => return Err(StudioError::BadRequest(Exposure::refusal(other))),
     };
     let tone = ToneCurve::parse(request.tonemap.as_deref().unwrap_or("filmic"))
         .map_err(StudioError::BadRequest)?;
