@@ -94,6 +94,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     let cancel = Cancel::new();
     let mut report = |fraction| progress.set(fraction);
     let kernel = config.kernel_with(&extent, &mut Control::new(&cancel, &mut report))?;
+    let built = start.elapsed().as_secs_f64();
     progress.stage("writing");
     crate::interrupt::writing(|| {
         write_kernel_for(&args.output, &kernel, Some(extent.image_width))
@@ -111,7 +112,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             .map(|c| format!("{:.6}", kernel.sum(c)))
             .collect();
         eprintln!(
-            "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, {:.2} s",
+            "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, built in {:.2} s, {:.2} s in all",
             args.output.display(),
             kernel.width(),
             kernel.height(),
@@ -120,6 +121,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             sums.join(" "),
             kernel.centre().0,
             kernel.centre().1,
+            built,
             start.elapsed().as_secs_f64()
         );
     }

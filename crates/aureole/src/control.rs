@@ -123,22 +123,33 @@ pub(crate) fn for_each_row<T: Send>(
     control: &mut Control,
     work: impl Fn(usize, &mut [T]) + Sync,
 ) -> Result<()> {
-    let width = width.max(1);
-    let height = plane.len() / width;
-    let rows_per_batch = height
+    let mut rows: Vec<&mut [T]> = plane.chunks_mut(width.max(1)).collect();
+    for_each(&mut rows, control, |j, row| work(j, row))
+}
+
+/// Runs `work(index, item)` on every item in parallel, in batches that
+/// report progress; items not yet started are skipped once the run is
+/// cancelled.
+pub(crate) fn for_each<T: Send>(
+    items: &mut [T],
+    control: &mut Control,
+    work: impl Fn(usize, &mut T) + Sync,
+) -> Result<()> {
+    let count = items.len();
+    let per_batch = count
         .div_ceil(BATCHES)
         .max(ROWS_PER_THREAD * rayon::current_num_threads())
         .max(1);
     let cancel = control.cancel();
-    for (batch, rows) in plane.chunks_mut(rows_per_batch * width).enumerate() {
+    for (batch, chunk) in items.chunks_mut(per_batch).enumerate() {
         control.check()?;
-        let first = batch * rows_per_batch;
-        rows.par_chunks_mut(width).enumerate().for_each(|(r, row)| {
+        let first = batch * per_batch;
+        chunk.par_iter_mut().enumerate().for_each(|(k, item)| {
             if !cancel.is_cancelled() {
-                work(first + r, row);
+                work(first + k, item);
             }
         });
-        control.report(((first + rows.len() / width) as f64 / height.max(1) as f64).min(1.0));
+        control.report(((first + chunk.len()) as f64 / count.max(1) as f64).min(1.0));
     }
     control.check()
 }

@@ -9,98 +9,250 @@
 use super::Spectrum;
 use crate::optics::aperture::pupil::EdgeTerm;
 use crate::optics::aperture::Optics;
+use std::f64::consts::{PI, TAU};
 
-/// The far field: incoherent sums over edges, curved sides and discs.
-/// Two equal, opposite edges sharing a ray, as the first of them sees it.
-struct Pair {
-    /// The separation d of their midpoints over λf, cycles/mm.
-    wave: [f64; 2],
-    /// The mean of e^(i2πx·d/(λf)) over a pixel centred at 0: the product
-    /// of the sincs of its two sides.
-    pixel: f64,
-}
+/// How far across its ray, in units of the longest wavelength's u, a pair
+/// of parallel edges is summed line by line in spectral light: beyond it
+/// the edge's own light is below 2·10⁻⁴ of its ray's and the cross term,
+/// at most twice that, is left out.
+const PAIR_REACH: f64 = 16.0;
 
+/// How far across its ray, in wavelengths of u, a pair's cross term is
+/// averaged over the square pixel exactly; beyond, the pixel's means of
+/// the sinc² and of the cosine are multiplied, exact for rays along a
+/// pixel axis, and the light there is below 1/(16π²) of the ray's.
+const PAIR_CORE: f64 = 4.0;
+
+/// The far field: incoherent sums over edges, curved sides and discs, with
+/// the cross terms of parallel edge pairs.
 pub(super) struct FarField {
-    /// (L², normal, unit direction along, L/f) per straight edge.
-    edges: Vec<(f64, [f64; 2], [f64; 2], f64)>,
-    /// In monochromatic light, for each straight edge that is the first of
-    /// a pair of equal, opposite edges of one polygon (whose rays coincide
-    /// and interfere), the pair.
-    pairs: Vec<Option<Pair>>,
+    edges: Vec<Edge>,
     /// Pieces of curved sides: the light they fan out, by direction.
     fans: Fans,
     discs: Vec<f64>,
-    /// Per plane: the spectrum-averaged ∫₀ᵘ sinc²(πu'/λ) du'.
-    tables: Vec<Cumulative>,
+    /// The planes' spectrum-averaged ∫₀ᵘ sinc²(πu'/λ) du' and its integral.
+    table: Cumulative,
+    /// Each wavelength of the light, for the pairs' cross terms, which are
+    /// summed line by line near their ray.
+    lines: Vec<Line>,
     /// Per plane: the sensitivity-weighted mean wavelength, mm.
     mean_lambda: Vec<f64>,
+    /// The longest wavelength, mm.
+    longest: f64,
     area: f64,
     focal: f64,
 }
 
-/// G(u) = ∫₀ᵘ g, g(u) = Σ w sinc²(πu/λ) / Σ w, tabulated finely, with the
-/// tail g ≈ ⟨λ²⟩/(2π²u²) beyond.
+/// One wavelength: λ in mm, its share of each plane's weight, and its own
+/// ∫ sinc² (in monochromatic light, the plane's table).
+struct Line {
+    lambda: f64,
+    shares: Vec<f64>,
+    table: Option<Cumulative>,
+}
+
+/// A straight edge: L², its normal, its unit direction, L/f.
+struct Edge {
+    l2: f64,
+    normal: [f64; 2],
+    along: [f64; 2],
+    l_over_f: f64,
+    /// For the first of two equal, opposite edges of one polygon (whose
+    /// rays coincide and interfere), the pair.
+    pair: Option<Pair>,
+}
+
+/// Two equal, opposite edges as the first of them sees it.
+struct Pair {
+    /// The separation d of their midpoints over f: the phase at x is
+    /// 2π x·d/(λf).
+    d_over_f: [f64; 2],
+    /// Per line, the mean of e^(i2πx·d/(λf)) over a pixel centred at 0:
+    /// the product of the sincs of its two sides.
+    pixel: Vec<f64>,
+    /// Per line, the quadrature of the cross term's exact pixel mean in
+    /// the ray's core (see [`FarField::add_pair`]): (frequency across the
+    /// ray, cycles/mm; weight) per node.
+    nodes: Vec<Vec<(f64, f64)>>,
+}
+
+/// Scratch space for one row of far-field pixels.
+#[derive(Default)]
+pub(super) struct Row {
+    /// Per pixel, the edges' tails without their plane's ⟨λ²⟩/(2π²).
+    tails: Vec<f64>,
+    /// Per pixel and plane, side by side, the rest.
+    sums: Vec<f64>,
+    /// Per pixel, a cosine along the row.
+    cosines: Vec<f64>,
+    /// Per pixel, a pair's cross term in one line, and one node's part.
+    cross: Vec<f64>,
+    waves: Vec<f64>,
+}
+
+/// The most planes a table holds.
+const PLANES: usize = 3;
+
+/// G(u) = ∫₀ᵘ g and H(u) = ∫₀ᵘ G, g(u) = Σ w sinc²(πu/λ) / Σ w, for each
+/// plane's weights on one grid, tabulated finely, with the tail
+/// g ≈ ⟨λ²⟩/(2π²u²) beyond.
 struct Cumulative {
+    planes: usize,
     step: f64,
+    /// G at the nodes, the planes side by side.
     values: Vec<f64>,
-    tail: f64,
+    /// H at the nodes, likewise.
+    seconds: Vec<f64>,
+    /// Per plane, ⟨λ²⟩/(2π²).
+    tail: [f64; PLANES],
     /// Where the table ends, and 1 over it.
     end: f64,
     inverse_end: f64,
 }
 
 impl Cumulative {
-    fn new(light: &[(f64, f64)]) -> Cumulative {
-        let total: f64 = light.iter().map(|(_, w)| w).sum();
-        let shortest = light.iter().map(|(l, _)| *l).fold(f64::INFINITY, f64::min);
-        let longest = light.iter().map(|(l, _)| *l).fold(0.0, f64::max);
+    /// The table of each plane's `light` (λ mm, weight), out to 32 times
+    /// the longest wavelength for many lines (their ⟨sinc²⟩ has lost its
+    /// fringes well before) and 256 times for one.
+    fn new(light: &[Vec<(f64, f64)>]) -> Cumulative {
+        let planes = light.len().min(PLANES);
+        let all = || light.iter().flatten().map(|(l, _)| *l);
+        let shortest = all().fold(f64::INFINITY, f64::min);
+        let longest = all().fold(0.0, f64::max);
         let step = shortest / 32.0;
-        let count = (256.0 * longest / step).ceil() as usize;
-        let g = |u: f64| {
-            light
+        let reach = if light.iter().all(|l| l.len() == 1) {
+            256.0
+        } else {
+            32.0
+        };
+        let count = (reach * longest / step).ceil() as usize;
+        let g = |plane: &[(f64, f64)], u: f64| {
+            let total: f64 = plane.iter().map(|(_, w)| w).sum();
+            plane
                 .iter()
                 .map(|(l, w)| {
-                    let z = std::f64::consts::PI * u / l;
+                    let z = PI * u / l;
                     let s = if z.abs() < 1e-9 { 1.0 } else { z.sin() / z };
                     w * s * s
                 })
                 .sum::<f64>()
                 / total
         };
-        let mut values = Vec::with_capacity(count + 1);
-        let mut sum = 0.0;
-        let mut last = g(0.0);
-        values.push(0.0);
-        for k in 1..=count {
-            let next = g(k as f64 * step);
-            sum += 0.5 * (last + next) * step;
-            values.push(sum);
-            last = next;
+        let mut values = vec![0.0; (count + 1) * planes];
+        let mut seconds = vec![0.0; (count + 1) * planes];
+        for (c, plane) in light[..planes].iter().enumerate() {
+            let (mut first, mut second) = (0.0, 0.0);
+            let mut last = g(plane, 0.0);
+            for k in 1..=count {
+                let next = g(plane, k as f64 * step);
+                // The trapezoid rule with its end correction, exact to the
+                // fourth order, for both integrals.
+                let before = first;
+                first += 0.5 * (last + next) * step;
+                second += 0.5 * (before + first) * step + step * step * (last - next) / 12.0;
+                values[k * planes + c] = first;
+                seconds[k * planes + c] = second;
+                last = next;
+            }
         }
-        let mean_square = light.iter().map(|(l, w)| w * l * l).sum::<f64>() / total;
-        let end = (values.len() - 1) as f64 * step;
+        let mut tail = [0.0; PLANES];
+        for (t, plane) in tail.iter_mut().zip(light) {
+            let total: f64 = plane.iter().map(|(_, w)| w).sum();
+            *t = plane.iter().map(|(l, w)| w * l * l).sum::<f64>() / total / (2.0 * PI * PI);
+        }
+        let end = count as f64 * step;
         Cumulative {
+            planes,
             step,
             values,
-            tail: mean_square / (2.0 * std::f64::consts::PI.powi(2)),
+            seconds,
+            tail,
             end,
             inverse_end: 1.0 / end,
         }
     }
 
-    /// G(u), odd in u, given a = |u| and 1/a, which a caller with several
-    /// tables divides once for all of them.
+    /// G(u) of every plane, odd in u.
     #[inline]
-    fn at(&self, u: f64, a: f64, inverse: f64) -> f64 {
-        let g = if a >= self.end {
-            self.values[self.values.len() - 1] + self.tail * (self.inverse_end - inverse)
+    fn first(&self, u: f64) -> [f64; PLANES] {
+        let (a, p) = (u.abs(), self.planes);
+        let mut out = [0.0; PLANES];
+        if a >= self.end {
+            let last = self.values.len() - p;
+            let beyond = self.inverse_end - 1.0 / a;
+            for (c, o) in out[..p].iter_mut().enumerate() {
+                *o = (self.values[last + c] + self.tail[c] * beyond).copysign(u);
+            }
         } else {
             let position = a / self.step;
             let k = position as usize;
             let t = position - k as f64;
-            self.values[k] * (1.0 - t) + self.values[k + 1] * t
-        };
-        g.copysign(u)
+            let (here, next) = (&self.values[k * p..][..p], &self.values[(k + 1) * p..][..p]);
+            for (c, o) in out[..p].iter_mut().enumerate() {
+                *o = (here[c] * (1.0 - t) + next[c] * t).copysign(u);
+            }
+        }
+        out
+    }
+
+    /// H(u) of every plane, even in u: cubic Hermite between the nodes, G
+    /// being its slope.
+    #[inline]
+    fn second(&self, u: f64) -> [f64; PLANES] {
+        let (a, p) = (u.abs(), self.planes);
+        let mut out = [0.0; PLANES];
+        if a >= self.end {
+            let last = self.values.len() - p;
+            let log = (a / self.end).ln();
+            for (c, o) in out[..p].iter_mut().enumerate() {
+                let slope = self.values[last + c] + self.tail[c] * self.inverse_end;
+                *o = self.seconds[last + c] + slope * (a - self.end) - self.tail[c] * log;
+            }
+            return out;
+        }
+        let position = a / self.step;
+        let k = position as usize;
+        let t = position - k as f64;
+        let (t2, t3) = (t * t, t * t * t);
+        let (h00, h01) = (2.0 * t3 - 3.0 * t2 + 1.0, 3.0 * t2 - 2.0 * t3);
+        let (h10, h11) = ((t3 - 2.0 * t2 + t) * self.step, (t3 - t2) * self.step);
+        let (s0, s1) = (
+            &self.seconds[k * p..][..p],
+            &self.seconds[(k + 1) * p..][..p],
+        );
+        let (v0, v1) = (&self.values[k * p..][..p], &self.values[(k + 1) * p..][..p]);
+        for (c, o) in out[..p].iter_mut().enumerate() {
+            *o = h00 * s0[c] + h10 * v0[c] + h01 * s1[c] + h11 * v1[c];
+        }
+        out
+    }
+
+    /// The mean of every plane's g over a square pixel whose sides project
+    /// onto the u axis as 2β and 2γ (β ≥ γ) about `c`: g weighted by the
+    /// trapezoid that is the square's width along u, the second difference
+    /// of H over 4βγ. Where γ is a hundredth of β or less the square is a
+    /// strip 2β wide to within 10⁻⁴, and G's first difference, free of the
+    /// second's cancellation, is used.
+    #[inline]
+    fn mean(&self, c: f64, beta: f64, gamma: f64) -> [f64; PLANES] {
+        let mut out = [0.0; PLANES];
+        if gamma <= 0.01 * beta {
+            let (a, b) = (self.first(c + beta), self.first(c - beta));
+            for k in 0..self.planes {
+                out[k] = (a[k] - b[k]) / (2.0 * beta);
+            }
+        } else {
+            let h = [
+                self.second(c + beta + gamma),
+                self.second(c - beta + gamma),
+                self.second(c + beta - gamma),
+                self.second(c - beta - gamma),
+            ];
+            for k in 0..self.planes {
+                out[k] = (h[0][k] - h[1][k] - h[2][k] + h[3][k]) / (4.0 * beta * gamma);
+            }
+        }
+        out
     }
 }
 
@@ -117,30 +269,47 @@ impl FarField {
         let light = |c: usize| -> Vec<(f64, f64)> {
             spectrum.iter().map(|(l, w)| (l * 1e-6, w[c])).collect()
         };
+        let monochrome = spectrum.len() == 1;
+        let lines: Vec<Line> = spectrum
+            .iter()
+            .map(|(l, w)| Line {
+                lambda: l * 1e-6,
+                shares: w.iter().zip(weights_total).map(|(w, t)| w / t).collect(),
+                table: (!monochrome).then(|| Cumulative::new(&[vec![(l * 1e-6, 1.0)]])),
+            })
+            .collect();
         let (curved, straight): (Vec<EdgeTerm>, Vec<EdgeTerm>) =
             edges.into_iter().partition(|e| e.fan.is_some());
-        // In one wavelength a pair's fringes along its ray are the
-        // pattern; over a spectrum their phases drift apart with distance
-        // (docs/physics.md §6), and the pairs are left out.
         let mut pairs: Vec<Option<Pair>> = straight.iter().map(|_| None).collect();
-        if let [(lambda_nm, _)] = spectrum.as_slice() {
-            let lf = lambda_nm * 1e-6 * f;
-            let sinc = |z: f64| if z.abs() < 1e-12 { 1.0 } else { z.sin() / z };
-            let pi = std::f64::consts::PI;
-            for (first, d) in parallel_pairs(&straight) {
-                let wave = [d[0] / lf, d[1] / lf];
-                pairs[first] = Some(Pair {
-                    wave,
-                    pixel: sinc(pi * pitch * wave[0]) * sinc(pi * pitch * wave[1]),
-                });
-            }
+        let sinc = |z: f64| if z.abs() < 1e-12 { 1.0 } else { z.sin() / z };
+        for (first, d) in parallel_pairs(&straight) {
+            let edge = &straight[first];
+            pairs[first] = Some(Pair {
+                d_over_f: [d[0] / f, d[1] / f],
+                pixel: lines
+                    .iter()
+                    .map(|line| {
+                        let lf = line.lambda * f;
+                        sinc(PI * pitch * d[0] / lf) * sinc(PI * pitch * d[1] / lf)
+                    })
+                    .collect(),
+                nodes: lines
+                    .iter()
+                    .map(|line| core_nodes(edge, d, line.lambda, f, pitch))
+                    .collect(),
+            });
         }
         FarField {
-            pairs,
-
             edges: straight
                 .into_iter()
-                .map(|e| (e.length * e.length, e.normal, e.along, e.length / f))
+                .zip(pairs)
+                .map(|(e, pair)| Edge {
+                    l2: e.length * e.length,
+                    normal: e.normal,
+                    along: e.along,
+                    l_over_f: e.length / f,
+                    pair,
+                })
                 .collect(),
             fans: Fans::new(curved.into_iter().filter_map(|e| {
                 let [before, after] = e.fan?;
@@ -153,7 +322,9 @@ impl FarField {
                 })
             })),
             discs,
-            tables: (0..planes).map(|c| Cumulative::new(&light(c))).collect(),
+            table: Cumulative::new(&(0..planes).map(light).collect::<Vec<_>>()),
+            longest: lines.iter().map(|l| l.lambda).fold(0.0, f64::max),
+            lines,
             mean_lambda: (0..planes)
                 .map(|c| {
                     spectrum.iter().map(|(l, w)| l * 1e-6 * w[c]).sum::<f64>() / weights_total[c]
@@ -164,78 +335,297 @@ impl FarField {
         }
     }
 
-    /// The light of every plane in the pixel at (x, y) mm, each times its
-    /// weight in `weights`, into `out`: the geometry is shared among the
-    /// planes, only the spectrum's tables differ.
-    pub fn energies(&self, x: f64, y: f64, pitch: f64, weights: &[f64], out: &mut [f64]) {
-        const PLANES: usize = 3;
-        let planes = out.len().min(PLANES);
-        let r2 = x * x + y * y;
-        let mut sums = [0.0; PLANES];
-        for (edge, pair) in self.edges.iter().zip(&self.pairs) {
-            let term = self.edge_term(edge, x, y, pitch, planes);
-            // A pair's fields F and −F·e^(iq·d) share a ray: |F|² + |F|²
-            // becomes 2|F|²(1 − cos q·d), the cosine averaged over the
-            // square pixel exactly (a product of two sincs).
-            let interference = pair.as_ref().map_or(0.0, |pair| {
-                let phase = std::f64::consts::TAU * (x * pair.wave[0] + y * pair.wave[1]);
-                2.0 * phase.cos() * pair.pixel
-            });
-            for (sum, t) in sums.iter_mut().zip(term) {
-                *sum += t * (1.0 - interference);
+    /// The light of every plane in the pixels of a row centred at
+    /// (`x0` + i·`pitch`, `y`) mm, each times its weight in `weights`, into
+    /// `out`, their planes side by side: edge by edge along the row, so
+    /// that the geometry is shared among the planes and the far side of
+    /// each ray, where every plane's table is its tail, is a plain sum.
+    pub fn row(
+        &self,
+        x0: f64,
+        y: f64,
+        pitch: f64,
+        weights: &[f64],
+        scratch: &mut Row,
+        out: &mut [f64],
+    ) {
+        let planes = weights.len();
+        let count = out.len() / planes;
+        scratch.tails.clear();
+        scratch.tails.resize(count, 0.0);
+        scratch.sums.clear();
+        scratch.sums.resize(count * planes, 0.0);
+        scratch.cosines.resize(count, 0.0);
+        for edge in &self.edges {
+            self.add_edge(edge, x0, y, pitch, planes, scratch);
+        }
+        let norm = pitch * pitch / (self.area * 4.0 * PI * PI);
+        for (i, pixel) in out.chunks_mut(planes).enumerate() {
+            let x = x0 + i as f64 * pitch;
+            let r2 = x * x + y * y;
+            let r = r2.sqrt();
+            // By stationary phase, the points of a curved side whose normal
+            // is ±x/|x| send ρ λ f / (4π² |x|³) there (two such points on a
+            // disc give its ⟨J₁²⟩ term), ρ the radius of curvature; each
+            // piece covers its share of the normal's directions, averaged
+            // over the angle the pixel spans.
+            let mut curved = 0.0;
+            if !self.fans.is_empty() {
+                let phi = y.atan2(x);
+                let half = 0.5 * pitch * (x.abs() + y.abs()) / r2;
+                curved += self.fans.between(phi - half, phi + half) / (2.0 * half);
+            }
+            curved += 2.0 * self.discs.iter().sum::<f64>();
+            let curved = curved * self.focal / (r2 * r);
+            for (c, value) in pixel.iter_mut().enumerate() {
+                let straight = scratch.sums[i * planes + c] + self.table.tail[c] * scratch.tails[i];
+                *value = weights[c] * norm * (straight / (r2 * r2) + curved * self.mean_lambda[c]);
             }
         }
-        let r = r2.sqrt();
-        let r3 = r2 * r;
-        // By stationary phase, the points of a curved side whose normal is
-        // ±x/|x| send ρ λ f / (4π² |x|³) there (two such points on a disc
-        // give its ⟨J₁²⟩ term), ρ the radius of curvature; each piece
-        // covers its share of the normal's directions, averaged over the
-        // angle the pixel spans.
-        let fanned = (!self.fans.is_empty()).then(|| {
-            let phi = y.atan2(x);
-            let half = 0.5 * pitch * (x.abs() + y.abs()) / r2;
-            self.fans.between(phi - half, phi + half) / (2.0 * half)
-        });
-        for (c, (value_out, sum)) in out.iter_mut().zip(sums).enumerate() {
-            let mut value = sum / (4.0 * std::f64::consts::PI.powi(2) * r2 * r2);
-            if let Some(fanned) = fanned {
-                value += fanned * self.mean_lambda[c] * self.focal
-                    / (4.0 * std::f64::consts::PI.powi(2) * r3);
+    }
+
+    /// One straight edge's L²(x·n̂)²⟨sinc²⟩ in the pixels of a row, the
+    /// sinc² averaged across the ray over each square pixel exactly, with
+    /// its pair's cross term.
+    fn add_edge(&self, edge: &Edge, x0: f64, y: f64, pitch: f64, planes: usize, row: &mut Row) {
+        let count = row.tails.len();
+        let [n0, n1] = edge.normal;
+        let [a0, a1] = edge.along;
+        let k = edge.l_over_f;
+        // Half the projections of the pixel's sides on the ray's normal,
+        // in u, the larger first.
+        let (sx, sy) = (0.5 * pitch * a0.abs() * k, 0.5 * pitch * a1.abs() * k);
+        let (beta, gamma) = (sx.max(sy), sx.min(sy));
+        let (across0, d_across) = (x0 * a0 + y * a1, pitch * a0);
+        let (along0, d_along) = (x0 * n0 + y * n1, pitch * n0);
+        let strip = |i: usize| {
+            let across = across0 + i as f64 * d_across;
+            let along = along0 + i as f64 * d_along;
+            (edge.l2 * along * along, across * k)
+        };
+        let end = self.table.end;
+        let table = band(across0, d_across, (end + beta + gamma) / k, count);
+        let monochrome = self.lines.len() == 1;
+        // In one wavelength a pair's fields F and −F·e^(iq·d) share a ray:
+        // |F|² + |F|² becomes 2|F|²(1 − cos q·d), the cosine averaged over
+        // the square pixel exactly (a product of two sincs), everywhere.
+        // In many, each line's phase drifts from the others' with distance;
+        // the cross term is summed line by line near the ray, where the
+        // light is.
+        let (pair, lined) = match &edge.pair {
+            Some(pair) => {
+                let reach = if monochrome {
+                    end
+                } else {
+                    PAIR_REACH * self.longest
+                };
+                let near = band(across0, d_across, (reach + beta + gamma) / k, count);
+                let start = near.start.max(table.start);
+                let near = start..near.end.min(table.end).max(start);
+                let geometry = Strip {
+                    x0,
+                    y,
+                    pitch,
+                    across0,
+                    d_across,
+                    k,
+                    beta,
+                    gamma,
+                };
+                self.add_pair(pair, &geometry, near.clone(), &strip, planes, row);
+                if monochrome {
+                    let line = &self.lines[0];
+                    let phase =
+                        |x: f64| TAU * (x * pair.d_over_f[0] + y * pair.d_over_f[1]) / line.lambda;
+                    cosines(
+                        phase(x0),
+                        phase(x0 + pitch) - phase(x0),
+                        0..count,
+                        &mut row.cosines,
+                    );
+                }
+                (monochrome.then_some(pair.pixel[0]), near)
             }
-            for radius in &self.discs {
-                value += radius * self.mean_lambda[c] * self.focal
-                    / (2.0 * std::f64::consts::PI.powi(2) * r3);
+            None => (None, table.start..table.start),
+        };
+        // Beyond the table all four corners' u lie on one side, where
+        // g = tail/u² and the trapezoid's mean is
+        // −tail·ln(1 − x)/(x D), D = c² − (β − γ)², x = 4βγ/D ≤ 10⁻³.
+        let squeeze = (beta - gamma) * (beta - gamma);
+        let corners = 2.0 * beta * gamma;
+        for range in [0..table.start, table.end..count] {
+            let tails = &mut row.tails[range.clone()];
+            match pair {
+                None => {
+                    for (i, tail) in range.zip(tails) {
+                        let (weight, c) = strip(i);
+                        let d = 1.0 / (c * c - squeeze);
+                        *tail += weight * d * (1.0 + corners * d);
+                    }
+                }
+                Some(p) => {
+                    for ((i, tail), cos) in range.clone().zip(tails).zip(&row.cosines[range]) {
+                        let (weight, c) = strip(i);
+                        let d = 1.0 / (c * c - squeeze);
+                        *tail += weight * d * (1.0 + corners * d) * (1.0 - 2.0 * p * cos);
+                    }
+                }
             }
-            *value_out = weights[c] * (value / self.area * pitch * pitch);
+        }
+        let cosines = &row.cosines;
+        let factor = |i: usize| pair.map_or(1.0, |p| 1.0 - 2.0 * p * cosines[i]);
+        for i in (table.start..lined.start).chain(lined.end..table.end) {
+            let (weight, c) = strip(i);
+            let weight = weight * factor(i);
+            let mean = self.table.mean(c, beta, gamma);
+            for (sum, m) in row.sums[i * planes..(i + 1) * planes].iter_mut().zip(mean) {
+                *sum += weight * m;
+            }
+        }
+    }
+
+    /// A pair's first edge near its ray, line by line: its own ⟨sinc²⟩
+    /// less twice the cross term ⟨sinc² cos q·d⟩, into each plane by the
+    /// line's share. In the ray's core the cross term's pixel mean is
+    /// exact: sinc²(πu/λ) = ∫ tri(z) e^(i2πzu/λ) dz over [−1, 1], so the
+    /// mean over the square of sinc²·cos q·d is
+    /// Σ_j w_j tri(z_j) P(z_j k â/λ + d/(λf)) cos 2π(x·d/(λf) + z_j k t/λ),
+    /// P(ω) = sinc(πpω_x) sinc(πpω_y) the square's mean of e^(i2πω·δ), t
+    /// the offset across the ray: Gauss–Legendre on each half of the
+    /// triangle, whose weights do not depend on the pixel.
+    fn add_pair(
+        &self,
+        pair: &Pair,
+        at: &Strip,
+        near: std::ops::Range<usize>,
+        strip: &impl Fn(usize) -> (f64, f64),
+        planes: usize,
+        row: &mut Row,
+    ) {
+        let count = row.tails.len();
+        row.cross.resize(count, 0.0);
+        row.waves.resize(count, 0.0);
+        for ((line, pixel), nodes) in self.lines.iter().zip(&pair.pixel).zip(&pair.nodes) {
+            let table = line.table.as_ref().unwrap_or(&self.table);
+            let phase =
+                |x: f64| TAU * (x * pair.d_over_f[0] + at.y * pair.d_over_f[1]) / line.lambda;
+            let (start, step) = (phase(at.x0), phase(at.x0 + at.pitch) - phase(at.x0));
+            cosines(start, step, near.clone(), &mut row.cosines);
+            let core = band(
+                at.across0,
+                at.d_across,
+                PAIR_CORE * line.lambda / at.k,
+                count,
+            );
+            let core = core.start.clamp(near.start, near.end)..core.end.clamp(near.start, near.end);
+            row.cross[core.clone()].iter_mut().for_each(|v| *v = 0.0);
+            for &(frequency, weight) in nodes {
+                let (start, step) = (
+                    start + TAU * frequency * at.across0,
+                    step + TAU * frequency * at.d_across,
+                );
+                let Row { cross, waves, .. } = row;
+                cosines(start, step, core.clone(), waves);
+                for (sum, cos) in cross[core.clone()].iter_mut().zip(&waves[core.clone()]) {
+                    *sum += weight * cos;
+                }
+            }
+            for i in near.clone() {
+                let (weight, c) = strip(i);
+                let own = table.mean(c, at.beta, at.gamma)[0];
+                let cross = if core.contains(&i) {
+                    row.cross[i]
+                } else {
+                    own * pixel * row.cosines[i]
+                };
+                let term = weight * (own - 2.0 * cross);
+                for (sum, share) in row.sums[i * planes..(i + 1) * planes]
+                    .iter_mut()
+                    .zip(&line.shares)
+                {
+                    *sum += share * term;
+                }
+            }
         }
     }
 }
 
-impl FarField {
-    /// One straight edge's L²(x·n̂)²⟨sinc²⟩ per plane in the pixel at
-    /// (x, y): the sinc² averaged across the ray over the strip the pixel
-    /// covers (as wide as the square's projection).
-    fn edge_term(
-        &self,
-        &(l2, n, a, l_over_f): &(f64, [f64; 2], [f64; 2], f64),
-        x: f64,
-        y: f64,
-        pitch: f64,
-        planes: usize,
-    ) -> [f64; 3] {
-        let along = x * n[0] + y * n[1];
-        let across = x * a[0] + y * a[1];
-        let half = 0.5 * pitch * (a[0].abs() + a[1].abs());
-        let (u1, u2) = ((across - half) * l_over_f, (across + half) * l_over_f);
-        let (a1, a2) = (u1.abs(), u2.abs());
-        let (i1, i2) = (1.0 / a1, 1.0 / a2);
-        let mut term = [0.0; 3];
-        for (t, table) in term.iter_mut().zip(&self.tables[..planes]) {
-            let mean = (table.at(u2, a2, i2) - table.at(u1, a1, i1)) / (u2 - u1);
-            *t = l2 * along * along * mean;
+/// Where a row's pixels lie about an edge's ray: the row's first pixel
+/// at (`x0`, `y`), the offset across the ray of the first and its step,
+/// u per offset (L/f), and the pixel's half projections in u.
+struct Strip {
+    x0: f64,
+    y: f64,
+    pitch: f64,
+    across0: f64,
+    d_across: f64,
+    k: f64,
+    beta: f64,
+    gamma: f64,
+}
+
+/// The nodes of a pair's exact cross term in one wavelength (see
+/// [`FarField::add_pair`]): enough Gauss–Legendre points on each half of
+/// the triangle for the PAIR_CORE turns of the phase across the core and
+/// the turns of the square's mean P.
+fn core_nodes(edge: &EdgeTerm, d: [f64; 2], lambda: f64, f: f64, pitch: f64) -> Vec<(f64, f64)> {
+    let sinc = |z: f64| if z.abs() < 1e-12 { 1.0 } else { z.sin() / z };
+    let (k, a) = (edge.length / f, edge.along);
+    let per_z = k / lambda;
+    let turns = PAIR_CORE + pitch * per_z * (a[0].abs() + a[1].abs());
+    let (points, weights) =
+        super::near::gauss_legendre(((2.2 * turns + 2.0).ceil() as usize).min(32));
+    let mut nodes = Vec::with_capacity(2 * points.len());
+    for side in [-1.0, 1.0] {
+        for (x, w) in points.iter().zip(&weights) {
+            let z = side * 0.5 * (1.0 + x);
+            let omega = [
+                z * per_z * a[0] + d[0] / (lambda * f),
+                z * per_z * a[1] + d[1] / (lambda * f),
+            ];
+            let box_mean = sinc(PI * pitch * omega[0]) * sinc(PI * pitch * omega[1]);
+            nodes.push((z * per_z, 0.5 * w * (1.0 - z.abs()) * box_mean));
         }
-        term
+    }
+    nodes
+}
+
+/// The pixels i of 0..`count` where |`c0` + i·`c1`| < `reach`, and one
+/// more on either side.
+fn band(c0: f64, c1: f64, reach: f64, count: usize) -> std::ops::Range<usize> {
+    let n = count as f64;
+    let (lo, hi) = if c1 == 0.0 {
+        if c0.abs() < reach {
+            (0.0, n)
+        } else {
+            (0.0, 0.0)
+        }
+    } else {
+        let (t1, t2) = ((-reach - c0) / c1, (reach - c0) / c1);
+        (
+            (t1.min(t2).floor() - 1.0).clamp(0.0, n),
+            (t1.max(t2).ceil() + 1.0).clamp(0.0, n),
+        )
+    };
+    if hi > lo {
+        lo as usize..hi as usize
+    } else {
+        0..0
+    }
+}
+
+/// cos(`start` + i·`step`) into `out`[i] for i in `range`: a rotation from
+/// pixel to pixel, started afresh every 32 so that round-off cannot grow.
+fn cosines(start: f64, step: f64, range: std::ops::Range<usize>, out: &mut [f64]) {
+    let (sin_step, cos_step) = step.sin_cos();
+    let mut i = range.start;
+    while i < range.end {
+        let (mut s, mut c) = (start + i as f64 * step).sin_cos();
+        for value in &mut out[i..range.end.min(i + 32)] {
+            *value = c;
+            (c, s) = (c * cos_step - s * sin_step, s * cos_step + c * sin_step);
+        }
+        i += 32;
     }
 }
 

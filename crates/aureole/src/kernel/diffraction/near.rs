@@ -138,7 +138,7 @@ fn points_per_axis(cycles: f64) -> usize {
 /// The `n` Gauss–Legendre nodes on [−1, 1] and their weights (Σ = 2):
 /// Newton's method on P_n from the Chebyshev guesses, P_n by its
 /// recurrence.
-fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+pub(super) fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     let (mut nodes, mut weights) = (vec![0.0; n], vec![0.0; n]);
     for i in 0..n.div_ceil(2) {
         let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
