@@ -1,10 +1,11 @@
-//! The far field of a diffraction pattern: beyond ~60 λN the interference
-//! between different edges oscillates faster than a pixel, and the pattern
-//! is the incoherent sum of each edge's |F_k|² = L²(x·n)² sinc²(πu/λ) /
-//! (4π²|x|⁴·area), u the offset across the edge's ray times L/f, averaged
-//! over the pixel analytically; each disc adds its ⟨J₁²⟩ term
-//! R λ f / (2π²|x|³·area), and each piece of a curved side fans its light
-//! over the turn of its normal (docs/physics.md §6).
+//! The far field of a diffraction pattern: beyond ~60 λN the cross terms
+//! of edges whose rays differ fall below B·λN/r, and the pattern is the
+//! sum of each edge's |F_k|² = L²(x·n)² sinc²(πu/λ) / (4π²|x|⁴·area), u
+//! the offset across the edge's ray times L/f, averaged over the square
+//! pixel exactly, with the cross terms of parallel edges, which share a
+//! ray; each disc adds its ⟨J₁²⟩ term R λ f / (2π²|x|³·area), and each
+//! piece of a curved side fans its light over the turn of its normal
+//! (docs/physics.md §6).
 
 use super::Spectrum;
 use crate::optics::aperture::pupil::EdgeTerm;
@@ -57,13 +58,16 @@ struct Edge {
     normal: [f64; 2],
     along: [f64; 2],
     l_over_f: f64,
-    /// For the first of two equal, opposite edges of one polygon (whose
-    /// rays coincide and interfere), the pair.
-    pair: Option<Pair>,
+    /// The equal, parallel edges after it, whose rays coincide with its
+    /// own and interfere with it.
+    pairs: Vec<Pair>,
 }
 
-/// Two equal, opposite edges as the first of them sees it.
+/// Two equal, parallel straight edges as the first of them sees it.
 struct Pair {
+    /// σ = s₁ s₂ (n̂₁·n̂₂): their fields along the common ray are F and
+    /// σ F e^(iq·d), the signs those of the polygons they bound.
+    sign: f64,
     /// The separation d of their midpoints over f: the phase at x is
     /// 2π x·d/(λf).
     d_over_f: [f64; 2],
@@ -88,6 +92,9 @@ pub(super) struct Row {
     /// Per pixel, a pair's cross term in one line, and one node's part.
     cross: Vec<f64>,
     waves: Vec<f64>,
+    /// Per pixel within the edge's table, its first plane's mean, which a
+    /// pair in one wavelength uses again.
+    means: Vec<f64>,
 }
 
 /// The most planes a table holds.
@@ -280,11 +287,12 @@ impl FarField {
             .collect();
         let (curved, straight): (Vec<EdgeTerm>, Vec<EdgeTerm>) =
             edges.into_iter().partition(|e| e.fan.is_some());
-        let mut pairs: Vec<Option<Pair>> = straight.iter().map(|_| None).collect();
+        let mut pairs: Vec<Vec<Pair>> = straight.iter().map(|_| Vec::new()).collect();
         let sinc = |z: f64| if z.abs() < 1e-12 { 1.0 } else { z.sin() / z };
-        for (first, d) in parallel_pairs(&straight) {
+        for (first, d, sign) in parallel_pairs(&straight, optics.diameter_mm) {
             let edge = &straight[first];
-            pairs[first] = Some(Pair {
+            pairs[first].push(Pair {
+                sign,
                 d_over_f: [d[0] / f, d[1] / f],
                 pixel: lines
                     .iter()
@@ -303,12 +311,12 @@ impl FarField {
             edges: straight
                 .into_iter()
                 .zip(pairs)
-                .map(|(e, pair)| Edge {
+                .map(|(e, pairs)| Edge {
                     l2: e.length * e.length,
                     normal: e.normal,
                     along: e.along,
                     l_over_f: e.length / f,
-                    pair,
+                    pairs,
                 })
                 .collect(),
             fans: Fans::new(curved.into_iter().filter_map(|e| {
@@ -385,8 +393,8 @@ impl FarField {
     }
 
     /// One straight edge's L²(x·n̂)²⟨sinc²⟩ in the pixels of a row, the
-    /// sinc² averaged across the ray over each square pixel exactly, with
-    /// its pair's cross term.
+    /// sinc² averaged across the ray over each square pixel exactly, and
+    /// its cross terms with the parallel edges after it.
     fn add_edge(&self, edge: &Edge, x0: f64, y: f64, pitch: f64, planes: usize, row: &mut Row) {
         let count = row.tails.len();
         let [n0, n1] = edge.normal;
@@ -403,97 +411,91 @@ impl FarField {
             let along = along0 + i as f64 * d_along;
             (edge.l2 * along * along, across * k)
         };
-        let end = self.table.end;
-        let table = band(across0, d_across, (end + beta + gamma) / k, count);
-        let monochrome = self.lines.len() == 1;
-        // In one wavelength a pair's fields F and −F·e^(iq·d) share a ray:
-        // |F|² + |F|² becomes 2|F|²(1 − cos q·d), the cosine averaged over
-        // the square pixel exactly (a product of two sincs), everywhere.
-        // In many, each line's phase drifts from the others' with distance;
-        // the cross term is summed line by line near the ray, where the
-        // light is.
-        let (pair, lined) = match &edge.pair {
-            Some(pair) => {
-                let reach = if monochrome {
-                    end
-                } else {
-                    PAIR_REACH * self.longest
-                };
-                let near = band(across0, d_across, (reach + beta + gamma) / k, count);
-                let start = near.start.max(table.start);
-                let near = start..near.end.min(table.end).max(start);
-                let geometry = Strip {
-                    x0,
-                    y,
-                    pitch,
-                    across0,
-                    d_across,
-                    k,
-                    beta,
-                    gamma,
-                };
-                self.add_pair(pair, &geometry, near.clone(), &strip, planes, row);
-                if monochrome {
-                    let line = &self.lines[0];
-                    let phase =
-                        |x: f64| TAU * (x * pair.d_over_f[0] + y * pair.d_over_f[1]) / line.lambda;
-                    cosines(
-                        phase(x0),
-                        phase(x0 + pitch) - phase(x0),
-                        0..count,
-                        &mut row.cosines,
-                    );
-                }
-                (monochrome.then_some(pair.pixel[0]), near)
-            }
-            None => (None, table.start..table.start),
-        };
+        let table = band(
+            across0,
+            d_across,
+            (self.table.end + beta + gamma) / k,
+            count,
+        );
         // Beyond the table all four corners' u lie on one side, where
         // g = tail/u² and the trapezoid's mean is
         // −tail·ln(1 − x)/(x D), D = c² − (β − γ)², x = 4βγ/D ≤ 10⁻³.
         let squeeze = (beta - gamma) * (beta - gamma);
         let corners = 2.0 * beta * gamma;
+        let tail = |i: usize| {
+            let (weight, c) = strip(i);
+            let d = 1.0 / (c * c - squeeze);
+            weight * d * (1.0 + corners * d)
+        };
         for range in [0..table.start, table.end..count] {
-            let tails = &mut row.tails[range.clone()];
-            match pair {
-                None => {
-                    for (i, tail) in range.zip(tails) {
-                        let (weight, c) = strip(i);
-                        let d = 1.0 / (c * c - squeeze);
-                        *tail += weight * d * (1.0 + corners * d);
-                    }
-                }
-                Some(p) => {
-                    for ((i, tail), cos) in range.clone().zip(tails).zip(&row.cosines[range]) {
-                        let (weight, c) = strip(i);
-                        let d = 1.0 / (c * c - squeeze);
-                        *tail += weight * d * (1.0 + corners * d) * (1.0 - 2.0 * p * cos);
-                    }
-                }
+            for (i, sum) in range.clone().zip(&mut row.tails[range]) {
+                *sum += tail(i);
             }
         }
-        let cosines = &row.cosines;
-        let factor = |i: usize| pair.map_or(1.0, |p| 1.0 - 2.0 * p * cosines[i]);
-        for i in (table.start..lined.start).chain(lined.end..table.end) {
+        row.means.resize(count, 0.0);
+        for i in table.clone() {
             let (weight, c) = strip(i);
-            let weight = weight * factor(i);
             let mean = self.table.mean(c, beta, gamma);
+            row.means[i] = mean[0];
             for (sum, m) in row.sums[i * planes..(i + 1) * planes].iter_mut().zip(mean) {
                 *sum += weight * m;
             }
         }
+        let at = Strip {
+            x0,
+            y,
+            pitch,
+            across0,
+            d_across,
+            k,
+            beta,
+            gamma,
+        };
+        for pair in &edge.pairs {
+            if self.lines.len() == 1 {
+                // In one wavelength everywhere: beyond the core the
+                // pixel's means of the edge's light and of the cosine are
+                // multiplied.
+                let line = &self.lines[0];
+                let phase =
+                    |x: f64| TAU * (x * pair.d_over_f[0] + y * pair.d_over_f[1]) / line.lambda;
+                cosines(
+                    phase(x0),
+                    phase(x0 + pitch) - phase(x0),
+                    0..count,
+                    &mut row.cosines,
+                );
+                let twice = 2.0 * pair.sign * pair.pixel[0];
+                for range in [0..table.start, table.end..count] {
+                    for ((i, sum), cos) in range
+                        .clone()
+                        .zip(&mut row.tails[range.clone()])
+                        .zip(&row.cosines[range])
+                    {
+                        *sum += tail(i) * twice * cos;
+                    }
+                }
+                self.add_cross(pair, &at, table.clone(), &strip, planes, row);
+            } else {
+                let reach = (PAIR_REACH * self.longest + beta + gamma) / k;
+                let near = band(across0, d_across, reach, count);
+                let start = near.start.max(table.start);
+                let near = start..near.end.min(table.end).max(start);
+                self.add_cross(pair, &at, near, &strip, planes, row);
+            }
+        }
     }
 
-    /// A pair's first edge near its ray, line by line: its own ⟨sinc²⟩
-    /// less twice the cross term ⟨sinc² cos q·d⟩, into each plane by the
-    /// line's share. In the ray's core the cross term's pixel mean is
-    /// exact: sinc²(πu/λ) = ∫ tri(z) e^(i2πzu/λ) dz over [−1, 1], so the
-    /// mean over the square of sinc²·cos q·d is
+    /// A pair's cross term 2σ⟨|F|² cos q·d⟩ in the pixels `near` of a row,
+    /// line by line, into each plane by the line's share. In the ray's core
+    /// the pixel mean is exact: sinc²(πu/λ) = ∫ tri(z) e^(i2πzu/λ) dz over
+    /// [−1, 1], so the mean over the square of sinc²·cos q·d is
     /// Σ_j w_j tri(z_j) P(z_j k â/λ + d/(λf)) cos 2π(x·d/(λf) + z_j k t/λ),
     /// P(ω) = sinc(πpω_x) sinc(πpω_y) the square's mean of e^(i2πω·δ), t
     /// the offset across the ray: Gauss–Legendre on each half of the
-    /// triangle, whose weights do not depend on the pixel.
-    fn add_pair(
+    /// triangle, whose weights do not depend on the pixel. Beyond the core
+    /// the pixel's means of the sinc² and of the cosine are multiplied.
+    fn add_cross(
         &self,
         pair: &Pair,
         at: &Strip,
@@ -506,7 +508,6 @@ impl FarField {
         row.cross.resize(count, 0.0);
         row.waves.resize(count, 0.0);
         for ((line, pixel), nodes) in self.lines.iter().zip(&pair.pixel).zip(&pair.nodes) {
-            let table = line.table.as_ref().unwrap_or(&self.table);
             let phase =
                 |x: f64| TAU * (x * pair.d_over_f[0] + at.y * pair.d_over_f[1]) / line.lambda;
             let (start, step) = (phase(at.x0), phase(at.x0 + at.pitch) - phase(at.x0));
@@ -532,13 +533,17 @@ impl FarField {
             }
             for i in near.clone() {
                 let (weight, c) = strip(i);
-                let own = table.mean(c, at.beta, at.gamma)[0];
                 let cross = if core.contains(&i) {
                     row.cross[i]
                 } else {
-                    own * pixel * row.cosines[i]
+                    // One wavelength's mean is the edge's own, found already.
+                    let mean = match &line.table {
+                        Some(table) => table.mean(c, at.beta, at.gamma)[0],
+                        None => row.means[i],
+                    };
+                    mean * pixel * row.cosines[i]
                 };
-                let term = weight * (own - 2.0 * cross);
+                let term = 2.0 * pair.sign * weight * cross;
                 for (sum, share) in row.sums[i * planes..(i + 1) * planes]
                     .iter_mut()
                     .zip(&line.shares)
@@ -629,16 +634,20 @@ fn cosines(start: f64, step: f64, range: std::ops::Range<usize>, out: &mut [f64]
     }
 }
 
-/// Pairs of straight edges of one polygon with equal lengths and opposite
-/// normals: the first's index and the separation of their midpoints, mm.
-fn parallel_pairs(edges: &[EdgeTerm]) -> Vec<(usize, [f64; 2])> {
+/// Pairs of equal, parallel straight edges (opposite blades of an even
+/// stop, the sides of a vane, the sides of opposite vanes), each edge at
+/// least 5 % of the pupil's `diameter` long (shorter ones, such as a vane's
+/// ends, hold (L/D)² of a blade's light): the first's index, the
+/// separation of their midpoints, mm, and σ = s₁ s₂ (n̂₁·n̂₂).
+fn parallel_pairs(edges: &[EdgeTerm], diameter: f64) -> Vec<(usize, [f64; 2], f64)> {
     let mut pairs = Vec::new();
     for (k, a) in edges.iter().enumerate() {
         for b in &edges[k + 1..] {
-            let opposite = a.normal[0] * b.normal[0] + a.normal[1] * b.normal[1] < -1.0 + 1e-9;
+            let cosine = a.normal[0] * b.normal[0] + a.normal[1] * b.normal[1];
             let equal = (a.length - b.length).abs() <= 1e-9 * a.length;
-            if a.polygon == b.polygon && opposite && equal {
-                pairs.push((k, [a.middle[0] - b.middle[0], a.middle[1] - b.middle[1]]));
+            if cosine.abs() > 1.0 - 1e-9 && equal && a.length >= 0.05 * diameter {
+                let d = [a.middle[0] - b.middle[0], a.middle[1] - b.middle[1]];
+                pairs.push((k, d, a.sign * b.sign * cosine.signum()));
             }
         }
     }
@@ -728,4 +737,52 @@ fn wrap(mut angle: f64) -> f64 {
         angle += TAU;
     }
     angle
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optics::Aperture;
+
+    fn optics(blades: u32, vanes: u32) -> Optics {
+        let aperture = Aperture {
+            blades,
+            rotation_deg: 0.0,
+            roundness: 0.0,
+            spectral: false,
+            wavelength_nm: 550.0,
+            obstruction: 0.0,
+            vanes,
+            vane_width: 0.02,
+            filters: Vec::new(),
+        };
+        let camera = crate::Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(50.0),
+            f_number: Some(8.0),
+        };
+        aperture.optics(&camera, 1.0).unwrap()
+    }
+
+    #[test]
+    fn parallel_edges_pair_with_the_sign_of_their_fields() {
+        // An even stop's opposite blades: fields F and −F·e^(iq·d).
+        let o = optics(8, 0);
+        let (edges, _) = o.pupil.far_field_terms();
+        let pairs = parallel_pairs(&edges, o.diameter_mm);
+        assert_eq!(pairs.len(), 4);
+        assert!(pairs.iter().all(|&(_, _, sign)| sign == -1.0));
+        // Four opaque vanes on a round stop: each vane's sides (−1), and
+        // with the opposite vane's sides, one collinear (+1: same normal,
+        // both opaque) and one facing (−1); the vanes' ends, 2 % of D, are
+        // left out, and perpendicular vanes do not pair.
+        let o = optics(0, 4);
+        let (edges, _) = o.pupil.far_field_terms();
+        let pairs = parallel_pairs(&edges, o.diameter_mm);
+        let count = |s: f64| pairs.iter().filter(|p| p.2 == s).count();
+        assert_eq!((pairs.len(), count(1.0), count(-1.0)), (12, 4, 8));
+        // Odd stops have none.
+        let o = optics(7, 0);
+        assert!(parallel_pairs(&o.pupil.far_field_terms().0, o.diameter_mm).is_empty());
+    }
 }

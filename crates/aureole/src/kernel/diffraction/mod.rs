@@ -4,10 +4,10 @@
 //! shift copies of the pattern.
 //!
 //! Near the centre the transform is evaluated exactly, supersampled
-//! ([`near`]). Beyond ~60 λN the interference between different edges
-//! oscillates faster than a pixel and the spectrum can show: there each
-//! edge's pattern is added incoherently, averaged over the pixel
-//! analytically ([`far`]). Filter orders are in [`orders`].
+//! ([`near`]). Beyond ~60 λN the cross terms of edges whose rays differ
+//! are a percent of the light: there each edge's pattern is averaged over
+//! the pixel analytically, with the cross terms of parallel edges
+//! ([`far`]). Filter orders are in [`orders`].
 
 mod far;
 mod near;

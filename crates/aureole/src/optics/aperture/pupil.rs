@@ -25,6 +25,8 @@ pub(crate) struct EdgeTerm {
     /// Which polygon of the pupil it bounds (edges of one polygon share its
     /// sign: both transmit, or both block).
     pub polygon: usize,
+    /// +1 for an edge of a polygon that transmits, −1 for one that blocks.
+    pub sign: f64,
     /// For a piece of a curved side: the angles (rad) by which the curve's
     /// normal turns before and after this piece, counter-clockwise, half of
     /// each turn to its neighbours. Its light fans over that range of
@@ -241,6 +243,7 @@ impl Pupil {
                             along: [e.delta[0] / e.length, e.delta[1] / e.length],
                             middle: e.middle,
                             polygon,
+                            sign: element.sign,
                             fan: e.fan,
                         });
                     }
