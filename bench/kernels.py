@@ -18,31 +18,23 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
-MONO8 = """
+
+def lens(aperture):
+    """A 50 mm lens at f/8 on full frame with one aperture effect."""
+    return f"""
 [camera]
 sensor_width_mm = 36.0
 focal_length_mm = 50.0
 f_number = 8.0
 [[effect]]
 type = "aperture"
-blades = 8
-spectral = false
-"""
-ROUNDED7 = """
-[camera]
-sensor_width_mm = 36.0
-focal_length_mm = 50.0
-f_number = 8.0
-[[effect]]
-type = "aperture"
-blades = 7
-roundness = 0.3
+{aperture}
 """
 
 
 def cases(folder):
-    (folder / "mono8.toml").write_text(MONO8)
-    (folder / "rounded7.toml").write_text(ROUNDED7)
+    (folder / "mono8.toml").write_text(lens("blades = 8\nspectral = false"))
+    (folder / "rounded7.toml").write_text(lens("blades = 7\nroundness = 0.3"))
     k4 = ["--size", "7679x4319", "--image-width", "3840"]
     k720 = ["--size", "2559x1439", "--image-width", "1280"]
     return [
