@@ -75,7 +75,7 @@ struct Pair {
     /// the product of the sincs of its two sides.
     pixel: Vec<f64>,
     /// Per line, the quadrature of the cross term's exact pixel mean in
-    /// the ray's core (see [`FarField::add_pair`]): (frequency across the
+    /// the ray's core (see [`FarField::add_cross`]): (frequency across the
     /// ray, cycles/mm; weight) per node.
     nodes: Vec<Vec<(f64, f64)>>,
 }
@@ -570,7 +570,7 @@ struct Strip {
 }
 
 /// The nodes of a pair's exact cross term in one wavelength (see
-/// [`FarField::add_pair`]): enough Gauss–Legendre points on each half of
+/// [`FarField::add_cross`]): enough Gauss–Legendre points on each half of
 /// the triangle for the PAIR_CORE turns of the phase across the core and
 /// the turns of the square's mean P.
 fn core_nodes(edge: &EdgeTerm, d: [f64; 2], lambda: f64, f: f64, pitch: f64) -> Vec<(f64, f64)> {
