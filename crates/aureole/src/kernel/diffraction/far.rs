@@ -619,7 +619,7 @@ fn band(c0: f64, c1: f64, reach: f64, count: usize) -> std::ops::Range<usize> {
     }
 }
 
-/// cos(`start` + i·`step`) into `out`[i] for i in `range`: a rotation from
+/// cos(`start` + i·`step`) into `out[i]` for i in `range`: a rotation from
 /// pixel to pixel, started afresh every 32 so that round-off cannot grow.
 fn cosines(start: f64, step: f64, range: std::ops::Range<usize>, out: &mut [f64]) {
     let (sin_step, cos_step) = step.sin_cos();
