@@ -493,6 +493,33 @@ mod tests {
     }
 
     #[test]
+    fn a_pattern_has_the_same_bytes_on_any_number_of_threads() {
+        // Rows are computed apart, mirrored, and summed in fixed chunks;
+        // the far field from 10 px out, pairs included.
+        let pitch = 36.0 / 3840.0;
+        for (optics, light, side) in [
+            (stop(7, 0.0, 8.0), light(), 61),
+            (
+                stop(8, 0.0, 8.0),
+                Light::Monochrome(550.0).wavelengths(),
+                60,
+            ),
+        ] {
+            let run = |threads| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| {
+                        let extent = Extent::new(side, side).unwrap();
+                        rasterise_with(&optics, &light, &extent, pitch, 10.0 * pitch)
+                    })
+            };
+            assert_eq!(run(1), run(3));
+        }
+    }
+
+    #[test]
     fn parallel_edges_in_one_wavelength_interfere_along_their_ray() {
         // In 550 nm light at the 4K pitch, opposite blades of an even stop
         // share a ray and draw fringes along it; rings one pixel wide beyond
