@@ -21,12 +21,19 @@ def interrupted(call, after):
         sent.append(time.monotonic())
         os.kill(os.getpid(), signal.SIGINT)
 
+    # A process started in the background by a shell without job control
+    # inherits SIGINT ignored, and Python then leaves it so: Ctrl-C is
+    # Python's default handler, installed here for the call.
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(after, interrupt)
-    timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        call()
-    stopped = time.monotonic()
-    timer.join()
+    try:
+        timer.start()
+        with pytest.raises(KeyboardInterrupt):
+            call()
+        stopped = time.monotonic()
+    finally:
+        timer.join()
+        signal.signal(signal.SIGINT, before)
     return stopped - sent[0]
 
 
