@@ -368,6 +368,9 @@ impl FarField {
             self.add_edge(edge, x0, y, pitch, planes, scratch);
         }
         let norm = pitch * pitch / (self.area * 4.0 * PI * PI);
+        // Where the last pixel's angles fell among the fans' breakpoints:
+        // the next pixel's lie beside them.
+        let mut hints = [0, 0];
         for (i, pixel) in out.chunks_mut(planes).enumerate() {
             let x = x0 + i as f64 * pitch;
             let r2 = x * x + y * y;
@@ -381,7 +384,7 @@ impl FarField {
             if !self.fans.is_empty() {
                 let phi = y.atan2(x);
                 let half = 0.5 * pitch * (x.abs() + y.abs()) / r2;
-                curved += self.fans.between(phi - half, phi + half) / (2.0 * half);
+                curved += self.fans.between(phi - half, phi + half, &mut hints) / (2.0 * half);
             }
             curved += 2.0 * self.discs.iter().sum::<f64>();
             let curved = curved * self.focal / (r2 * r);
@@ -704,9 +707,11 @@ impl Fans {
     }
 
     /// ∫ of the density from `from` to `to`: what the cumulative integral
-    /// leaves of a range no piece covers is round-off, and 0.
-    fn between(&self, from: f64, to: f64) -> f64 {
-        let covered = self.integral(to) - self.integral(from);
+    /// leaves of a range no piece covers is round-off, and 0. `hints` are
+    /// where the search for each end starts, and where it ended.
+    fn between(&self, from: f64, to: f64, hints: &mut [usize; 2]) -> f64 {
+        let [low, high] = hints;
+        let covered = self.integral(to, high) - self.integral(from, low);
         if covered > 1e-12 * self.turn {
             covered
         } else {
@@ -715,12 +720,21 @@ impl Fans {
     }
 
     /// ∫ of the density from −π to `angle` (any angle, whole turns
-    /// counted).
-    fn integral(&self, angle: f64) -> f64 {
+    /// counted). The breakpoint below it is sought from `hint` outwards,
+    /// a step or two along a row, and left there.
+    fn integral(&self, angle: f64, hint: &mut usize) -> f64 {
         use std::f64::consts::{PI, TAU};
         let turns = ((angle + PI) / TAU).floor();
         let a = angle - turns * TAU;
-        let k = self.points.partition_point(|p| p.0 <= a).max(1) - 1;
+        // The last breakpoint at or below a (the first is −π ≤ a).
+        let mut k = (*hint).min(self.points.len() - 1);
+        while k + 1 < self.points.len() && self.points[k + 1].0 <= a {
+            k += 1;
+        }
+        while k > 0 && self.points[k].0 > a {
+            k -= 1;
+        }
+        *hint = k;
         let (start, integral, density) = self.points[k];
         turns * self.turn + integral + density * (a - start)
     }

@@ -303,6 +303,13 @@ impl Pupil {
         let (points, count) = (nu_x.len(), dnu_x.len());
         let q = |i: usize, k: usize| [TAU * (nu_x[i] + dnu_x[k]), TAU * (nu_y + dnu_y[k])];
         let mut total = vec![[0.0f64; 2]; points * count];
+        // Every sample's q, point by point, for the edges' inner loop.
+        let (qx, qy): (Vec<f64>, Vec<f64>) = (0..points * count)
+            .map(|at| {
+                let q = q(at / count, at % count);
+                (q[0], q[1])
+            })
+            .unzip();
         // The edge sums, real and imaginary parts apart so that the inner
         // loop runs in vector registers.
         let (mut sums_re, mut sums_im) = (vec![0.0; points * count], vec![0.0; points * count]);
@@ -335,12 +342,12 @@ impl Pupil {
                     let row = i * count..(i + 1) * count;
                     let terms = by_offset
                         .iter()
-                        .zip(dnu_x)
-                        .zip(dnu_y)
+                        .zip(&qx[row.clone()])
+                        .zip(&qy[row.clone()])
                         .zip(&mut sums_re[row.clone()])
                         .zip(&mut sums_im[row]);
-                    for (((((phase_k, half_k), dx), dy), re), im) in terms {
-                        let q = [TAU * (x + dx), TAU * (nu_y + dy)];
+                    for (((((phase_k, half_k), &q0), &q1), re), im) in terms {
+                        let q = [q0, q1];
                         let z = 0.5 * (q[0] * e.delta[0] + q[1] * e.delta[1]);
                         let sin_z = half_i[0] * half_k[1] + half_i[1] * half_k[0];
                         let sinc = if z.abs() < 1e-8 {
