@@ -8,7 +8,7 @@
 //! (docs/physics.md §6).
 
 use super::Spectrum;
-use crate::optics::aperture::pupil::EdgeTerm;
+use crate::optics::aperture::pupil::{sinc, EdgeTerm};
 use crate::optics::aperture::Optics;
 use std::f64::consts::{PI, TAU};
 
@@ -30,7 +30,8 @@ pub(super) struct FarField {
     edges: Vec<Edge>,
     /// Pieces of curved sides: the light they fan out, by direction.
     fans: Fans,
-    discs: Vec<f64>,
+    /// Twice the discs' radii summed: each adds R λ f / (2π²|x|³·area).
+    discs: f64,
     /// The planes' spectrum-averaged ∫₀ᵘ sinc²(πu'/λ) du' and its integral.
     table: Cumulative,
     /// Each wavelength of the light, for the pairs' cross terms, which are
@@ -137,11 +138,7 @@ impl Cumulative {
             let total: f64 = plane.iter().map(|(_, w)| w).sum();
             plane
                 .iter()
-                .map(|(l, w)| {
-                    let z = PI * u / l;
-                    let s = if z.abs() < 1e-9 { 1.0 } else { z.sin() / z };
-                    w * s * s
-                })
+                .map(|(l, w)| w * sinc(PI * u / l).powi(2))
                 .sum::<f64>()
                 / total
         };
@@ -276,30 +273,28 @@ impl FarField {
         let light = |c: usize| -> Vec<(f64, f64)> {
             spectrum.iter().map(|(l, w)| (l * 1e-6, w[c])).collect()
         };
-        let monochrome = spectrum.len() == 1;
+        let (curved, straight): (Vec<EdgeTerm>, Vec<EdgeTerm>) =
+            edges.into_iter().partition(|e| e.fan.is_some());
+        let found = parallel_pairs(&straight, optics.diameter_mm);
+        // Each line's own table serves only the pairs in many wavelengths.
+        let lined = spectrum.len() > 1 && !found.is_empty();
         let lines: Vec<Line> = spectrum
             .iter()
             .map(|(l, w)| Line {
                 lambda: l * 1e-6,
                 shares: w.iter().zip(weights_total).map(|(w, t)| w / t).collect(),
-                table: (!monochrome).then(|| Cumulative::new(&[vec![(l * 1e-6, 1.0)]])),
+                table: lined.then(|| Cumulative::new(&[vec![(l * 1e-6, 1.0)]])),
             })
             .collect();
-        let (curved, straight): (Vec<EdgeTerm>, Vec<EdgeTerm>) =
-            edges.into_iter().partition(|e| e.fan.is_some());
         let mut pairs: Vec<Vec<Pair>> = straight.iter().map(|_| Vec::new()).collect();
-        let sinc = |z: f64| if z.abs() < 1e-12 { 1.0 } else { z.sin() / z };
-        for (first, d, sign) in parallel_pairs(&straight, optics.diameter_mm) {
+        for (first, d, sign) in found {
             let edge = &straight[first];
             pairs[first].push(Pair {
                 sign,
                 d_over_f: [d[0] / f, d[1] / f],
                 pixel: lines
                     .iter()
-                    .map(|line| {
-                        let lf = line.lambda * f;
-                        sinc(PI * pitch * d[0] / lf) * sinc(PI * pitch * d[1] / lf)
-                    })
+                    .map(|line| square_mean(pitch, [d[0], d[1]].map(|v| v / (line.lambda * f))))
                     .collect(),
                 nodes: lines
                     .iter()
@@ -329,7 +324,7 @@ impl FarField {
                     )
                 })
             })),
-            discs,
+            discs: 2.0 * discs.iter().sum::<f64>(),
             table: Cumulative::new(&(0..planes).map(light).collect::<Vec<_>>()),
             longest: lines.iter().map(|l| l.lambda).fold(0.0, f64::max),
             lines,
@@ -386,7 +381,7 @@ impl FarField {
                 let half = 0.5 * pitch * (x.abs() + y.abs()) / r2;
                 curved += self.fans.between(phi - half, phi + half, &mut hints) / (2.0 * half);
             }
-            curved += 2.0 * self.discs.iter().sum::<f64>();
+            curved += self.discs;
             let curved = curved * self.focal / (r2 * r);
             for (c, value) in pixel.iter_mut().enumerate() {
                 let straight = scratch.sums[i * planes + c] + self.table.tail[c] * scratch.tails[i];
@@ -456,20 +451,13 @@ impl FarField {
         };
         for pair in &edge.pairs {
             if self.lines.len() == 1 {
-                // In one wavelength everywhere: beyond the core the
+                // In one wavelength everywhere: beyond the table the
                 // pixel's means of the edge's light and of the cosine are
-                // multiplied.
-                let line = &self.lines[0];
-                let phase =
-                    |x: f64| TAU * (x * pair.d_over_f[0] + y * pair.d_over_f[1]) / line.lambda;
-                cosines(
-                    phase(x0),
-                    phase(x0 + pitch) - phase(x0),
-                    0..count,
-                    &mut row.cosines,
-                );
+                // multiplied; within it, see add_cross.
+                let (start, step) = pair.phase(x0, y, pitch, self.lines[0].lambda);
                 let twice = 2.0 * pair.sign * pair.pixel[0];
                 for range in [0..table.start, table.end..count] {
+                    cosines(start, step, range.clone(), &mut row.cosines);
                     for ((i, sum), cos) in range
                         .clone()
                         .zip(&mut row.tails[range.clone()])
@@ -511,9 +499,7 @@ impl FarField {
         row.cross.resize(count, 0.0);
         row.waves.resize(count, 0.0);
         for ((line, pixel), nodes) in self.lines.iter().zip(&pair.pixel).zip(&pair.nodes) {
-            let phase =
-                |x: f64| TAU * (x * pair.d_over_f[0] + at.y * pair.d_over_f[1]) / line.lambda;
-            let (start, step) = (phase(at.x0), phase(at.x0 + at.pitch) - phase(at.x0));
+            let (start, step) = pair.phase(at.x0, at.y, at.pitch, line.lambda);
             cosines(start, step, near.clone(), &mut row.cosines);
             let core = band(
                 at.across0,
@@ -558,6 +544,15 @@ impl FarField {
     }
 }
 
+impl Pair {
+    /// The phase 2π x·d/(λf) at the row's first pixel (`x0`, `y`) and its
+    /// step from pixel to pixel, in `lambda` mm.
+    fn phase(&self, x0: f64, y: f64, pitch: f64, lambda: f64) -> (f64, f64) {
+        let [dx, dy] = self.d_over_f;
+        (TAU * (x0 * dx + y * dy) / lambda, TAU * pitch * dx / lambda)
+    }
+}
+
 /// Where a row's pixels lie about an edge's ray: the row's first pixel
 /// at (`x0`, `y`), the offset across the ray of the first and its step,
 /// u per offset (L/f), and the pixel's half projections in u.
@@ -577,7 +572,6 @@ struct Strip {
 /// the triangle for the PAIR_CORE turns of the phase across the core and
 /// the turns of the square's mean P.
 fn core_nodes(edge: &EdgeTerm, d: [f64; 2], lambda: f64, f: f64, pitch: f64) -> Vec<(f64, f64)> {
-    let sinc = |z: f64| if z.abs() < 1e-12 { 1.0 } else { z.sin() / z };
     let (k, a) = (edge.length / f, edge.along);
     let per_z = k / lambda;
     let turns = PAIR_CORE + pitch * per_z * (a[0].abs() + a[1].abs());
@@ -591,11 +585,17 @@ fn core_nodes(edge: &EdgeTerm, d: [f64; 2], lambda: f64, f: f64, pitch: f64) -> 
                 z * per_z * a[0] + d[0] / (lambda * f),
                 z * per_z * a[1] + d[1] / (lambda * f),
             ];
-            let box_mean = sinc(PI * pitch * omega[0]) * sinc(PI * pitch * omega[1]);
+            let box_mean = square_mean(pitch, omega);
             nodes.push((z * per_z, 0.5 * w * (1.0 - z.abs()) * box_mean));
         }
     }
     nodes
+}
+
+/// The mean of e^(i2πω·δ) over a square pixel `pitch` wide centred at 0:
+/// the product of the sincs of its two sides.
+fn square_mean(pitch: f64, omega: [f64; 2]) -> f64 {
+    sinc(PI * pitch * omega[0]) * sinc(PI * pitch * omega[1])
 }
 
 /// The pixels i of 0..`count` where |`c0` + i·`c1`| < `reach`, and one

@@ -278,10 +278,16 @@ mod tests {
     /// The light of `plane` between radii `r0` and `r1` px, in `bins`
     /// sectors from the +x axis.
     fn sectors(plane: &[f64], r0: f64, r1: f64, bins: usize) -> Vec<f64> {
+        sectors_of(plane, SIDE, r0, r1, bins)
+    }
+
+    /// The light of `plane` (`side` px square) between radii `r0` and `r1`
+    /// px, in `bins` sectors from the +x axis.
+    fn sectors_of(plane: &[f64], side: usize, r0: f64, r1: f64, bins: usize) -> Vec<f64> {
         let mut out = vec![0.0; bins];
-        let centre = (SIDE / 2) as f64;
+        let centre = (side / 2) as f64;
         for (i, v) in plane.iter().enumerate() {
-            let (dx, dy) = ((i % SIDE) as f64 - centre, centre - (i / SIDE) as f64);
+            let (dx, dy) = ((i % side) as f64 - centre, centre - (i / side) as f64);
             let r = dx.hypot(dy);
             if r >= r0 && r < r1 {
                 let turn = dy.atan2(dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
@@ -289,6 +295,14 @@ mod tests {
             }
         }
         out
+    }
+
+    /// `a`'s light over `b`'s, and their relative L2 distance.
+    fn light_and_l2(a: &[f64], b: &[f64]) -> (f64, f64) {
+        let light = a.iter().sum::<f64>() / b.iter().sum::<f64>();
+        let distance = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>();
+        let norm = b.iter().map(|y| y * y).sum::<f64>();
+        (light, (distance / norm).sqrt())
     }
 
     #[test]
@@ -404,14 +418,7 @@ mod tests {
             for r in [60.0, 100.0, 140.0] {
                 let (fast, exact) = far_and_exact_on_ring(&optics, light, pitch, r, 180);
                 for (c, (a, b)) in fast.iter().zip(&exact).enumerate() {
-                    let total = a.iter().sum::<f64>() / b.iter().sum::<f64>();
-                    let l2 = a
-                        .iter()
-                        .zip(b)
-                        .map(|(x, y)| (x - y).powi(2))
-                        .sum::<f64>()
-                        .sqrt()
-                        / b.iter().map(|y| y * y).sum::<f64>().sqrt();
+                    let (total, l2) = light_and_l2(a, b);
                     assert!(
                         (total - 1.0).abs() < 0.01 && l2 < 0.01,
                         "{blades} blades at {rotation}°, {light:?}, plane {c}, ring {r} px: \
@@ -544,14 +551,7 @@ mod tests {
                 rasterise_with(&optics, &spectrum, &extent, pitch, f64::INFINITY).swap_remove(0);
             for r in radii {
                 let (a, b) = (ring(&fast, side, r, 180), ring(&exact, side, r, 180));
-                let total = a.iter().sum::<f64>() / b.iter().sum::<f64>();
-                let l2 = a
-                    .iter()
-                    .zip(&b)
-                    .map(|(x, y)| (x - y).powi(2))
-                    .sum::<f64>()
-                    .sqrt()
-                    / b.iter().map(|y| y * y).sum::<f64>().sqrt();
+                let (total, l2) = light_and_l2(&a, &b);
                 assert!(
                     (total - 1.0).abs() < 0.02 && l2 < 0.03,
                     "{what}, ring {r} px: light ×{total:.3}, angular L2 {l2:.3}"
@@ -563,15 +563,6 @@ mod tests {
     /// The light of `plane` (`side` px square) on the ring of width 1 px
     /// at `r0` px, in `bins` sectors from the +x axis.
     fn ring(plane: &[f64], side: usize, r0: f64, bins: usize) -> Vec<f64> {
-        let mut out = vec![0.0; bins];
-        let c = (side / 2) as f64;
-        for (i, v) in plane.iter().enumerate() {
-            let (dx, dy) = ((i % side) as f64 - c, c - (i / side) as f64);
-            if (dx.hypot(dy) - r0).abs() < 0.5 {
-                let t = dy.atan2(dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
-                out[((t * bins as f64) as usize).min(bins - 1)] += v;
-            }
-        }
-        out
+        sectors_of(plane, side, r0 - 0.5, r0 + 0.5, bins)
     }
 }

@@ -70,7 +70,8 @@ pub struct Pupil {
     elements: Vec<Element>,
 }
 
-fn sinc(z: f64) -> f64 {
+/// sin z / z, its series near 0.
+pub(crate) fn sinc(z: f64) -> f64 {
     if z.abs() < 1e-8 {
         1.0 - z * z / 6.0
     } else {
