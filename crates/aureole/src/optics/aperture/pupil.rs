@@ -302,13 +302,13 @@ impl Pupil {
     pub fn intensity_sums(&self, nu_x: &[f64], nu_y: f64, offsets: &Offsets, out: &mut [f64]) {
         let (dnu_x, dnu_y) = (&offsets.x, &offsets.y);
         let (points, count) = (nu_x.len(), dnu_x.len());
-        let q = |i: usize, k: usize| [TAU * (nu_x[i] + dnu_x[k]), TAU * (nu_y + dnu_y[k])];
         let mut total = vec![[0.0f64; 2]; points * count];
-        // Every sample's q, point by point, for the edges' inner loop.
+        // Every sample's q, point by point, for the discs, the edges' inner
+        // loop and the polygons' sums.
         let (qx, qy): (Vec<f64>, Vec<f64>) = (0..points * count)
             .map(|at| {
-                let q = q(at / count, at % count);
-                (q[0], q[1])
+                let (i, k) = (at / count, at % count);
+                (TAU * (nu_x[i] + dnu_x[k]), TAU * (nu_y + dnu_y[k]))
             })
             .unzip();
         // The edge sums, real and imaginary parts apart so that the inner
@@ -324,7 +324,7 @@ impl Pupil {
                 } => (edges, *centroid, *reach),
                 Shape::Disc { centre, radius } => {
                     for (at, t) in total.iter_mut().enumerate() {
-                        let q = q(at / count, at % count);
+                        let q = [qx[at], qy[at]];
                         let q2 = q[0] * q[0] + q[1] * q[1];
                         let a = disc(element.area, *centre, *radius, q, q2);
                         t[0] += element.sign * a[0];
@@ -364,7 +364,7 @@ impl Pupil {
             }
             let sums = sums_re.iter().zip(&sums_im);
             for (at, (t, (s_re, s_im))) in total.iter_mut().zip(sums).enumerate() {
-                let q = q(at / count, at % count);
+                let q = [qx[at], qy[at]];
                 let q2 = q[0] * q[0] + q[1] * q[1];
                 let a = polygon(element.area, centroid, reach, q, q2, || [*s_re, *s_im]);
                 t[0] += element.sign * a[0];
