@@ -2,7 +2,7 @@
 """Kernel build times: `aureole psf` on the lens kernels users build, each
 binary given on the command line run in turn, `--runs` times, medians.
 
-    python3 bench/kernels.py target/release/aureole [OTHER_BINARY ...]
+    python3 bench/kernels.py target/release/aureole [OTHER_BINARY ...] [--only NAME]
 
 The time is the whole command (building and writing a PFM into a temporary
 folder), as a user waits for it; a binary that reports its build time
@@ -35,12 +35,14 @@ type = "aperture"
 def cases(folder):
     (folder / "mono8.toml").write_text(lens("blades = 8\nspectral = false"))
     (folder / "rounded7.toml").write_text(lens("blades = 7\nroundness = 0.3"))
+    (folder / "mirror.toml").write_text(lens("blades = 0\nobstruction = 0.3\nvanes = 4"))
     k4 = ["--size", "7679x4319", "--image-width", "3840"]
     k720 = ["--size", "2559x1439", "--image-width", "1280"]
     return [
         ("4K camera-f8-7blade", ["--preset", "camera-f8-7blade", *k4]),
         ("4K 7 rounded blades (0.3)", ["--config", str(folder / "rounded7.toml"), *k4]),
         ("4K 8 blades, 550 nm", ["--config", str(folder / "mono8.toml"), *k4]),
+        ("4K mirror lens (obstruction 0.3, 4 vanes)", ["--config", str(folder / "mirror.toml"), *k4]),
         ("720p camera-f8-7blade", ["--preset", "camera-f8-7blade", *k720]),
         ("720p configs/night-street.toml", ["--config", str(ROOT / "configs/night-street.toml"), *k720]),
     ]
@@ -59,12 +61,15 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("binaries", nargs="+")
     parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--only", default="", help="run the kernels whose name holds this")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         print("| kernel | " + " | ".join(args.binaries) + " |")
         print("|---|" + "---|" * len(args.binaries))
         for name, case in cases(folder):
+            if args.only not in name:
+                continue
             times = {b: [] for b in args.binaries}
             for _ in range(args.runs):
                 for b in args.binaries:

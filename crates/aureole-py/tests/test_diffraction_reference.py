@@ -216,18 +216,31 @@ def check(blades, f_number, pitch_um, roundness):
     compare(ours, theirs, finer, (12, 30, 60), blades)
 
 
-@pytest.mark.parametrize("blades,rotation", [(7, 5.0), (8, 5.0), (4, 0.0)])
-def test_the_far_field_matches_hcipy(blades, rotation):
+@pytest.mark.parametrize("blades,rotation,obstruction,vanes,spectral", [
+    (7, 5.0, 0.0, 0, False),
+    (8, 5.0, 0.0, 0, False),
+    (4, 0.0, 0.0, 0, False),
+    (0, 5.0, 0.0, 0, False),
+    (0, 5.0, 0.3, 4, False),
+    (0, 5.0, 0.3, 4, True),
+])
+def test_the_far_field_matches_hcipy(blades, rotation, obstruction, vanes, spectral):
     # The 4K pitch at f/8 (λN = 0.47 px): the far field from 48 px out,
     # rays about a pixel wide crossing the pixels at their own angles (a
-    # square stop at 0° sends them along the diagonals).
+    # square stop at 0° sends them along the diagonals); a round stop's
+    # and a telescope's rings, which the pixels average only in part, and
+    # the beats of the telescope's vanes with the rims they end on.
     size = 161
-    ours = camera(blades, 8.0, rotation=rotation).kernel(size, size, image_width=3840)
-    mask = lambda radius: stop_mask(blades, radius, 0.0, rotation)  # noqa: E731
+    extra = f"obstruction = {obstruction}\nvanes = {vanes}"
+    ours = camera(blades, 8.0, rotation=rotation, spectral=spectral, extra=extra).kernel(
+        size, size, image_width=3840)
+    mask = lambda radius: stop_mask(blades, radius, 0.0, rotation, obstruction, vanes)  # noqa: E731
+    light = sensitivities() if spectral else None
     theirs, finer = (
-        reference(blades, 8.0, PITCH_4K_UM, size=size, mask=mask, pupil_samples=n, sub_pixels=k)
+        reference(blades, 8.0, PITCH_4K_UM, size=size, mask=mask, light=light, pupil_samples=n,
+                  sub_pixels=k)
         for n, k in ((1024, 6), (1536, 9)))
-    compare(ours, theirs, finer, (30, 60, 75), blades)
+    compare(ours, theirs, finer, (30, 60, 75), blades or 2 * vanes)
 
 
 @pytest.mark.parametrize("blades,extra", [

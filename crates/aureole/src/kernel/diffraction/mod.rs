@@ -429,6 +429,86 @@ mod tests {
         }
     }
 
+    #[test]
+    fn the_far_field_draws_the_discs_fringes() {
+        // A round stop's rim, and an obstruction's with it, send light out
+        // in rings: each disc's ⟨J₁²⟩ swings by its −sin 2z, and two
+        // concentric discs beat at z₁ ∓ z₂. At the 4K pitch and f/8 the
+        // pixel averages them only in part, and by the angle at which the
+        // rings cross it. Without them a round stop's rings were 1.5 % off
+        // in angular L2, with an obstruction of 0.3 up to 22 %, and 16 % of
+        // a ring's light was missing or added.
+        let pitch = 36.0 / 3840.0;
+        for (obstruction, light) in [
+            (0.0, Light::Monochrome(550.0)),
+            (0.3, Light::Monochrome(550.0)),
+            (0.3, Light::Spectral),
+            (0.5, Light::Monochrome(450.0)),
+        ] {
+            let optics = {
+                let aperture = Aperture {
+                    blades: 0,
+                    obstruction,
+                    ..stop_parameters()
+                };
+                let camera = crate::Camera {
+                    sensor_width_mm: Some(36.0),
+                    focal_length_mm: Some(50.0),
+                    f_number: Some(8.0),
+                };
+                aperture.optics(&camera, 1.0).unwrap()
+            };
+            for r in [50.0, 80.0, 130.0] {
+                let (fast, exact) = far_and_exact_on_ring(&optics, light, pitch, r, 180);
+                for (c, (a, b)) in fast.iter().zip(&exact).enumerate() {
+                    let (total, l2) = light_and_l2(a, b);
+                    assert!(
+                        (total - 1.0).abs() < 0.005 && l2 < 0.006,
+                        "obstruction {obstruction}, {light:?}, plane {c}, ring {r} px: \
+                         light ×{total:.4}, angular L2 {l2:.4}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_vanes_ends_beat_with_the_rims_they_lie_on() {
+        // A telescope's spider: 4 vanes from an obstruction of 0.3 to the
+        // rim. Each vane's ends lie on a disc's rim, where the disc's
+        // stationary point and the end have one phase along the vane: their
+        // cross term does not oscillate. Without it the rings at 80–250 px
+        // were 2.5–4.3 % off in angular L2 in one wavelength and 6–11 % in
+        // 17 lines.
+        let pitch = 36.0 / 3840.0;
+        let optics = {
+            let aperture = Aperture {
+                blades: 0,
+                obstruction: 0.3,
+                vanes: 4,
+                ..stop_parameters()
+            };
+            let camera = crate::Camera {
+                sensor_width_mm: Some(36.0),
+                focal_length_mm: Some(50.0),
+                f_number: Some(8.0),
+            };
+            aperture.optics(&camera, 1.0).unwrap()
+        };
+        for light in [Light::Monochrome(550.0), Light::Spectral] {
+            for r in [80.0, 130.0, 250.0] {
+                let (fast, exact) = far_and_exact_on_ring(&optics, light, pitch, r, 180);
+                for (c, (a, b)) in fast.iter().zip(&exact).enumerate() {
+                    let (total, l2) = light_and_l2(a, b);
+                    assert!(
+                        (total - 1.0).abs() < 0.01 && l2 < 0.022,
+                        "{light:?}, plane {c}, ring {r} px: light ×{total:.4}, angular L2 {l2:.4}"
+                    );
+                }
+            }
+        }
+    }
+
     /// The far field's and the exact transform's light in the pixels of
     /// the 1-px ring at `r` px, per plane in `bins` sectors: each pixel
     /// evaluated both ways, so that no kernel need be rasterised.
@@ -502,10 +582,26 @@ mod tests {
     #[test]
     fn a_pattern_has_the_same_bytes_on_any_number_of_threads() {
         // Rows are computed apart, mirrored, and summed in fixed chunks;
-        // the far field from 10 px out, pairs included.
+        // the far field from 10 px out, pairs, fringes and rims included.
         let pitch = 36.0 / 3840.0;
+        let telescope = Aperture {
+            blades: 0,
+            obstruction: 0.3,
+            vanes: 4,
+            ..stop_parameters()
+        }
+        .optics(
+            &crate::Camera {
+                sensor_width_mm: Some(36.0),
+                focal_length_mm: Some(50.0),
+                f_number: Some(8.0),
+            },
+            1.0,
+        )
+        .unwrap();
         for (optics, light, side) in [
             (stop(7, 0.0, 8.0), light(), 61),
+            (telescope, light(), 61),
             (
                 stop(8, 0.0, 8.0),
                 Light::Monochrome(550.0).wavelengths(),

@@ -34,6 +34,16 @@ pub(crate) struct EdgeTerm {
     pub fan: Option<[f64; 2]>,
 }
 
+/// A disc for the far field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct DiscTerm {
+    pub centre: [f64; 2],
+    /// mm.
+    pub radius: f64,
+    /// +1 transmits, −1 blocks.
+    pub sign: f64,
+}
+
 #[derive(Debug, Clone)]
 struct Edge {
     length: f64,
@@ -229,9 +239,9 @@ impl Pupil {
     }
 
     /// What the far field is made of: every polygon edge as (length L mm,
-    /// outward normal, unit direction along it), and every disc's radius.
+    /// outward normal, unit direction along it), and every disc.
     /// Far from the centre the edges' and discs' patterns add incoherently.
-    pub(crate) fn far_field_terms(&self) -> (Vec<EdgeTerm>, Vec<f64>) {
+    pub(crate) fn far_field_terms(&self) -> (Vec<EdgeTerm>, Vec<DiscTerm>) {
         let mut edges = Vec::new();
         let mut discs = Vec::new();
         for (polygon, element) in self.elements.iter().enumerate() {
@@ -249,7 +259,11 @@ impl Pupil {
                         });
                     }
                 }
-                Shape::Disc { radius, .. } => discs.push(*radius),
+                Shape::Disc { centre, radius } => discs.push(DiscTerm {
+                    centre: *centre,
+                    radius: *radius,
+                    sign: element.sign,
+                }),
             }
         }
         (edges, discs)
