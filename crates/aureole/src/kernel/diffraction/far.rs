@@ -81,6 +81,9 @@ struct Pair {
     /// The separation d of their midpoints over f: the phase at x is
     /// 2π x·d/(λf).
     d_over_f: [f64; 2],
+    /// The other edge's length over this one's, r ≤ 1: their fields' sincs
+    /// across the ray are sinc(πu/λ) and sinc(πur/λ).
+    ratio: f64,
     /// Per line, the mean of e^(i2πx·d/(λf)) over a pixel centred at 0:
     /// the product of the sincs of its two sides.
     pixel: Vec<f64>,
@@ -297,18 +300,19 @@ impl FarField {
             })
             .collect();
         let mut pairs: Vec<Vec<Pair>> = straight.iter().map(|_| Vec::new()).collect();
-        for (first, d, sign) in found {
+        for (first, d, sign, ratio) in found {
             let edge = &straight[first];
             pairs[first].push(Pair {
                 sign,
                 d_over_f: [d[0] / f, d[1] / f],
+                ratio,
                 pixel: lines
                     .iter()
                     .map(|line| square_mean(pitch, [d[0], d[1]].map(|v| v / (line.lambda * f))))
                     .collect(),
                 nodes: lines
                     .iter()
-                    .map(|line| core_nodes(edge, d, line.lambda, f, pitch))
+                    .map(|line| core_nodes(edge, d, ratio, line.lambda, f, pitch))
                     .collect(),
             });
         }
@@ -469,7 +473,8 @@ impl FarField {
                 // In one wavelength everywhere: beyond the table the
                 // pixel's means of the edge's light and of the cosine are
                 // multiplied; within it, see add_cross.
-                let (start, step) = pair.phase(x0, y, pitch, self.lines[0].lambda);
+                let lambda = self.lines[0].lambda;
+                let (start, step) = pair.phase(x0, y, pitch, lambda);
                 let twice = 2.0 * pair.sign * pair.pixel[0];
                 for range in [0..table.start, table.end..count] {
                     cosines(start, step, range.clone(), &mut row.cosines);
@@ -478,7 +483,7 @@ impl FarField {
                         .zip(&mut row.tails[range.clone()])
                         .zip(&row.cosines[range])
                     {
-                        *sum += tail(i) * twice * cos;
+                        *sum += tail(i) * twice * cos * pair.beat(strip(i).1, lambda);
                     }
                 }
                 self.add_cross(pair, &at, table.clone(), &strip, planes, row);
@@ -545,7 +550,7 @@ impl FarField {
                         Some(table) => table.mean(c, at.beta, at.gamma)[0],
                         None => row.means[i],
                     };
-                    mean * pixel * row.cosines[i]
+                    mean * pixel * row.cosines[i] * pair.beat(c, line.lambda)
                 };
                 let term = 2.0 * pair.sign * weight * cross;
                 for (sum, share) in row.sums[i * planes..(i + 1) * planes]
@@ -560,6 +565,17 @@ impl FarField {
 }
 
 impl Pair {
+    /// Beyond the ray's core, sinc(πu/λ)·sinc(πur/λ) is sinc²(πu/λ) times
+    /// cos(πu(1 − r)/λ) to within its fast fringes, which the pixel
+    /// averages: the slow beat of unequal edges' sincs.
+    fn beat(&self, u: f64, lambda: f64) -> f64 {
+        if self.ratio < 1.0 {
+            libm::cos(PI * u * (1.0 - self.ratio) / lambda)
+        } else {
+            1.0
+        }
+    }
+
     /// The phase 2π x·d/(λf) at the row's first pixel (`x0`, `y`) and its
     /// step from pixel to pixel, in `lambda` mm.
     fn phase(&self, x0: f64, y: f64, pitch: f64, lambda: f64) -> (f64, f64) {
@@ -1052,25 +1068,44 @@ struct Strip {
 }
 
 /// The nodes of a pair's exact cross term in one wavelength (see
-/// [`FarField::add_cross`]): enough Gauss–Legendre points on each half of
-/// the triangle for the PAIR_CORE turns of the phase across the core and
-/// the turns of the square's mean P.
-fn core_nodes(edge: &EdgeTerm, d: [f64; 2], lambda: f64, f: f64, pitch: f64) -> Vec<(f64, f64)> {
+/// [`FarField::add_cross`]): sinc(πu/λ)·sinc(πur/λ) is the transform of
+/// the trapezoid T(z) = (1/r)·|[z − r/2, z + r/2] ∩ [−½, ½]| (for r = 1 the
+/// triangle 1 − |z|), integrated by Gauss–Legendre on its flat top and on
+/// each slope, on either side, with enough points for the PAIR_CORE turns
+/// of the phase across the core and the turns of the square's mean P. The
+/// weights hold r, so that a pair's term is its longer edge's L² times
+/// them.
+fn core_nodes(
+    edge: &EdgeTerm,
+    d: [f64; 2],
+    ratio: f64,
+    lambda: f64,
+    f: f64,
+    pitch: f64,
+) -> Vec<(f64, f64)> {
     let (k, a) = (edge.length / f, edge.along);
     let per_z = k / lambda;
     let turns = PAIR_CORE + pitch * per_z * (a[0].abs() + a[1].abs());
     let (points, weights) =
         super::near::gauss_legendre(((2.2 * turns + 2.0).ceil() as usize).min(32));
-    let mut nodes = Vec::with_capacity(2 * points.len());
+    let (top, foot) = (0.5 * (1.0 - ratio), 0.5 * (1.0 + ratio));
+    let trapezoid =
+        |z: f64| ((0.5f64).min(z + 0.5 * ratio) - (-0.5f64).max(z - 0.5 * ratio)).max(0.0);
+    let mut nodes = Vec::with_capacity(4 * points.len());
     for side in [-1.0, 1.0] {
-        for (x, w) in points.iter().zip(&weights) {
-            let z = side * 0.5 * (1.0 + x);
-            let omega = [
-                z * per_z * a[0] + d[0] / (lambda * f),
-                z * per_z * a[1] + d[1] / (lambda * f),
-            ];
-            let box_mean = square_mean(pitch, omega);
-            nodes.push((z * per_z, 0.5 * w * (1.0 - z.abs()) * box_mean));
+        for (from, to) in [(0.0, top), (top, foot)] {
+            if to <= from {
+                continue;
+            }
+            for (x, w) in points.iter().zip(&weights) {
+                let z = side * (from + 0.5 * (to - from) * (1.0 + x));
+                let omega = [
+                    z * per_z * a[0] + d[0] / (lambda * f),
+                    z * per_z * a[1] + d[1] / (lambda * f),
+                ];
+                let box_mean = square_mean(pitch, omega);
+                nodes.push((z * per_z, 0.5 * (to - from) * w * trapezoid(z) * box_mean));
+            }
         }
     }
     nodes
@@ -1121,20 +1156,37 @@ fn cosines(start: f64, step: f64, range: std::ops::Range<usize>, out: &mut [f64]
     }
 }
 
-/// Pairs of equal, parallel straight edges (opposite blades of an even
-/// stop, the sides of a vane, the sides of opposite vanes), each edge at
-/// least 5 % of the pupil's `diameter` long (shorter ones, such as a vane's
-/// ends, hold (L/D)² of a blade's light): the first's index, the
-/// separation of their midpoints, mm, and σ = s₁ s₂ (n̂₁·n̂₂).
-fn parallel_pairs(edges: &[EdgeTerm], diameter: f64) -> Vec<(usize, [f64; 2], f64)> {
+/// Pairs of parallel straight edges (opposite blades of an even stop, the
+/// sides of a vane, the sides of opposite vanes, a vane's side and the
+/// blade beside it), each edge at least 5 % of the pupil's `diameter` long
+/// (shorter ones, such as a vane's ends, hold (L/D)² of a blade's light):
+/// the longer one's index, the separation of their midpoints from the
+/// shorter one's, mm, σ = s₁ s₂ (n̂₁·n̂₂), and the shorter's length over
+/// the longer's.
+fn parallel_pairs(edges: &[EdgeTerm], diameter: f64) -> Vec<(usize, [f64; 2], f64, f64)> {
     let mut pairs = Vec::new();
-    for (k, a) in edges.iter().enumerate() {
-        for b in &edges[k + 1..] {
+    for (j, a) in edges.iter().enumerate() {
+        for (k, b) in edges.iter().enumerate().skip(j + 1) {
             let cosine = a.normal[0] * b.normal[0] + a.normal[1] * b.normal[1];
-            let equal = (a.length - b.length).abs() <= 1e-9 * a.length;
-            if cosine.abs() > 1.0 - 1e-9 && equal && a.length >= 0.05 * diameter {
-                let d = [a.middle[0] - b.middle[0], a.middle[1] - b.middle[1]];
-                pairs.push((k, d, a.sign * b.sign * cosine.signum()));
+            let long = 0.05 * diameter;
+            if cosine.abs() > 1.0 - 1e-9 && a.length >= long && b.length >= long {
+                // Equal edges within round-off pair from the first.
+                let (first, other) = if b.length > a.length * (1.0 + 1e-9) {
+                    (k, a)
+                } else {
+                    (j, b)
+                };
+                let this = &edges[first];
+                let d = [
+                    this.middle[0] - other.middle[0],
+                    this.middle[1] - other.middle[1],
+                ];
+                let ratio = if other.length >= this.length * (1.0 - 1e-9) {
+                    1.0
+                } else {
+                    other.length / this.length
+                };
+                pairs.push((first, d, a.sign * b.sign * cosine.signum(), ratio));
             }
         }
     }
@@ -1291,7 +1343,9 @@ mod tests {
         let (edges, _) = o.pupil.far_field_terms();
         let pairs = parallel_pairs(&edges, o.diameter_mm);
         assert_eq!(pairs.len(), 4);
-        assert!(pairs.iter().all(|&(_, _, sign)| sign == -1.0));
+        assert!(pairs
+            .iter()
+            .all(|&(_, _, sign, ratio)| sign == -1.0 && ratio == 1.0));
         // Four opaque vanes on a round stop: each vane's sides (−1), and
         // with the opposite vane's sides, one collinear (+1: same normal,
         // both opaque) and one facing (−1); the vanes' ends, 2 % of D, are
@@ -1301,6 +1355,17 @@ mod tests {
         let pairs = parallel_pairs(&edges, o.diameter_mm);
         let count = |s: f64| pairs.iter().filter(|p| p.2 == s).count();
         assert_eq!((pairs.len(), count(1.0), count(-1.0)), (12, 4, 8));
+        // Three vanes in a hexagon run to its corners: each vane's sides
+        // lie parallel to the two blades across the vane, longer than them.
+        let o = optics(6, 3);
+        let (edges, _) = o.pupil.far_field_terms();
+        let pairs = parallel_pairs(&edges, o.diameter_mm);
+        let unequal: Vec<_> = pairs.iter().filter(|p| p.3 < 1.0).collect();
+        assert_eq!((pairs.len(), unequal.len()), (18, 12));
+        for &&(first, _, _, ratio) in &unequal {
+            assert!((edges[first].length - o.diameter_mm / 2.0).abs() < 1e-9);
+            assert!(ratio > 0.7 && ratio < 0.9, "{ratio}");
+        }
         // Odd stops have none.
         let o = optics(7, 0);
         assert!(parallel_pairs(&o.pupil.far_field_terms().0, o.diameter_mm).is_empty());

@@ -509,6 +509,41 @@ mod tests {
         }
     }
 
+    #[test]
+    fn a_vanes_sides_interfere_with_the_blades_beside_them() {
+        // Three vanes in a hexagonal stop run to its corners, their sides
+        // parallel to the blades across them but shorter: the fields share
+        // a ray, with sincs of two widths, sinc(πu/λ)·sinc(πur/λ). Without
+        // their cross terms the rings at 50–250 px were 3–7 % off in
+        // angular L2 in one wavelength.
+        let pitch = 36.0 / 3840.0;
+        let optics = {
+            let aperture = Aperture {
+                blades: 6,
+                vanes: 3,
+                ..stop_parameters()
+            };
+            let camera = crate::Camera {
+                sensor_width_mm: Some(36.0),
+                focal_length_mm: Some(50.0),
+                f_number: Some(8.0),
+            };
+            aperture.optics(&camera, 1.0).unwrap()
+        };
+        for light in [Light::Monochrome(550.0), Light::Spectral] {
+            for r in [50.0, 130.0, 250.0] {
+                let (fast, exact) = far_and_exact_on_ring(&optics, light, pitch, r, 180);
+                for (c, (a, b)) in fast.iter().zip(&exact).enumerate() {
+                    let (total, l2) = light_and_l2(a, b);
+                    assert!(
+                        (total - 1.0).abs() < 0.015 && l2 < 0.01,
+                        "{light:?}, plane {c}, ring {r} px: light ×{total:.4}, angular L2 {l2:.4}"
+                    );
+                }
+            }
+        }
+    }
+
     /// The far field's and the exact transform's light in the pixels of
     /// the 1-px ring at `r` px, per plane in `bins` sectors: each pixel
     /// evaluated both ways, so that no kernel need be rasterised.
