@@ -62,6 +62,17 @@ struct Line {
     table: Option<Cumulative>,
 }
 
+impl Line {
+    /// `amplitude` times the line's share of each plane.
+    fn weights(&self, amplitude: f64) -> [f64; PLANES] {
+        let mut weights = [0.0; PLANES];
+        for (w, share) in weights.iter_mut().zip(&self.shares) {
+            *w = amplitude * share;
+        }
+        weights
+    }
+}
+
 /// A straight edge: L², its normal, its unit direction, L/f.
 struct Edge {
     l2: f64,
@@ -635,19 +646,24 @@ struct Rim {
     step: f64,
     half_turn: usize,
     /// The beat can reach FRINGE_FLOOR in a pixel at r only within
-    /// band/r^{5/2} of the edge's ray (mm).
+    /// band/r^{5/2} of the edge's ray (mm), and r only within `reach`.
     band: f64,
+    reach: f64,
 }
 
 impl Rim {
-    /// The edges of `edges` that end on a disc of `discs`.
+    /// The edges of `edges` that end on a disc of `discs`, in a pupil of
+    /// `area` mm².
     fn find(
         edges: &[EdgeTerm],
         discs: &[DiscTerm],
         lines: &[Line],
         f: f64,
         pitch: f64,
+        area: f64,
     ) -> Vec<Rim> {
+        let shortest = lines.iter().map(|l| l.lambda).fold(f64::INFINITY, f64::min);
+        let longest = lines.iter().map(|l| l.lambda).fold(0.0, f64::max);
         let mut rims = Vec::new();
         for edge in edges {
             for (j, disc) in discs.iter().enumerate() {
@@ -660,12 +676,16 @@ impl Rim {
                 if (distance - disc.radius).abs() > 1e-6 * disc.radius || radial > 1e-9 * distance {
                     continue;
                 }
-                let shortest = lines.iter().map(|l| l.lambda).fold(f64::INFINITY, f64::min);
                 // P turns by at most 0.02 rad per step.
                 let turn = PI * pitch * (disc.radius + distance) / (shortest * f);
                 let half_turn = ((PI * turn / 0.02).ceil() as usize).clamp(32, 1 << 15);
                 let step = PI / half_turn as f64;
                 let amplitude = 2.0 * edge.sign * disc.sign * edge.length * disc.radius.sqrt();
+                // The beat is at most L√R (λf)^{1/2} p²/(π² r^{5/2}·area) of
+                // the light in a pixel, and 2/(κL|x·ê|) of that beside the
+                // edge's ray, κ = 2π/(λf).
+                let beat = edge.length * (disc.radius * longest * f).sqrt() * pitch * pitch
+                    / (PI * PI * area * FRINGE_FLOOR);
                 rims.push(Rim {
                     disc: j,
                     offset: d,
@@ -674,13 +694,7 @@ impl Rim {
                     length: edge.length,
                     weights: lines
                         .iter()
-                        .map(|line| {
-                            let mut weights = [0.0; PLANES];
-                            for (w, share) in weights.iter_mut().zip(&line.shares) {
-                                *w = amplitude * (line.lambda / f).sqrt() * share;
-                            }
-                            weights
-                        })
+                        .map(|line| line.weights(amplitude * (line.lambda / f).sqrt()))
                         .collect(),
                     pixel: lines
                         .iter()
@@ -696,7 +710,8 @@ impl Rim {
                         .collect(),
                     step,
                     half_turn,
-                    band: 0.0,
+                    band: beat * 2.0 * longest * f / (TAU * edge.length),
+                    reach: beat.powf(0.4),
                 });
             }
         }
@@ -788,10 +803,6 @@ impl Fringes {
                     .iter()
                     .map(|&(form, amplitude, radii)| {
                         let k = TAU * radii / (line.lambda * f);
-                        let mut weights = [0.0; PLANES];
-                        for (w, share) in weights.iter_mut().zip(&line.shares) {
-                            *w = amplitude * line.lambda * share;
-                        }
                         let pixel = (0..nodes)
                             .map(|i| {
                                 let u = (i as f64 * step).min(FRAC_1_SQRT_2);
@@ -801,7 +812,7 @@ impl Fringes {
                             .collect();
                         Wave {
                             form,
-                            weights,
+                            weights: line.weights(amplitude * line.lambda),
                             pixel,
                         }
                     })
@@ -812,18 +823,11 @@ impl Fringes {
         // `discs`, λ f p²/(4π² r³·area) of the light in a pixel.
         let roots: f64 = discs.iter().map(|d| d.radius.sqrt()).sum();
         let longest = lines.iter().map(|l| l.lambda).fold(0.0, f64::max);
-        let mut rims = Rim::find(edges, discs, lines, f, pitch);
-        // A rim's beat is at most L√R (λf)^{1/2} p²/(π² r^{5/2}·area) of
-        // the light in a pixel, and 2/(κL|x·ê|) of that beside the edge's
-        // ray, κ = 2π/(λf).
-        let mut reach =
-            (roots * roots * longest * f * pitch * pitch / (PI * PI * area * FRINGE_FLOOR)).cbrt();
-        for rim in &mut rims {
-            let root = discs[rim.disc].radius.sqrt() * (longest * f).sqrt();
-            let beat = rim.length * root * pitch * pitch / (PI * PI * area * FRINGE_FLOOR);
-            reach = reach.max(beat.powf(0.4));
-            rim.band = beat * 2.0 * longest * f / (TAU * rim.length);
-        }
+        let rims = Rim::find(edges, discs, lines, f, pitch, area);
+        let reach = rims.iter().map(|rim| rim.reach).fold(
+            (roots * roots * longest * f * pitch * pitch / (PI * PI * area * FRINGE_FLOOR)).cbrt(),
+            f64::max,
+        );
         Fringes {
             reach,
             rims,
@@ -874,12 +878,12 @@ impl Fringes {
             let x = x0 + i as f64 * pitch;
             let r = x.hypot(y);
             let t = x.abs().min(y.abs()) / (r * self.step);
-            row.x.push(x);
             row.radius.push(r);
-            row.root.push(r.sqrt());
             row.node.push(t as usize);
             row.fraction.push(t.fract());
             if !self.rims.is_empty() {
+                row.x.push(x);
+                row.root.push(r.sqrt());
                 row.angle.push(libm::atan2(y, x));
             }
         }
@@ -1164,28 +1168,25 @@ fn cosines(start: f64, step: f64, range: std::ops::Range<usize>, out: &mut [f64]
 /// shorter one's, mm, σ = s₁ s₂ (n̂₁·n̂₂), and the shorter's length over
 /// the longer's.
 fn parallel_pairs(edges: &[EdgeTerm], diameter: f64) -> Vec<(usize, [f64; 2], f64, f64)> {
+    let long = 0.05 * diameter;
     let mut pairs = Vec::new();
     for (j, a) in edges.iter().enumerate() {
         for (k, b) in edges.iter().enumerate().skip(j + 1) {
             let cosine = a.normal[0] * b.normal[0] + a.normal[1] * b.normal[1];
-            let long = 0.05 * diameter;
             if cosine.abs() > 1.0 - 1e-9 && a.length >= long && b.length >= long {
-                // Equal edges within round-off pair from the first.
-                let (first, other) = if b.length > a.length * (1.0 + 1e-9) {
-                    (k, a)
+                // Equal edges within round-off pair from the first, and
+                // share one sinc.
+                let (first, this, other) = if b.length > a.length * (1.0 + 1e-9) {
+                    (k, b, a)
                 } else {
-                    (j, b)
+                    (j, a, b)
                 };
-                let this = &edges[first];
                 let d = [
                     this.middle[0] - other.middle[0],
                     this.middle[1] - other.middle[1],
                 ];
-                let ratio = if other.length >= this.length * (1.0 - 1e-9) {
-                    1.0
-                } else {
-                    other.length / this.length
-                };
+                let ratio = other.length / this.length;
+                let ratio = if ratio > 1.0 - 1e-9 { 1.0 } else { ratio };
                 pairs.push((first, d, a.sign * b.sign * cosine.signum(), ratio));
             }
         }

@@ -619,7 +619,6 @@ mod tests {
         // Rows are computed apart, mirrored, and summed in fixed chunks;
         // the far field from 10 px out, pairs, fringes and rims included.
         let pitch = 36.0 / 3840.0;
-
         for (optics, light, side) in [
             (stop(7, 0.0, 8.0), light(), 61),
             (telescope(), light(), 61),
