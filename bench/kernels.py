@@ -43,6 +43,7 @@ def cases(folder):
         ("4K 7 rounded blades (0.3)", ["--config", str(folder / "rounded7.toml"), *k4]),
         ("4K 8 blades, 550 nm", ["--config", str(folder / "mono8.toml"), *k4]),
         ("4K mirror lens (obstruction 0.3, 4 vanes)", ["--config", str(folder / "mirror.toml"), *k4]),
+        ("4K star-filter-4pt", ["--preset", "star-filter-4pt", *k4]),
         ("720p camera-f8-7blade", ["--preset", "camera-f8-7blade", *k720]),
         ("720p configs/night-street.toml", ["--config", str(ROOT / "configs/night-street.toml"), *k720]),
     ]

@@ -45,7 +45,7 @@ impl<'a> NearField<'a> {
 
     /// With `points`(p/(λN)) Gauss–Legendre points per axis (the core's
     /// never fewer than [`points_per_axis`]).
-    fn with_points(
+    pub(super) fn with_points(
         optics: &'a Optics,
         spectrum: &'a Spectrum,
         pitch_mm: f64,
@@ -131,7 +131,7 @@ impl NearField<'_> {
 /// of the pattern's highest frequency: enough that every pixel's integral
 /// is within 0.5 % of its exact value (the tests check it from λN = 0.3 to
 /// 20 px).
-fn points_per_axis(cycles: f64) -> usize {
+pub(super) fn points_per_axis(cycles: f64) -> usize {
     ((2.2 * cycles + 2.0).ceil() as usize).clamp(2, MOST_CORE_POINTS)
 }
 
