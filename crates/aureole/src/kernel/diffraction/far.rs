@@ -673,7 +673,14 @@ impl Rim {
                 ];
                 let distance = d[0].hypot(d[1]);
                 let radial = (d[0] * edge.normal[1] - d[1] * edge.normal[0]).abs();
-                if (distance - disc.radius).abs() > 1e-6 * disc.radius || radial > 1e-9 * distance {
+                // An edge on the rim beats with it along its whole ray; a
+                // short one elsewhere (a vane's end on another disc) with a
+                // phase that turns along the ray, which the pixel's mean
+                // follows as long as the edge's sinc is smooth across the
+                // pixel: its ray two pixels wide or more.
+                let on_rim = (distance - disc.radius).abs() <= 1e-6 * disc.radius;
+                let short = edge.length <= shortest * f / (2.0 * pitch);
+                if !(on_rim || short) || radial > 1e-9 * distance {
                     continue;
                 }
                 // P turns by at most 0.02 rad per step.
