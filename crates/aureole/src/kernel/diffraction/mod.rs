@@ -725,11 +725,26 @@ mod tests {
     #[test]
     fn a_pattern_has_the_same_bytes_on_any_number_of_threads() {
         // Rows are computed apart, mirrored, and summed in fixed chunks;
-        // the far field from 10 px out, pairs, fringes and rims included.
+        // the far field from 10 px out, pairs, fringes and rims included,
+        // and a star filter's orders with their cores.
         let pitch = 36.0 / 3840.0;
+        let family = |angle_deg| crate::optics::aperture::Filter {
+            angle_deg,
+            spacing_um: 200.0,
+            width_um: 10.0,
+        };
+        let star = lens(
+            Aperture {
+                blades: 0,
+                filters: vec![family(0.0), family(90.0)],
+                ..stop_parameters()
+            },
+            8.0,
+        );
         for (optics, light, side) in [
             (stop(7, 0.0, 8.0), light(), 61),
             (telescope(), light(), 61),
+            (star, light(), 61),
             (
                 stop(8, 0.0, 8.0),
                 Light::Monochrome(550.0).wavelengths(),
