@@ -38,7 +38,7 @@ pub(super) fn through_filter(
         .sum();
     let windows: Vec<Window> = planes
         .iter()
-        .map(|plane| core_window(plane, extent, ORDER_REACH))
+        .map(|plane| centre_window(plane, extent, ORDER_REACH))
         .collect();
     let cores = Cores::new(optics, spectrum, &windows, pitch_mm);
     let share = 1.0 / planes.len().max(1) as f64;
@@ -115,7 +115,7 @@ struct Window {
 
 /// The square window of a plane around its centre, half-size `max_reach`
 /// or as much as the plane holds.
-fn core_window(plane: &[f64], extent: &Extent, max_reach: usize) -> Window {
+fn centre_window(plane: &[f64], extent: &Extent, max_reach: usize) -> Window {
     let (w, h) = (extent.width, extent.height);
     let (cx, cy) = (w / 2, h / 2);
     let reach = max_reach.min(cx).min(cy).min(w - 1 - cx).min(h - 1 - cy);
