@@ -666,6 +666,12 @@ impl Rim {
         let longest = lines.iter().map(|l| l.lambda).fold(0.0, f64::max);
         let mut rims = Vec::new();
         for edge in edges {
+            // An edge on a rim beats with it along its whole ray; a short
+            // one elsewhere (a vane's end on another disc) with a phase
+            // that turns along the ray, which the pixel's mean follows as
+            // long as the edge's sinc is smooth across the pixel: its ray
+            // two pixels wide or more.
+            let short = edge.length <= shortest * f / (2.0 * pitch);
             for (j, disc) in discs.iter().enumerate() {
                 let d = [
                     edge.middle[0] - disc.centre[0],
@@ -673,13 +679,7 @@ impl Rim {
                 ];
                 let distance = d[0].hypot(d[1]);
                 let radial = (d[0] * edge.normal[1] - d[1] * edge.normal[0]).abs();
-                // An edge on the rim beats with it along its whole ray; a
-                // short one elsewhere (a vane's end on another disc) with a
-                // phase that turns along the ray, which the pixel's mean
-                // follows as long as the edge's sinc is smooth across the
-                // pixel: its ray two pixels wide or more.
                 let on_rim = (distance - disc.radius).abs() <= 1e-6 * disc.radius;
-                let short = edge.length <= shortest * f / (2.0 * pitch);
                 if !(on_rim || short) || radial > 1e-9 * distance {
                     continue;
                 }

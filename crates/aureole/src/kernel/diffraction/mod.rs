@@ -565,23 +565,14 @@ mod tests {
         let far = FarField::new(optics, &spectrum, &totals, pitch);
         let mut scratch = far::Row::default();
         let (mut fast, mut exact) = (vec![vec![0.0; bins]; planes], vec![vec![0.0; bins]; planes]);
-        let reach = r.ceil() as i64 + 1;
-        for j in -reach..=reach {
-            for i in -reach..=reach {
-                let (dx, dy) = (i as f64, j as f64);
-                if (dx.hypot(dy) - r).abs() >= 0.5 {
-                    continue;
-                }
-                let (x, y) = (dx * pitch, dy * pitch);
-                let (mut a, mut b) = (vec![0.0; planes], vec![0.0; planes]);
-                far.row(x, y, pitch, &totals, &mut scratch, &mut a);
-                near.add_many(&[x], y, false, &mut b);
-                let t = dy.atan2(dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
-                let bin = ((t * bins as f64) as usize).min(bins - 1);
-                for c in 0..planes {
-                    fast[c][bin] += a[c];
-                    exact[c][bin] += b[c];
-                }
+        for (dx, dy, bin) in ring_pixels(r, bins) {
+            let (x, y) = (dx * pitch, dy * pitch);
+            let (mut a, mut b) = (vec![0.0; planes], vec![0.0; planes]);
+            far.row(x, y, pitch, &totals, &mut scratch, &mut a);
+            near.add_many(&[x], y, false, &mut b);
+            for c in 0..planes {
+                fast[c][bin] += a[c];
+                exact[c][bin] += b[c];
             }
         }
         (fast, exact)
@@ -658,39 +649,45 @@ mod tests {
     ) -> Vec<Vec<f64>> {
         let planes = spectrum[0].1.len();
         let mut out = vec![vec![0.0; bins]; planes];
-        let reach = r.ceil() as i64 + 1;
         let total: Vec<f64> = (0..planes)
             .map(|c| spectrum.iter().map(|(_, w)| w[c]).sum())
             .collect();
         for (lambda_nm, weights) in spectrum {
             let single = vec![(*lambda_nm, vec![1.0])];
-            // Twice the points and more: exact to 10⁻⁶ (near.rs's tests).
-            let near = NearField::with_points(optics, &single, pitch, |c| {
-                2 * near::points_per_axis(c) + 8
-            });
+            let near = NearField::exact(optics, &single, pitch);
             let to_mm = lambda_nm * 1e-6 * optics.focal_mm;
-            for j in -reach..=reach {
-                for i in -reach..=reach {
-                    let (dx, dy) = (i as f64, j as f64);
-                    if (dx.hypot(dy) - r).abs() >= 0.5 {
-                        continue;
-                    }
-                    let mut light = 0.0;
-                    for (nu, share) in &optics.orders {
-                        let mut pixel = [0.0];
-                        let (x, y) = (dx * pitch - nu[0] * to_mm, dy * pitch - nu[1] * to_mm);
-                        near.add_many(&[x], y, false, &mut pixel);
-                        light += share * pixel[0];
-                    }
-                    let t = dy.atan2(dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
-                    let bin = ((t * bins as f64) as usize).min(bins - 1);
-                    for c in 0..planes {
-                        out[c][bin] += light * weights[c] / total[c];
-                    }
+            for (dx, dy, bin) in ring_pixels(r, bins) {
+                let mut light = 0.0;
+                for (nu, share) in &optics.orders {
+                    let mut pixel = [0.0];
+                    let (x, y) = (dx * pitch - nu[0] * to_mm, dy * pitch - nu[1] * to_mm);
+                    near.add_many(&[x], y, false, &mut pixel);
+                    light += share * pixel[0];
+                }
+                for c in 0..planes {
+                    out[c][bin] += light * weights[c] / total[c];
                 }
             }
         }
         out
+    }
+
+    /// The pixels of the 1-px ring at `r` px about the centre: their
+    /// offsets right and up, px, and their sector of `bins` from the +x
+    /// axis.
+    fn ring_pixels(r: f64, bins: usize) -> Vec<(f64, f64, usize)> {
+        let reach = r.ceil() as i64 + 1;
+        let mut pixels = Vec::new();
+        for j in -reach..=reach {
+            for i in -reach..=reach {
+                let (dx, dy) = (i as f64, j as f64);
+                if (dx.hypot(dy) - r).abs() < 0.5 {
+                    let t = dy.atan2(dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
+                    pixels.push((dx, dy, ((t * bins as f64) as usize).min(bins - 1)));
+                }
+            }
+        }
+        pixels
     }
 
     #[test]

@@ -45,7 +45,7 @@ impl<'a> NearField<'a> {
 
     /// With `points`(p/(λN)) Gauss–Legendre points per axis (the core's
     /// never fewer than [`points_per_axis`]).
-    pub(super) fn with_points(
+    fn with_points(
         optics: &'a Optics,
         spectrum: &'a Spectrum,
         pitch_mm: f64,
@@ -60,6 +60,19 @@ impl<'a> NearField<'a> {
                 points(c).max(points_per_axis(c))
             }),
         }
+    }
+}
+
+#[cfg(test)]
+impl<'a> NearField<'a> {
+    /// With twice the points and more: exact to 10⁻⁶ (the tests below), a
+    /// reference for the patterns built from the near field.
+    pub(super) fn exact(
+        optics: &'a Optics,
+        spectrum: &'a Spectrum,
+        pitch_mm: f64,
+    ) -> NearField<'a> {
+        NearField::with_points(optics, spectrum, pitch_mm, |c| 2 * points_per_axis(c) + 8)
     }
 }
 
@@ -131,7 +144,7 @@ impl NearField<'_> {
 /// of the pattern's highest frequency: enough that every pixel's integral
 /// is within 0.5 % of its exact value (the tests check it from λN = 0.3 to
 /// 20 px).
-pub(super) fn points_per_axis(cycles: f64) -> usize {
+fn points_per_axis(cycles: f64) -> usize {
     ((2.2 * cycles + 2.0).ceil() as usize).clamp(2, MOST_CORE_POINTS)
 }
 
@@ -203,11 +216,7 @@ mod tests {
             for lambda_n_px in [0.3, 0.7, 1.0, 2.2, 5.0, 20.0] {
                 let pitch = 550e-6 * 4.0 / lambda_n_px;
                 let ours = rasterise(&NearField::new(&optics, &light, pitch), pitch, 12);
-                let exact = rasterise(
-                    &NearField::with_points(&optics, &light, pitch, |c| 2 * points_per_axis(c) + 8),
-                    pitch,
-                    12,
-                );
+                let exact = rasterise(&NearField::exact(&optics, &light, pitch), pitch, 12);
                 let mut worst = (0.0, 0);
                 for (k, (a, b)) in ours.iter().zip(&exact).enumerate() {
                     let error = (a / b - 1.0).abs();

@@ -291,14 +291,19 @@ impl Cores {
         // the block of (fx, fy) turned by half a turn, so only the first
         // half of the places is evaluated.
         let evaluated = places / 2 + 1;
+        let singles: Vec<Spectrum> = spectrum
+            .iter()
+            .map(|(lambda_nm, _)| vec![(*lambda_nm, vec![1.0])])
+            .collect();
+        let nears: Vec<NearField<'_>> = singles
+            .iter()
+            .map(|single| NearField::new(optics, single, pitch_mm))
+            .collect();
         let exact: Vec<Vec<f64>> = (0..spectrum.len() * evaluated)
             .into_par_iter()
             .map(|n| {
-                let (line, k) = (n / evaluated, n % evaluated);
-                let single: Spectrum = vec![(spectrum[line].0, vec![1.0])];
-                let near = NearField::new(optics, &single, pitch_mm);
-                let (fx, fy) = place(k);
-                pattern_about(&near, reach, fx, fy, pitch_mm)
+                let (fx, fy) = place(n % evaluated);
+                pattern_about(&nears[n / evaluated], reach, fx, fy, pitch_mm)
             })
             .collect();
         let blocks = windows
