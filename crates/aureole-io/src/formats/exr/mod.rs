@@ -13,7 +13,6 @@ use std::path::Path;
 
 use aureole::image::{Image, Layout, Primaries, REC709_LUMINANCE};
 use aureole::memory::format_bytes;
-use exr::image::write::WritableImage;
 use exr::image::{FlatImage, Layers};
 use exr::meta::attribute::{LevelMode, SampleType};
 use exr::meta::BlockDescription;
@@ -25,6 +24,9 @@ use crate::compression::Compression;
 use crate::error::{Error, Result};
 use crate::limits::Limits;
 use crate::read::{explain, Choice, Shape};
+
+mod chunks;
+mod zip;
 
 /// What an EXR file held besides the planes aureole spreads.
 #[derive(Debug, Clone)]
@@ -761,10 +763,7 @@ pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
         notes.push(Note::ClampedToHalf { count: clamped });
     }
     write_atomic(path, |out| {
-        image
-            .write()
-            .to_buffered(out)
-            .map_err(|e| encode_error(e.to_string()))
+        chunks::write(&image, out).map_err(|e| encode_error(e.to_string()))
     })?;
     Ok(notes)
 }

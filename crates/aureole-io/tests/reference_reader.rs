@@ -1,0 +1,180 @@
+//! The EXR files we write, read by the reference library: OpenImageIO's
+//! `oiiotool` (over OpenEXR) compares them with files `exr` writes itself,
+//! and OpenEXR's `exrheader` reads their headers. Where the tools are not
+//! installed (Debian's `openimageio-tools` and `openexr`), the tests say so
+//! and check only what the `exr` crate reads back.
+
+use std::path::Path;
+use std::process::Command;
+
+use aureole::{Image, Layout};
+use aureole_io::compression::Compression;
+use aureole_io::formats::Samples;
+use aureole_io::limits::Limits;
+use aureole_io::read::read_image;
+use aureole_io::write::{write_linear, write_linear_into, LinearOptions};
+use exr::prelude::*;
+
+fn installed(tool: &str) -> bool {
+    let found = Command::new(tool).arg("--help").output().is_ok();
+    if !found {
+        eprintln!("skipped the {tool} check: {tool} is not installed (Debian: openimageio-tools, openexr)");
+    }
+    found
+}
+
+/// `oiiotool a b --diff` with no difference allowed.
+fn same_pixels(a: &Path, b: &Path) {
+    if !installed("oiiotool") {
+        return;
+    }
+    let out = Command::new("oiiotool")
+        .args([a, b].map(Path::as_os_str))
+        .args(["--diff", "--fail", "0", "--failpercent", "0", "--warn", "0"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("PASS"),
+        "oiiotool --diff {} {}: {text}{}",
+        a.display(),
+        b.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// `exrheader` reads the file and names its compression as `compression`
+/// (OpenEXR's words: "zip, multi-scanline blocks").
+fn header_says(path: &Path, compression: &str) {
+    if !installed("exrheader") {
+        return;
+    }
+    let out = Command::new("exrheader").arg(path).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "exrheader {}: {text}", path.display());
+    assert!(
+        text.contains(&format!("compression (type compression): {compression}")),
+        "{text}"
+    );
+}
+
+/// An image with odd sizes (a last block of 16 lines cut short), values
+/// over ten decades and both signs, and alpha.
+fn scene(layout: Layout) -> Image {
+    let (w, h) = (333, 77);
+    let mut image = Image::filled(w, h, layout, 0.0);
+    let mut state = 7u64;
+    for plane in &mut image.planes {
+        for v in plane.iter_mut() {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let u = (state >> 40) as f32 / (1u64 << 24) as f32;
+            *v = 10f32.powf(u * 9.0 - 5.0) * if state % 11 == 0 { -1.0 } else { 1.0 };
+        }
+    }
+    image.alpha = Some((0..w * h).map(|i| (i % 5) as f32 * 0.25).collect());
+    image
+}
+
+fn flat(path: &Path) -> FlatImage {
+    read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .unwrap()
+}
+
+#[test]
+fn zip_files_are_read_back_bit_for_bit_by_exr_and_openexr() {
+    let dir = tempfile::tempdir().unwrap();
+    for compression in [Compression::Zip, Compression::Zips] {
+        for samples in [Samples::Float, Samples::Half] {
+            for layout in [Layout::Rgb, Layout::Luminance] {
+                let mut image = scene(layout);
+                if samples == Samples::Half {
+                    for v in image.planes.iter_mut().flatten() {
+                        *v = v.clamp(-65504.0, 65504.0);
+                    }
+                }
+                let ours = dir.path().join("ours.exr");
+                let options = LinearOptions {
+                    samples: Some(samples),
+                    compression: Some(compression),
+                };
+                write_linear(&ours, &image, options).unwrap();
+                let what = format!("{compression} {samples:?} {layout:?}");
+                // The exr crate's reader, sample by sample.
+                let back = read_image(&ours, Limits::NONE).unwrap().image;
+                let expected: Vec<u32> = image
+                    .planes
+                    .iter()
+                    .flatten()
+                    .map(|&v| match samples {
+                        Samples::Float => v.to_bits(),
+                        Samples::Half => f16::from_f32(v).to_f32().to_bits(),
+                    })
+                    .collect();
+                let found: Vec<u32> = back.planes.iter().flatten().map(|v| v.to_bits()).collect();
+                assert!(expected == found, "{what}: samples differ");
+                assert_eq!(back.alpha.as_ref().map(Vec::len), Some(333 * 77), "{what}");
+                // The reference library, against what exr itself writes.
+                let theirs = dir.path().join("theirs.exr");
+                flat(&ours).write().to_file(&theirs).unwrap();
+                same_pixels(&ours, &theirs);
+                header_says(
+                    &ours,
+                    match compression {
+                        Compression::Zips => "zip, individual scanlines",
+                        _ => "zip, multi-scanline blocks",
+                    },
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn tiled_zip_files_stay_tiled_and_read_back_by_openexr() {
+    let dir = tempfile::tempdir().unwrap();
+    // Smooth, so that its tiles compress (noise would be stored as it is).
+    let (w, h) = (333, 77);
+    let channels = SpecificChannels::rgb(|at: Vec2<usize>| {
+        let (x, y) = (at.x() as f32, at.y() as f32);
+        (x * 0.25, y * 0.5, (x + y) * 0.125)
+    });
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::named("beauty"),
+        Encoding {
+            compression: exr::compression::Compression::ZIP16,
+            blocks: Blocks::Tiles(Vec2(64, 32)),
+            line_order: LineOrder::Increasing,
+        },
+        channels,
+    );
+    let tiled = dir.path().join("tiled.exr");
+    exr::image::Image::from_layer(layer)
+        .write()
+        .to_file(&tiled)
+        .unwrap();
+    let loaded = read_image(&tiled, Limits::NONE).unwrap();
+    let ours = dir.path().join("ours.exr");
+    write_linear_into(
+        &ours,
+        &loaded.image,
+        LinearOptions::default(),
+        loaded.original,
+    )
+    .unwrap();
+    let back = flat(&ours);
+    assert_eq!(
+        back.layer_data[0].encoding.blocks,
+        Blocks::Tiles(Vec2(64, 32))
+    );
+    same_pixels(&ours, &tiled);
+    header_says(&ours, "zip, multi-scanline blocks");
+}
