@@ -178,3 +178,67 @@ fn tiled_zip_files_stay_tiled_and_read_back_by_openexr() {
     same_pixels(&ours, &tiled);
     header_says(&ours, "zip, multi-scanline blocks");
 }
+
+/// `oiiotool --printstats`' count of infinite samples in each channel.
+fn infinities(path: &Path) -> Option<Vec<u64>> {
+    if !installed("oiiotool") {
+        return None;
+    }
+    let out = Command::new("oiiotool")
+        .arg(path)
+        .arg("--printstats")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text.lines().find_map(|l| l.split_once("InfCount:"))?.1;
+    Some(
+        line.split_whitespace()
+            .filter_map(|n| n.parse().ok())
+            .collect(),
+    )
+}
+
+#[test]
+fn lossy_half_compressions_never_make_lamps_infinite() {
+    let dir = tempfile::tempdir().unwrap();
+    // Street lamps of 10⁵ cd/m² over a night sky, and samples just below
+    // the half range, which the DCT's error carries over it.
+    let (w, h) = (96, 64);
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.02);
+    for plane in &mut image.planes {
+        for (i, v) in plane.iter_mut().enumerate() {
+            let (x, y) = (i % w, i / w);
+            if (x % 24 < 3) && (y % 16 < 3) {
+                *v = if x < 48 { 1e5 } else { 65500.0 };
+            }
+        }
+    }
+    for compression in [Compression::Dwaa, Compression::Dwab] {
+        for samples in [Samples::Float, Samples::Half] {
+            let path = dir.path().join(format!("{compression}.exr"));
+            let options = LinearOptions {
+                samples: Some(samples),
+                compression: Some(compression),
+            };
+            let notes = write_linear(&path, &image, options).unwrap();
+            let said: Vec<String> = notes.iter().map(|n| n.to_string()).collect();
+            assert!(
+                said.iter().any(|n| n.contains("65504")),
+                "{compression} {samples:?}: {said:?}"
+            );
+            let back = read_image(&path, Limits::NONE).unwrap().image;
+            let infinite = back
+                .planes
+                .iter()
+                .flatten()
+                .filter(|v| v.is_infinite())
+                .count();
+            assert_eq!(infinite, 0, "{compression} {samples:?}");
+            let bright = back.planes[0].iter().cloned().fold(0.0f32, f32::max);
+            assert!(bright > 6e4, "{compression} {samples:?}: {bright}");
+            if let Some(counts) = infinities(&path) {
+                assert_eq!(counts, [0, 0, 0], "{compression} {samples:?}");
+            }
+        }
+    }
+}

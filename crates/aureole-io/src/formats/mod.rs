@@ -153,6 +153,17 @@ pub enum Note {
         /// How many.
         count: usize,
     },
+    /// Samples near or beyond the largest half float in channels that a
+    /// lossy compression stores as half (DWAA and DWAB: R, G, B, Y, RY,
+    /// BY), lowered so that they do not come back infinite.
+    ClampedForCompression {
+        /// How many.
+        count: usize,
+        /// The compression.
+        compression: Compression,
+        /// The largest magnitude they were written with, rounded down.
+        ceiling: u32,
+    },
     /// Negative samples that the format cannot hold, written as 0.
     NegativesZeroed {
         /// How many.
@@ -173,6 +184,14 @@ impl std::fmt::Display for Note {
             Note::ClampedToHalf { count } => write!(
                 f,
                 "{count} samples beyond ±{HALF_MAX} (the largest half float) written as ±{HALF_MAX}"
+            ),
+            Note::ClampedForCompression {
+                count,
+                compression,
+                ceiling,
+            } => write!(
+                f,
+                "{count} samples near or beyond ±{HALF_MAX} written as at most ±{ceiling}: {compression} stores R, G, B and Y as lossy half floats, which would come back infinite; zip, piz or none keep them"
             ),
             Note::NegativesZeroed { count, format } => write!(
                 f,

@@ -6,17 +6,18 @@
 //! and a result written as EXR puts it back in its place, under its own
 //! channel names and sample types, with every other layer, part, window and
 //! attribute as it was.
-
 use std::collections::BTreeMap;
-use std::io::Cursor;
 use std::path::Path;
 
-use aureole::image::{Image, Layout, Primaries, REC709_LUMINANCE};
+use aureole::image::{Image, Layout, Primaries};
 use aureole::memory::format_bytes;
 use exr::image::{FlatImage, Layers};
 use exr::meta::attribute::{LevelMode, SampleType};
+use exr::meta::header::Header;
 use exr::meta::BlockDescription;
-use exr::prelude::{self as x, ReadChannels, ReadLayers};
+use exr::prelude::{self as x};
+use half::slice::HalfFloatSliceExt;
+use rayon::prelude::*;
 
 use super::{Decoded, LinearPlanes, Note, Samples, HALF_MAX};
 use crate::atomic::write_atomic;
@@ -25,7 +26,16 @@ use crate::error::{Error, Result};
 use crate::limits::Limits;
 use crate::read::{explain, Choice, Shape};
 
-mod chunks;
+mod b44;
+mod chroma;
+mod dwa;
+mod layout;
+mod piz;
+mod predictor;
+mod pxr24;
+mod read;
+mod rle;
+mod write;
 mod zip;
 
 /// What an EXR file held besides the planes aureole spreads.
@@ -239,21 +249,8 @@ struct Part {
     channels: Vec<String>,
 }
 
-fn parts_of_image(image: &FlatImage) -> Vec<Part> {
-    let parts = image.layer_data.iter().map(|layer| Part {
-        name: layer.attributes.layer_name.as_ref().map(|n| n.to_string()),
-        channels: layer
-            .channel_data
-            .list
-            .iter()
-            .map(|c| c.name.to_string())
-            .collect(),
-    });
-    parts.collect()
-}
-
-fn parts_of_headers(meta: &x::MetaData) -> Vec<Part> {
-    let parts = meta.headers.iter().map(|header| Part {
+fn parts_of_headers(headers: &[Header]) -> Vec<Part> {
+    let parts = headers.iter().map(|header| Part {
         name: header
             .own_attributes
             .layer_name
@@ -434,10 +431,10 @@ fn other_layers(parts: &[Part], chosen: &Candidate) -> String {
 
 /// Refuses what the `exr` crate would refuse with a less helpful word, or
 /// what would not fit in memory, from the headers alone.
-fn check_headers(meta: &x::MetaData, limits: Limits) -> std::result::Result<bool, String> {
+fn check_headers(headers: &[Header], limits: Limits) -> std::result::Result<bool, String> {
     let (mut pixels, mut needed) = (0u64, 0u64);
     let mut levels = false;
-    for (i, header) in meta.headers.iter().enumerate() {
+    for (i, header) in headers.iter().enumerate() {
         if header.deep {
             return Err(format!(
                 "part {i} holds deep data (several samples per pixel), which aureole does not spread; flatten it first (for example oiiotool in.exr --flatten -o flat.exr)"
@@ -450,9 +447,9 @@ fn check_headers(meta: &x::MetaData, limits: Limits) -> std::result::Result<bool
             .filter(|c| c.sampling != x::Vec2(1, 1))
             .map(|c| format!("{} ({}x{})", c.name, c.sampling.0, c.sampling.1))
             .collect();
-        if !subsampled.is_empty() {
+        if !subsampled.is_empty() && header.blocks != BlockDescription::ScanLines {
             return Err(format!(
-                "channels {} are subsampled (luminance/chroma with reduced chroma), which aureole does not read; convert the file to RGB first (for example oiiotool in.exr -o rgb.exr)",
+                "part {i} is tiled with subsampled channels {}, which OpenEXR allows only in scanline files",
                 subsampled.join(", ")
             ));
         }
@@ -473,8 +470,8 @@ fn check_headers(meta: &x::MetaData, limits: Limits) -> std::result::Result<bool
     if needed > limits.max_bytes {
         return Err(format!(
             "OpenEXR declares {pixels} pixels ({}x{} in its first part), which need {} to decode but the memory limit is {}",
-            meta.headers.first().map_or(0, |h| h.layer_size.0),
-            meta.headers.first().map_or(0, |h| h.layer_size.1),
+            headers.first().map_or(0, |h| h.layer_size.0),
+            headers.first().map_or(0, |h| h.layer_size.1),
             format_bytes(needed),
             format_bytes(limits.max_bytes)
         ));
@@ -493,8 +490,8 @@ pub(crate) fn probe(
     let Ok(meta) = x::MetaData::read_from_file(path, false) else {
         return Ok(None);
     };
-    check_headers(&meta, limits)?;
-    let chosen = choose(&parts_of_headers(&meta), choice)?;
+    check_headers(&meta.headers, limits)?;
+    let chosen = choose(&parts_of_headers(&meta.headers), choice)?;
     let size = meta.headers[chosen.part].layer_size;
     Ok(Some(Shape {
         width: size.0,
@@ -511,20 +508,19 @@ pub(crate) fn decode(
     limits: Limits,
     choice: &Choice,
 ) -> std::result::Result<Decoded, String> {
-    let meta = x::MetaData::read_from_buffered(Cursor::new(bytes), false)
-        .map_err(|e| explain("OpenEXR", e.to_string()))?;
-    let levels = check_headers(&meta, limits)?;
-    let mut image = x::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| explain("OpenEXR", e.to_string()))?;
-
-    let parts = parts_of_image(&image);
+    let file = read::File::parse(bytes).map_err(|e| explain("OpenEXR", e))?;
+    let levels = check_headers(&file.headers, limits)?;
+    let parts = parts_of_headers(&file.headers);
     let chosen = choose(&parts, choice)?;
+    // The channels we spread come as f32, converted as they are placed.
+    let wanted: Vec<(usize, &str)> = chosen
+        .colour
+        .iter()
+        .chain(&chosen.alpha)
+        .map(|name| (chosen.part, name.as_str()))
+        .collect();
+    let mut channels = read::read(bytes, &file, &wanted).map_err(|e| explain("OpenEXR", e))?;
+
     let mut notes = Vec::new();
     let others = other_layers(&parts, &chosen);
     if !others.is_empty() {
@@ -544,69 +540,111 @@ pub(crate) fn decode(
                 .into(),
         );
     }
-    let primaries = image.attributes.chromaticities.map(|c| Primaries {
+    let attributes = &file.headers[0].shared_attributes;
+    let primaries = attributes.chromaticities.map(|c| Primaries {
         red: [c.red.0, c.red.1],
         green: [c.green.0, c.green.1],
         blue: [c.blue.0, c.blue.1],
         white: [c.white.0, c.white.1],
     });
-    if primaries.is_some_and(|p| p.luminance_weights().is_none()) {
+    if primaries.is_some_and(|p| p.luminance_weights().is_none()) && !chosen.chroma {
         notes.push("the chromaticities attribute is degenerate: luminance uses Rec.709".into());
     }
-    let layer = &mut image.layer_data[chosen.part];
-    let (width, height) = (layer.size.0, layer.size.1);
-    let white_luminance = layer
-        .attributes
+    let header = &file.headers[chosen.part];
+    let (width, height) = (header.layer_size.0, header.layer_size.1);
+    let origin = header.own_attributes.layer_position;
+    let white_luminance = header
+        .own_attributes
         .white_luminance
         .filter(|w| w.is_finite() && *w > 0.0);
-    // Float samples are moved out, not copied: a 4K frame is 100 MB.
-    let mut take = |name: &str| -> Option<(Vec<f32>, Taken)> {
-        let list = &mut layer.channel_data.list;
-        let at = list.iter().position(|c| c.name.to_string() == name)?;
-        let channel = list.remove(at);
+    let part = &mut channels[chosen.part];
+    let mut take = |name: &str| -> Option<(read::Channel, Taken)> {
+        let at = part.iter().position(|c| c.name.eq(name))?;
+        let channel = part.remove(at);
         let taken = Taken {
             name: name.to_string(),
-            kind: sample_type(&channel.sample_data),
-            linear: channel.quantize_linearly,
+            kind: channel.kind,
+            linear: channel.linear,
         };
-        let values = match channel.sample_data {
-            x::FlatSamples::F32(values) => values,
-            other => other.values_as_f32().collect(),
-        };
-        Some((values, taken))
+        Some((channel, taken))
     };
     let mut taken = Vec::new();
-    let mut planes = Vec::new();
+    let mut colour = Vec::new();
     for name in &chosen.colour {
-        if let Some((values, id)) = take(name) {
-            planes.push(values);
+        if let Some((channel, id)) = take(name) {
+            colour.push(channel);
             taken.push(id);
         }
     }
-    let alpha = chosen
-        .alpha
-        .as_deref()
-        .and_then(&mut take)
-        .map(|(values, id)| {
-            taken.push(id);
-            values
-        });
-    let layout = if planes.len() == 3 {
+    let alpha = chosen.alpha.as_deref().and_then(&mut take).map(|(c, id)| {
+        taken.push(id);
+        c
+    });
+    let layout = if colour.len() == 3 {
         Layout::Rgb
     } else {
         Layout::Luminance
     };
-    if chosen.chroma {
-        let weights = primaries
-            .and_then(|p| p.luminance_weights())
-            .unwrap_or(REC709_LUMINANCE);
-        planes = rgb_from_chroma(planes, weights);
+    let planes = if chosen.chroma {
         notes.push(
             "luminance/chroma channels (Y, RY, BY) decoded to RGB; an EXR output holds R, G, B"
                 .into(),
         );
+        let file = primaries.map_or(chroma::REC709, |p| [p.red, p.green, p.blue, p.white]);
+        let weights = match chroma::weights(file) {
+            w if w.iter().all(|v| v.is_finite()) => w,
+            _ => {
+                notes.push(
+                    "the chromaticities attribute is degenerate: chroma decoded with Rec.709's"
+                        .into(),
+                );
+                chroma::weights(chroma::REC709)
+            }
+        };
+        let mut channels = colour.into_iter();
+        let (Some(y), Some(ry), Some(by)) = (channels.next(), channels.next(), channels.next())
+        else {
+            return Err("a luminance/chroma layer lacks Y, RY or BY".into());
+        };
+        let y = full_resolution(y, (width, height));
+        if ry.sampling == (2, 2) && by.sampling == (2, 2) {
+            let planes = chroma::Planes {
+                y: &y,
+                ry: floats(&ry.samples),
+                by: floats(&by.samples),
+                width,
+                height,
+                origin: (i64::from(origin.0), i64::from(origin.1)),
+            };
+            chroma::to_rgb(&planes, weights).into()
+        } else {
+            let (ry, by) = (
+                full_resolution(ry, (width, height)),
+                full_resolution(by, (width, height)),
+            );
+            chroma::full_resolution_to_rgb(y, ry, by, weights)
+        }
+    } else {
+        colour
+            .into_iter()
+            .map(|c| full_resolution(c, (width, height)))
+            .collect()
+    };
+    let alpha = alpha.map(|a| full_resolution(a, (width, height)));
+    let subsampled: Vec<String> = channels
+        .iter()
+        .flatten()
+        .filter(|c| c.sampling != (1, 1))
+        .map(|c| c.name.to_string())
+        .collect();
+    if !subsampled.is_empty() {
+        notes.push(format!(
+            "channels {} are subsampled: an EXR output holds them at full resolution",
+            subsampled.join(", ")
+        ));
     }
-    let compression = Compression::from_exr(layer.encoding.compression);
+    let compression = Compression::from_exr(header.compression);
+    let image = kept_image(&file.headers, channels);
     Ok(Decoded {
         image: Image {
             width,
@@ -633,44 +671,125 @@ pub(crate) fn decode(
     })
 }
 
-/// OpenEXR's luminance/chroma to RGB (`RgbaYca::YCAtoRGBA`): RY = (R − Y)/Y,
-/// BY = (B − Y)/Y, and G from Y with the file's luminance weights.
-fn rgb_from_chroma(planes: Vec<Vec<f32>>, weights: [f32; 3]) -> Vec<Vec<f32>> {
-    let mut planes = planes.into_iter();
-    let (Some(y), Some(mut ry), Some(mut by)) = (planes.next(), planes.next(), planes.next())
-    else {
-        return Vec::new();
-    };
-    let mut g = vec![0.0; y.len()];
-    for i in 0..y.len() {
-        let r = (ry[i] + 1.0) * y[i];
-        let b = (by[i] + 1.0) * y[i];
-        g[i] = (y[i] - r * weights[0] - b * weights[2]) / weights[1];
-        ry[i] = r;
-        by[i] = b;
+/// The f32 samples of a channel read as float.
+fn floats(samples: &x::FlatSamples) -> &[f32] {
+    match samples {
+        x::FlatSamples::F32(values) => values,
+        _ => &[],
     }
-    vec![ry, g, by]
 }
 
-/// Samples to store: half (clamped to its range, counted) or float.
-fn samples(plane: &[f32], half: bool, clamp: bool, clamped: &mut usize) -> x::FlatSamples {
-    if half {
-        x::FlatSamples::F16(
-            plane
-                .iter()
-                .map(|&v| {
-                    if clamp && v.is_finite() && v.abs() > HALF_MAX {
-                        *clamped += 1;
-                        x::f16::from_f32(v.clamp(-HALF_MAX, HALF_MAX))
-                    } else {
-                        x::f16::from_f32(v)
-                    }
-                })
-                .collect(),
-        )
-    } else {
-        x::FlatSamples::F32(plane.to_vec())
+/// A channel read as float, at full resolution: a subsampled one's
+/// samples repeated over the pixels they stand for.
+fn full_resolution(channel: read::Channel, (width, height): (usize, usize)) -> Vec<f32> {
+    let values = match channel.samples {
+        x::FlatSamples::F32(values) => values,
+        other => other.values_as_f32().collect(),
+    };
+    if channel.sampling == (1, 1) {
+        return values;
     }
+    let (sx, sy) = channel.sampling;
+    let columns = channel.size.0.max(1);
+    let rows = channel.size.1.max(1);
+    let mut full = Vec::with_capacity(width * height);
+    for y in 0..height {
+        let row = (y / sy).min(rows - 1);
+        full.extend((0..width).map(|x| {
+            values
+                .get(row * columns + (x / sx).min(columns - 1))
+                .copied()
+                .unwrap_or(0.0)
+        }));
+    }
+    full
+}
+
+/// Every part of the file as `exr` holds an image, less the channels
+/// taken out; subsampled channels at full resolution, which is how `exr`
+/// writes them.
+fn kept_image(headers: &[Header], channels: Vec<Vec<read::Channel>>) -> FlatImage {
+    let mut layers = Layers::new();
+    for (header, channels) in headers.iter().zip(channels) {
+        let size = (header.layer_size.0, header.layer_size.1);
+        let list = channels
+            .into_iter()
+            .map(|c| {
+                let (name, linear, sampling) = (c.name.clone(), c.linear, c.sampling);
+                let kind = c.kind;
+                let sample_data = if sampling == (1, 1) {
+                    c.samples
+                } else {
+                    let full = full_resolution(c, size);
+                    match kind {
+                        SampleType::F16 => {
+                            x::FlatSamples::F16(full.into_iter().map(x::f16::from_f32).collect())
+                        }
+                        SampleType::F32 => x::FlatSamples::F32(full),
+                        SampleType::U32 => {
+                            x::FlatSamples::U32(full.into_iter().map(|v| v as u32).collect())
+                        }
+                    }
+                };
+                x::AnyChannel {
+                    name,
+                    sample_data,
+                    quantize_linearly: linear,
+                    sampling: x::Vec2(1, 1),
+                }
+            })
+            .collect();
+        layers.push(x::Layer {
+            channel_data: x::AnyChannels::sort(list),
+            attributes: header.own_attributes.clone(),
+            size: header.layer_size,
+            encoding: x::Encoding {
+                compression: header.compression,
+                line_order: header.line_order,
+                blocks: match header.blocks {
+                    BlockDescription::ScanLines => x::Blocks::ScanLines,
+                    BlockDescription::Tiles(tiles) => x::Blocks::Tiles(tiles.tile_size),
+                },
+            },
+        });
+    }
+    FlatImage {
+        attributes: headers[0].shared_attributes.clone(),
+        layer_data: layers,
+    }
+}
+
+/// Samples to store: half (clamped to its range, counted) or float; on
+/// every core, half through F16C where the CPU has it.
+fn samples(plane: &[f32], half: bool, clamp: bool, clamped: &mut usize) -> x::FlatSamples {
+    const CHUNK: usize = 1 << 16;
+    if !half {
+        let mut out = vec![0.0f32; plane.len()];
+        out.par_chunks_mut(CHUNK)
+            .zip(plane.par_chunks(CHUNK))
+            .for_each(|(o, p)| o.copy_from_slice(p));
+        return x::FlatSamples::F32(out);
+    }
+    let mut out = vec![x::f16::ZERO; plane.len()];
+    *clamped += out
+        .par_chunks_mut(CHUNK)
+        .zip(plane.par_chunks(CHUNK))
+        .map(|(o, p)| {
+            o.convert_from_f32_slice(p);
+            if !clamp {
+                return 0;
+            }
+            let mut beyond = 0;
+            for (o, &v) in o.iter_mut().zip(p) {
+                if v.is_finite() && v.abs() > HALF_MAX {
+                    *o = x::f16::from_f32(v.clamp(-HALF_MAX, HALF_MAX));
+                    beyond += 1;
+                }
+            }
+            beyond
+        })
+        .sum::<usize>();
+    x::FlatSamples::F16(out)
 }
 
 /// Writes the planes to `path` atomically: into the file they were read
@@ -762,9 +881,25 @@ pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
     if clamped > 0 {
         notes.push(Note::ClampedToHalf { count: clamped });
     }
+    let mut lowered = None;
     write_atomic(path, |out| {
-        chunks::write(&image, out).map_err(|e| encode_error(e.to_string()))
+        lowered = Some(write::write(&image, out).map_err(|e| encode_error(e.to_string()))?);
+        Ok(())
     })?;
+    if let Some(lowered) = lowered.filter(|l| l.count > 0) {
+        let dwa = image
+            .layer_data
+            .iter()
+            .map(|l| l.encoding.compression)
+            .find(|&c| dwa::is_dwa(c))
+            .and_then(Compression::from_exr)
+            .unwrap_or(Compression::Dwaa);
+        notes.push(Note::ClampedForCompression {
+            count: lowered.count,
+            compression: dwa,
+            ceiling: lowered.ceiling as u32,
+        });
+    }
     Ok(notes)
 }
 

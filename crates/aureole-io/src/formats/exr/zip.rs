@@ -1,17 +1,18 @@
-//! OpenEXR's ZIP and ZIPS chunks: the samples' bytes split into even and
-//! odd halves, each byte replaced by its difference to the one before
-//! (+128), then zlib. Compressed by libdeflate: the `exr` crate compresses
-//! with miniz_oxide at level 4, more than twice the CPU time for the same
-//! size (measured in README.md's codec table).
+//! OpenEXR's ZIP and ZIPS chunks: the [`predictor`](super::predictor)'s
+//! bytes through zlib, by libdeflate both ways (the `exr` crate compresses
+//! with miniz_oxide at level 4: more than twice the CPU time for the same
+//! size, README.md's codec table).
 
-use libdeflater::{CompressionLvl, Compressor};
+use libdeflater::{CompressionLvl, Compressor, DecompressionError, Decompressor};
+
+use super::predictor::{predict, unpredict};
 
 /// libdeflate's level for every ZIP chunk we write. Measured on a 4K half
-/// RGB frame of the night street (bench/codec.py): level 1 compresses
-/// in 0.29 CPU-s to 15.18 MB, level 2 in 0.35 to 15.00, level 4 (what
-/// OpenEXR 3.x writes) in 0.41 to 14.81, level 6 in 0.57 to 14.49. Level 1
-/// keeps files within 2.5 % of OpenEXR's at 70 % of level 4's time; float
-/// kernels barely compress at any level (91 %).
+/// RGB frame of the night street after the camera, one thread: level 1
+/// compresses in 0.29 CPU-s to 15.18 MB, level 2 in 0.35 to 15.00, level 4
+/// (what OpenEXR 3.x writes) in 0.41 to 14.81, level 6 in 0.57 to 14.49.
+/// Level 1 keeps files within 2.5 % of OpenEXR's in 70 % of level 4's
+/// time; float kernels barely compress at any level (91 %).
 pub(crate) const LEVEL: i32 = 1;
 
 /// A compressor at [`LEVEL`], one per thread.
@@ -23,33 +24,45 @@ pub(crate) fn compressor() -> Compressor {
 
 /// The bytes of a chunk's samples (little-endian, as the file stores them
 /// uncompressed) as a ZIP chunk's data; the samples themselves where
-/// compressing would not make them smaller, as OpenEXR does.
-pub(crate) fn compress(raw: Vec<u8>, compressor: &mut Compressor) -> Vec<u8> {
+/// compressing would not make them smaller, as OpenEXR does. `scratch`
+/// is the thread's buffer, kept between chunks.
+pub(crate) fn compress(
+    raw: Vec<u8>,
+    compressor: &mut Compressor,
+    scratch: &mut Vec<u8>,
+) -> Vec<u8> {
     let predicted = predict(&raw);
-    let mut compressed = vec![0; compressor.zlib_compress_bound(predicted.len())];
-    match compressor.zlib_compress(&predicted, &mut compressed) {
-        Ok(n) if n < raw.len() => {
-            compressed.truncate(n);
-            compressed
-        }
+    let bound = compressor.zlib_compress_bound(predicted.len());
+    if scratch.len() < bound {
+        scratch.resize(bound, 0);
+    }
+    match compressor.zlib_compress(&predicted, scratch) {
+        Ok(n) if n < raw.len() => scratch[..n].to_vec(),
         _ => raw,
     }
 }
 
-/// The even bytes, then the odd ones, each as its difference to the one
-/// before plus 128 (OpenEXR's `ImfZip`).
-fn predict(raw: &[u8]) -> Vec<u8> {
-    let mut split: Vec<u8> = Vec::with_capacity(raw.len());
-    split.extend(raw.iter().step_by(2));
-    split.extend(raw.iter().skip(1).step_by(2));
-    let mut out = Vec::with_capacity(raw.len());
-    out.extend(split.first());
-    out.extend(
-        split
-            .windows(2)
-            .map(|pair| pair[1].wrapping_sub(pair[0]).wrapping_add(128)),
-    );
-    out
+/// A compressed ZIP chunk back to its `expected` bytes of samples.
+pub(crate) fn decompress(
+    data: &[u8],
+    expected: usize,
+    decompressor: &mut Decompressor,
+) -> Result<Vec<u8>, String> {
+    let mut predicted = vec![0; expected];
+    let n = decompressor
+        .zlib_decompress(data, &mut predicted)
+        .map_err(|e| match e {
+            DecompressionError::BadData => "a ZIP chunk's data is damaged".to_string(),
+            DecompressionError::InsufficientSpace => {
+                format!("a ZIP chunk holds more than the {expected} bytes of its lines")
+            }
+        })?;
+    if n != expected {
+        return Err(format!(
+            "a ZIP chunk holds {n} bytes where its lines need {expected}"
+        ));
+    }
+    Ok(unpredict(&mut predicted))
 }
 
 #[cfg(test)]
@@ -57,25 +70,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn chunks_inflate_back_to_the_predicted_bytes() {
+    fn chunks_come_back_as_they_were() {
         let mut compressor = compressor();
-        let mut decompressor = libdeflater::Decompressor::new();
+        let mut decompressor = Decompressor::new();
         for length in [1usize, 2, 3, 17, 4096, 4097] {
             let raw: Vec<u8> = (0..length).map(|i| (i * 7 % 13) as u8).collect();
-            let data = compress(raw.clone(), &mut compressor);
+            let data = compress(raw.clone(), &mut compressor, &mut Vec::new());
             assert!(data.len() < length || data == raw, "{length}");
             if data.len() < length {
-                let mut inflated = vec![0; length];
-                decompressor.zlib_decompress(&data, &mut inflated).unwrap();
-                assert_eq!(inflated, predict(&raw), "{length}");
+                assert_eq!(decompress(&data, length, &mut decompressor).unwrap(), raw);
+                assert!(decompress(&data, length + 1, &mut decompressor).is_err());
             }
         }
-    }
-
-    #[test]
-    fn the_predictor_is_openexrs() {
-        // Bytes 1 2 3 4 5: even 1 3 5, odd 2 4; differences from 1.
-        assert_eq!(predict(&[1, 2, 3, 4, 5]), vec![1, 130, 130, 125, 130]);
     }
 
     #[test]
@@ -87,6 +93,9 @@ mod tests {
                 (state >> 24) as u8
             })
             .collect();
-        assert_eq!(compress(raw.clone(), &mut compressor()), raw);
+        assert_eq!(
+            compress(raw.clone(), &mut compressor(), &mut Vec::new()),
+            raw
+        );
     }
 }

@@ -18,16 +18,29 @@ use exr::meta::header::Header;
 use exr::meta::BlockDescription;
 use rayon::prelude::*;
 
-use super::zip;
+use super::{dwa, zip};
 
 /// Chunks compressed together before they are written, per thread: a
 /// bound on the compressed chunks held at once (a few MB at 4K).
 const CHUNKS_PER_THREAD: usize = 16;
 
+/// Samples that a lossy compression could not hold, lowered ([`dwa`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Lowered {
+    pub count: usize,
+    /// The largest magnitude any of them was written with.
+    pub ceiling: f32,
+}
+
 /// Writes `image` to `out`: headers, offset tables and every chunk.
-pub(crate) fn write(image: &FlatImage, out: impl Write + Seek) -> exr::error::UnitResult {
+/// Returns the samples lowered so that DWA does not make them infinite.
+pub(crate) fn write(image: &FlatImage, out: impl Write + Seek) -> exr::error::Result<Lowered> {
     let headers = image.write().infer_meta_data();
     let layers = image.layer_data.create_writer(&headers);
+    let mut lowered = Lowered {
+        count: 0,
+        ceiling: crate::formats::HALF_MAX,
+    };
     exr::block::write(out, headers, true, |meta, writer| {
         let order: Vec<(usize, BlockIndex)> =
             exr::block::enumerate_ordered_header_block_indices(&meta.headers).collect();
@@ -35,41 +48,58 @@ pub(crate) fn write(image: &FlatImage, out: impl Write + Seek) -> exr::error::Un
         for blocks in order.chunks(batch) {
             let chunks = blocks
                 .par_iter()
-                .map_init(zip::compressor, |compressor, &(index, block)| {
-                    let data = layers.extract_uncompressed_block(&meta.headers, block);
-                    let chunk = compress(
-                        UncompressedBlock { index: block, data },
-                        &meta.headers,
-                        compressor,
-                    )?;
-                    Ok((index, chunk))
-                })
-                .collect::<exr::error::Result<Vec<(usize, Chunk)>>>()?;
-            for (index, chunk) in chunks {
+                .map_init(
+                    || (zip::compressor(), Vec::new()),
+                    |(compressor, scratch), &(index, block)| {
+                        let data = layers.extract_uncompressed_block(&meta.headers, block);
+                        let (chunk, lowered) = compress(
+                            UncompressedBlock { index: block, data },
+                            &meta.headers,
+                            compressor,
+                            scratch,
+                        )?;
+                        Ok((index, chunk, lowered))
+                    },
+                )
+                .collect::<exr::error::Result<Vec<(usize, Chunk, Lowered)>>>()?;
+            for (index, chunk, block) in chunks {
+                lowered.count += block.count;
+                lowered.ceiling = lowered.ceiling.min(block.ceiling);
                 writer.write_chunk(index, chunk)?;
             }
         }
         Ok(())
-    })
+    })?;
+    Ok(lowered)
 }
 
-/// One block as a chunk: ZIP and ZIPS through libdeflate, the rest as
-/// `exr` compresses them. Samples are stored little-endian: on a
-/// big-endian machine `exr` converts them and compresses them too.
+/// One block as a chunk: ZIP and ZIPS through libdeflate, DWA within the
+/// half range ([`dwa`]), the rest as `exr` compresses them. Samples are
+/// stored little-endian: on a big-endian machine `exr` converts them and
+/// compresses them too.
 fn compress(
     block: UncompressedBlock,
     headers: &[Header],
     compressor: &mut libdeflater::Compressor,
-) -> exr::error::Result<Chunk> {
-    let Some(header) = headers.get(block.index.layer) else {
-        return block.compress_to_chunk(headers);
+    scratch: &mut Vec<u8>,
+) -> exr::error::Result<(Chunk, Lowered)> {
+    let none = Lowered {
+        count: 0,
+        ceiling: crate::formats::HALF_MAX,
     };
+    let Some(header) = headers.get(block.index.layer) else {
+        return Ok((block.compress_to_chunk(headers)?, none));
+    };
+    if dwa::is_dwa(header.compression) {
+        let (chunk, count, ceiling) = dwa::compress(block, headers)?;
+        return Ok((chunk, Lowered { count, ceiling }));
+    }
     let zipped = matches!(header.compression, X::ZIP1 | X::ZIP16);
     if !zipped || cfg!(target_endian = "big") || header.deep {
-        return block.compress_to_chunk(headers);
+        return Ok((block.compress_to_chunk(headers)?, none));
     }
     let index = block.index;
-    let compressed_pixels_le = zip::compress(block.data, compressor);
+    let compressed_pixels_le = zip::compress(block.data, compressor, scratch);
     let compressed_block = match header.blocks {
         BlockDescription::ScanLines => CompressedBlock::ScanLine(CompressedScanLineBlock {
             compressed_pixels_le,
@@ -85,8 +115,9 @@ fn compress(
             },
         }),
     };
-    Ok(Chunk {
+    let chunk = Chunk {
         layer_index: index.layer,
         compressed_block,
-    })
+    };
+    Ok((chunk, none))
 }

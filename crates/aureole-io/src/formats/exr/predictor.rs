@@ -1,0 +1,65 @@
+//! The byte predictor that OpenEXR's ZIP and RLE compressions share
+//! (`ImfZip`, `ImfRle`): a block's bytes split into the even ones, then
+//! the odd ones, each stored as its difference to the one before, plus
+//! 128. Float samples' bytes then change slowly and compress well.
+
+/// The even bytes, then the odd ones, as differences.
+pub(crate) fn predict(raw: &[u8]) -> Vec<u8> {
+    let half = raw.len().div_ceil(2);
+    let mut split = vec![0u8; raw.len()];
+    let (even, odd) = split.split_at_mut(half);
+    for ((pair, e), o) in raw.chunks_exact(2).zip(even.iter_mut()).zip(odd.iter_mut()) {
+        *e = pair[0];
+        *o = pair[1];
+    }
+    if raw.len() % 2 == 1 {
+        even[half - 1] = raw[raw.len() - 1];
+    }
+    let mut out = vec![0u8; raw.len()];
+    if let (Some((first, rest)), Some(&value)) = (out.split_first_mut(), split.first()) {
+        *first = value;
+        for (o, pair) in rest.iter_mut().zip(split.windows(2)) {
+            *o = pair[1].wrapping_sub(pair[0]).wrapping_add(128);
+        }
+    }
+    out
+}
+
+/// [`predict`] undone, in place of `predicted`'s bytes.
+pub(crate) fn unpredict(predicted: &mut [u8]) -> Vec<u8> {
+    for i in 1..predicted.len() {
+        predicted[i] = predicted[i - 1]
+            .wrapping_add(predicted[i])
+            .wrapping_sub(128);
+    }
+    let (even, odd) = predicted.split_at(predicted.len().div_ceil(2));
+    let mut raw = Vec::with_capacity(predicted.len());
+    for (e, o) in even.iter().zip(odd) {
+        raw.push(*e);
+        raw.push(*o);
+    }
+    if even.len() > odd.len() {
+        raw.extend(even.last());
+    }
+    raw
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_predictor_is_openexrs() {
+        // Bytes 1 2 3 4 5: even 1 3 5, odd 2 4; differences from 1.
+        assert_eq!(predict(&[1, 2, 3, 4, 5]), vec![1, 130, 130, 125, 130]);
+        assert_eq!(unpredict(&mut [1, 130, 130, 125, 130]), vec![1, 2, 3, 4, 5]);
+    }
+
+    #[test]
+    fn bytes_come_back_as_they_were() {
+        for length in [0usize, 1, 2, 3, 16, 17] {
+            let raw: Vec<u8> = (0..length).map(|i| (i * 37 % 256) as u8).collect();
+            assert_eq!(unpredict(&mut predict(&raw)), raw, "{length}");
+        }
+    }
+}
