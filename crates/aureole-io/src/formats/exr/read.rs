@@ -42,7 +42,15 @@ impl File {
         exr::meta::magic_number::validate_exr(&mut read).map_err(error)?;
         let requirements = Requirements::read(&mut read).map_err(error)?;
         requirements.validate().map_err(error)?;
-        let headers = Header::read_all(&mut read, &requirements, true).map_err(error)?;
+        // Strict, as `exr` reads headers for its own validated reads.
+        let headers = Header::read_all(&mut read, &requirements, true).map_err(|e| {
+            let e = e.to_string();
+            if e.contains("window") {
+                format!("the header's data window or display window is out of range ({e})")
+            } else {
+                format!("a header is damaged ({e})")
+            }
+        })?;
         let offsets = MetaData::read_offset_tables(&mut read, &headers).map_err(error)?;
         for (i, header) in headers.iter().enumerate() {
             let window = header.data_window();
