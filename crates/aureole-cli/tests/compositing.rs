@@ -351,8 +351,9 @@ fn a_multi_part_file_keeps_its_other_parts_and_a_part_can_be_chosen() {
 fn luminance_chroma_is_decoded_to_rgb() {
     let dir = tempfile::tempdir().unwrap();
     let (input, output) = (dir.path().join("yc.exr"), dir.path().join("out.exr"));
-    // A saturated red at Y = 1: R = 1/wr … so RY = (R − Y)/Y.
-    let [wr, wg, wb] = aureole::image::REC709_LUMINANCE;
+    // A saturated red: RY = (R − Y)/Y, BY = (B − Y)/Y, with Y weighted as
+    // OpenEXR's RGBA files weight it for Rec.709 (`computeYw`).
+    let [wr, wg, wb] = [0.212_639, 0.715_168_7, 0.072_192_29];
     let (r, g, b) = (2.0f32, 0.5f32, 0.25f32);
     let y = wr * r + wg * g + wb * b;
     let n = 16 * 8;
