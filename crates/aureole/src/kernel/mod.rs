@@ -12,9 +12,13 @@ mod raster;
 mod split;
 
 use crate::camera::Camera;
+use rayon::prelude::*;
+
 use crate::control::{Cancel, Control};
 use crate::error::{Error, Result};
+use crate::image::sum_f64;
 use crate::optics::{Context, Effect, Source};
+use raster::plane_sum;
 use split::SplitKernel;
 
 /// The most pixels a kernel may have (2²⁸: 2 GiB per f64 plane while it is
@@ -137,18 +141,21 @@ impl Kernel {
             return Err(refuse(&format!("{} planes", planes.len())));
         }
         let mut normalised = Vec::with_capacity(planes.len());
-        for plane in planes {
+        for mut plane in planes {
             if plane.len() != width * height {
                 return Err(refuse(&format!("a plane of {} values", plane.len())));
             }
-            if plane.iter().any(|v| !v.is_finite() || *v < 0.0) {
+            if plane.par_iter().any(|v| !v.is_finite() || *v < 0.0) {
                 return Err(refuse("a negative or non-finite weight"));
             }
-            let sum: f64 = plane.iter().map(|&v| f64::from(v)).sum();
+            let sum = plane_sum(&plane, width);
             if sum <= 0.0 {
                 return Err(refuse("a plane of zeros"));
             }
-            normalised.push(plane.iter().map(|&v| (f64::from(v) / sum) as f32).collect());
+            plane
+                .par_iter_mut()
+                .for_each(|v| *v = (f64::from(*v) / sum) as f32);
+            normalised.push(plane);
         }
         Ok(Kernel {
             width,
@@ -200,27 +207,37 @@ impl Kernel {
         self.planes.iter().map(|plane| plane[at]).collect()
     }
 
-    /// ΣK of one plane, in f64.
+    /// ΣK of one plane, in f64 (the same bits on any number of threads).
     pub fn sum(&self, plane: usize) -> f64 {
-        self.planes[plane].iter().map(|&v| f64::from(v)).sum()
+        plane_sum(&self.planes[plane], self.width)
     }
 
     /// The light beyond the (2r + 1)² window around the centre, the most of
     /// any plane; `None` when the window does not fit in the kernel.
     pub fn beyond(&self, r: usize) -> Option<f64> {
+        self.beyond_each(&[r]).pop().flatten()
+    }
+
+    /// [`Kernel::beyond`] for each radius of `radii`, the planes summed once.
+    pub fn beyond_each(&self, radii: &[usize]) -> Vec<Option<f64>> {
         let (w, h) = (self.width, self.height);
         let (cx, cy) = self.centre();
-        if r > cx.min(cy).min(w - 1 - cx).min(h - 1 - cy) {
-            return None;
-        }
-        let beyond = (0..self.planes.len()).map(|c| {
-            let inside: f64 = (cy - r..=cy + r)
-                .flat_map(|j| &self.planes[c][j * w + cx - r..=j * w + cx + r])
-                .map(|&v| f64::from(v))
-                .sum();
-            (self.sum(c) - inside).max(0.0)
-        });
-        Some(beyond.fold(0.0, f64::max))
+        let sums: Vec<f64> = (0..self.planes.len()).map(|c| self.sum(c)).collect();
+        radii
+            .iter()
+            .map(|&r| {
+                if r > cx.min(cy).min(w - 1 - cx).min(h - 1 - cy) {
+                    return None;
+                }
+                let beyond = self.planes.iter().zip(&sums).map(|(plane, sum)| {
+                    let inside: f64 = (cy - r..=cy + r)
+                        .map(|j| sum_f64(&plane[j * w + cx - r..=j * w + cx + r]))
+                        .sum();
+                    (sum - inside).max(0.0)
+                });
+                Some(beyond.fold(0.0, f64::max))
+            })
+            .collect()
     }
 }
 

@@ -143,18 +143,56 @@ impl SplitKernel {
 /// S ⊛ T over the extent, both centred: the linear convolution in f32, zero
 /// padded so that nothing wraps. Its round-off, ~10⁻⁷ of the largest value,
 /// stays far below what the f32 convolution of an image with the kernel
-/// adds anyway.
+/// adds anyway. The plane whose light reaches less far from the centre is
+/// the kernel, cut to its reach: the transforms then pad the extent by
+/// that reach rather than by the whole extent (a corona's rays of a few
+/// hundred pixels over a full-frame bloom: a third of the samples).
 fn compose(s: &[f32], t: &[f32], extent: &Extent, control: &mut Control) -> Result<Vec<f32>> {
-    let size = (extent.width, extent.height);
+    let (rs, rt) = (reach(s, extent), reach(t, extent));
+    let area = |(x, y): (usize, usize)| (2 * x + 1) * (2 * y + 1);
+    let (image, kernel, (rx, ry)) = if area(rt) <= area(rs) {
+        (s, t, rt)
+    } else {
+        (t, s, rs)
+    };
+    let (cx, cy) = extent.centre();
+    let (kw, kh) = (2 * rx + 1, 2 * ry + 1);
+    // The reach is the farther side's: the nearer side is padded with 0.
+    let (w, h) = (extent.width, extent.height);
+    let mut cut = vec![0.0; kw * kh];
+    for (row, j) in cut.chunks_mut(kw).zip(cy as i64 - ry as i64..) {
+        if j < 0 || j >= h as i64 {
+            continue;
+        }
+        let first = cx.saturating_sub(rx);
+        let last = (cx + rx).min(w - 1);
+        let at = j as usize * w;
+        row[first + rx - cx..=last + rx - cx].copy_from_slice(&kernel[at + first..=at + last]);
+    }
     let convolver = Convolver::new(
-        &[t],
-        size,
+        &[&cut],
+        (kw, kh),
         extent.width,
         extent.height,
         Centre::Include,
         &mut control.part(0.0, 0.5),
     )?;
-    convolver.convolve(s, 0, &mut control.part(0.5, 1.0))
+    convolver.convolve(image, 0, &mut control.part(0.5, 1.0))
+}
+
+/// How far from the centre a plane of the extent holds light, columns and
+/// rows (0, 0 for none or the centre alone).
+fn reach(plane: &[f32], extent: &Extent) -> (usize, usize) {
+    let (cx, cy) = extent.centre();
+    plane
+        .par_chunks(extent.width)
+        .enumerate()
+        .filter_map(|(j, row)| {
+            let first = row.iter().position(|&v| v != 0.0)?;
+            let last = row.iter().rposition(|&v| v != 0.0)?;
+            Some((first.abs_diff(cx).max(last.abs_diff(cx)), j.abs_diff(cy)))
+        })
+        .reduce(|| (0, 0), |a, b| (a.0.max(b.0), a.1.max(b.1)))
 }
 
 #[cfg(test)]
@@ -174,9 +212,30 @@ mod tests {
         };
         let cancel = Cancel::new();
         let mut quiet = Control::quiet(&cancel);
-        for (w, h) in [(1, 1), (5, 4), (8, 7), (12, 9), (3, 16)] {
-            let s: Vec<f32> = (0..w * h).map(|i| (i * 37 % 11) as f32 + 0.25).collect();
-            let t: Vec<f32> = (0..w * h).map(|i| (i * 13 % 7) as f32 + 0.5).collect();
+        // Full planes, and planes whose light reaches a pixel or two from
+        // the centre (the transform is then cut to the shorter reach).
+        let cases = [(1, 1), (5, 4), (8, 7), (12, 9), (3, 16), (15, 11), (9, 13)];
+        for (n, (w, h)) in cases.into_iter().enumerate() {
+            let near =
+                |i: usize, r: usize| (i % w).abs_diff(w / 2) <= r && (i / w).abs_diff(h / 2) <= r;
+            let s: Vec<f32> = (0..w * h)
+                .map(|i| {
+                    if n == 6 && !near(i, 2) {
+                        0.0
+                    } else {
+                        (i * 37 % 11) as f32 + 0.25
+                    }
+                })
+                .collect();
+            let t: Vec<f32> = (0..w * h)
+                .map(|i| {
+                    if n == 5 && !near(i, 1) {
+                        0.0
+                    } else {
+                        (i * 13 % 7) as f32 + 0.5
+                    }
+                })
+                .collect();
             let fast = compose(&s, &t, &Extent::new(w, h).unwrap(), &mut quiet).unwrap();
             let (cx, cy) = ((w / 2) as i64, (h / 2) as i64);
             for oy in -cy..h as i64 - cy {

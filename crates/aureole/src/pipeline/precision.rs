@@ -169,8 +169,10 @@ fn dark_level(luminance: &PixelLuminance, pixels: usize) -> Option<f64> {
 /// 8, … 128 pixels that fit inside it, each with the light the kernel moves
 /// beyond it.
 pub(super) fn split_radii(kernel: &Kernel) -> Vec<(usize, f64)> {
-    [4usize, 8, 16, 32, 64, 128]
+    let radii = [4usize, 8, 16, 32, 64, 128];
+    radii
         .into_iter()
-        .map_while(|r| Some((r, kernel.beyond(r)?)))
+        .zip(kernel.beyond_each(&radii))
+        .map_while(|(r, beyond)| Some((r, beyond?)))
         .collect()
 }
