@@ -216,17 +216,28 @@ impl Image {
         self.find(|v| v < 0.0)
     }
 
-    fn find(&self, bad: impl Fn(f32) -> bool) -> Option<BadSamples> {
-        let mut count = 0;
-        let mut first = usize::MAX;
-        for plane in &self.planes {
-            for (i, &v) in plane.iter().enumerate() {
-                if bad(v) {
-                    count += 1;
-                    first = first.min(i);
-                }
-            }
-        }
+    fn find(&self, bad: impl Fn(f32) -> bool + Sync) -> Option<BadSamples> {
+        const CHUNK: usize = 1 << 16;
+        let in_plane = |plane: &Vec<f32>| {
+            plane
+                .par_chunks(CHUNK)
+                .enumerate()
+                .map(|(c, chunk)| {
+                    let mut found = (0usize, usize::MAX);
+                    for (i, &v) in chunk.iter().enumerate() {
+                        if bad(v) {
+                            found = (found.0 + 1, found.1.min(c * CHUNK + i));
+                        }
+                    }
+                    found
+                })
+                .reduce(|| (0, usize::MAX), |a, b| (a.0 + b.0, a.1.min(b.1)))
+        };
+        let (count, first) = self
+            .planes
+            .par_iter()
+            .map(in_plane)
+            .reduce(|| (0, usize::MAX), |a, b| (a.0 + b.0, a.1.min(b.1)));
         (count > 0).then(|| BadSamples {
             count,
             first: (first % self.width, first / self.width),
@@ -236,14 +247,12 @@ impl Image {
     /// Replaces NaN, infinite and negative samples by 0; returns how many
     /// were replaced.
     pub fn sanitize(&mut self) -> usize {
-        let mut count = 0;
-        for v in self.planes.iter_mut().flatten() {
-            if !v.is_finite() || *v < 0.0 {
-                *v = 0.0;
-                count += 1;
-            }
-        }
-        count
+        self.planes
+            .par_iter_mut()
+            .flat_map(|plane| plane.par_iter_mut())
+            .filter(|v| !v.is_finite() || **v < 0.0)
+            .map(|v| *v = 0.0)
+            .count()
     }
 }
 
