@@ -103,6 +103,41 @@ fn full_frame_kernels_convolve_exactly_with_pruned_columns() {
 }
 
 #[test]
+fn a_kernel_split_for_lamps_still_convolves_every_plane_exactly() {
+    // Once split, the engine holds the spectrum beyond the window and the
+    // window's rows instead of the whole spectrum: planes without lamps
+    // go through their sum. Full-frame kernels (pruned columns) and
+    // smaller ones (whole columns), split at radii one after another, and
+    // a split cancelled halfway.
+    for (w, h, kw, kh) in [(16, 9, 31, 17), (15, 10, 29, 19), (20, 14, 13, 11)] {
+        let planes: Vec<Vec<f32>> = (0..3).map(|c| pseudo_random(kw * kh, 40 + c)).collect();
+        let kernel = Kernel::from_planes(kw, kh, planes).unwrap();
+        let slices: Vec<&[f32]> = kernel.planes().iter().map(Vec::as_slice).collect();
+        let image = pseudo_random(w * h, 9);
+        let engine = convolver(&kernel, w, h, Centre::Leave);
+        let exact = |engine: &Convolver| {
+            for k in 0..3 {
+                let single = Kernel::from_planes(kw, kh, vec![kernel.planes()[k].clone()]).unwrap();
+                assert_direct(&convolve(engine, &image, k), &image, w, h, &single);
+            }
+        };
+        exact(&engine);
+        for radius in [2, 4, 2] {
+            let mut control = Control::quiet(&Cancel::new());
+            assert!(engine.split_near(&slices, radius, &mut control).unwrap());
+            assert!(engine.has_split(radius));
+            exact(&engine);
+        }
+        let cancel = Cancel::new();
+        cancel.cancel();
+        let refused = engine.split_near(&slices, 3, &mut Control::quiet(&cancel));
+        assert!(refused.is_err(), "{w}x{h}: a cancelled split");
+        assert!(!engine.has_split(3));
+        exact(&engine);
+    }
+}
+
+#[test]
 fn planes_convolved_together_match_planes_convolved_alone() {
     let (w, h) = (21, 13);
     let planes: Vec<Vec<f32>> = (0..3).map(|c| pseudo_random(w * h, 20 + c)).collect();

@@ -41,6 +41,12 @@ impl Near {
         Near { radius, windows }
     }
 
+    /// Kernel plane `plane`'s window: (2r + 1)² weights, rows downwards,
+    /// the centre's 0.
+    pub fn window(&self, plane: usize) -> &[f32] {
+        &self.windows[plane]
+    }
+
     /// Kernel plane `plane` less its window (and centre): what the
     /// transform carries for the lamps.
     pub fn far_plane(&self, plane: &[f32], (kw, kh): (usize, usize)) -> Vec<f32> {

@@ -48,28 +48,83 @@ const BLOCK: usize = 8;
 /// Values in a tile.
 const TILE: usize = BLOCK * STRIP;
 
-/// The kernel split for lamps: its near windows and, per kernel plane, the
-/// spectrum of the rest.
-type Split = (Near, Vec<Vec<Complex<f32>>>);
+/// The kernel's spectra as the engine holds them.
+struct Spectra {
+    /// The near windows of the split last asked for.
+    near: Option<Near>,
+    /// Per kernel plane.
+    planes: Vec<PlaneSpectrum>,
+}
+
+/// One kernel plane's spectrum, stored column by column (`px/2 + 1`
+/// columns of P values; for pruned columns the even frequencies, then the
+/// odd ones).
+enum PlaneSpectrum {
+    /// K̂ whole: what every input without lamps needs.
+    Whole(Vec<Complex<f32>>),
+    /// Split for lamps at a radius: the spectrum of the kernel beyond the
+    /// near window, and the window's row spectra, from which each column
+    /// of the window's spectrum is transformed as it is needed. K̂ is
+    /// their sum: holding it too would take another kernel's worth of
+    /// memory (400 MB for a full-frame 4K RGB kernel).
+    Split {
+        radius: usize,
+        far: Vec<Complex<f32>>,
+        /// The 2r + 1 rows of the window (centre left out) as row spectra,
+        /// one after the other.
+        window: Vec<Complex<f32>>,
+    },
+}
+
+impl Spectra {
+    /// Whether every plane is split at `radius`, and the near windows are
+    /// that radius's: lamps can go through.
+    fn split_at(&self, radius: usize) -> bool {
+        self.near.as_ref().is_some_and(|near| near.radius == radius)
+            && self
+                .planes
+                .iter()
+                .all(|p| matches!(p, PlaneSpectrum::Split { radius: r, .. } if *r == radius))
+    }
+}
+
+/// What column `u` of an input is multiplied by.
+enum KernelColumn<'a> {
+    /// K̂'s column.
+    Whole(&'a [Complex<f32>]),
+    /// The far spectrum's column, and the window's row spectra (the column
+    /// at `u` of each of its rows).
+    Split {
+        far: &'a [Complex<f32>],
+        window: &'a [Complex<f32>],
+        lamps: Option<&'a LampRows>,
+    },
+}
 
 /// Row spectra of the lamps alone, by row: (row, its spectrum).
 type LampRows = Vec<(usize, Vec<Complex<f32>>)>;
 
-/// The lamps' share of one column: their row spectra, the column's index
-/// in them, and the far kernel's spectrum of the column.
-struct LampColumn<'a> {
-    rows: &'a LampRows,
-    u: usize,
-    far: &'a [Complex<f32>],
-}
-
-/// What a strip task reads: strip `index`, the kernel's spectrum, and the
-/// lamps' row spectra with the spectrum of the kernel beyond its near
-/// window, if there are lamps.
+/// What a strip task reads: strip `index`, the kernel plane's spectra, and
+/// the lamps' row spectra if there are lamps.
 struct Strip<'a> {
     index: usize,
-    spectrum: &'a [Complex<f32>],
-    lamps: Option<(&'a LampRows, &'a [Complex<f32>])>,
+    spectra: &'a Spectra,
+    kernel_plane: usize,
+    lamps: Option<&'a LampRows>,
+}
+
+impl Strip<'_> {
+    /// What column `u` is multiplied by; `py` values a column.
+    fn column(&self, u: usize, py: usize) -> KernelColumn<'_> {
+        match &self.spectra.planes[self.kernel_plane] {
+            PlaneSpectrum::Whole(whole) => KernelColumn::Whole(&whole[u * py..(u + 1) * py]),
+            PlaneSpectrum::Split { far, window, .. } => KernelColumn::Split {
+                far: &far[u * py..(u + 1) * py],
+                window,
+                lamps: self.lamps,
+            },
+        }
+    }
 }
 
 /// One plane to convolve.
@@ -107,10 +162,14 @@ pub struct Convolver {
     /// The kernel's width and height.
     kernel_size: (usize, usize),
     grid: Grid,
-    /// One spectrum per kernel plane, stored column by column (`px/2 + 1`
-    /// columns of P values; for pruned columns the even frequencies, then
-    /// the odd ones).
-    spectra: Vec<Vec<Complex<f32>>>,
+    /// The kernel's spectra, whole or split for lamps, per kernel plane
+    /// and stored column by column (`px/2 + 1` columns of P values; for
+    /// pruned columns the even frequencies, then the odd ones). Replaced
+    /// whole when lamps ask for a split: a running application keeps the
+    /// one it started with.
+    spectra: Mutex<Arc<Spectra>>,
+    /// Kernel planes.
+    planes: usize,
     /// The weight each kernel plane left out of its spectrum (its centre),
     /// applied exactly to the plane itself: in the FFT it would dominate
     /// the round-off of the light that moves.
@@ -122,9 +181,6 @@ pub struct Convolver {
     column_fft: Arc<dyn Fft<f32>>,
     column_ifft: Arc<dyn Fft<f32>>,
     buffers: Pool<Buffers>,
-    /// The kernel split for lamps, with the spectra (per kernel plane) of
-    /// its part beyond the near window, as last asked for.
-    near: Mutex<Option<Arc<Split>>>,
 }
 
 impl Convolver {
@@ -178,7 +234,11 @@ impl Convolver {
             height,
             kernel_size: size,
             grid,
-            spectra,
+            planes: spectra.len(),
+            spectra: Mutex::new(Arc::new(Spectra {
+                near: None,
+                planes: spectra.into_iter().map(PlaneSpectrum::Whole).collect(),
+            })),
             centres,
             twiddles,
             row_fft,
@@ -186,7 +246,6 @@ impl Convolver {
             column_fft: planner.plan_fft_forward(grid.columns.transform_length()),
             column_ifft: planner.plan_fft_inverse(grid.columns.transform_length()),
             buffers: Pool::new(),
-            near: Mutex::new(None),
         })
     }
 
@@ -232,9 +291,11 @@ impl Convolver {
         for (input, rows) in inputs.iter().zip(buffers.iter_mut()) {
             self.forward_rows(input, rows, strips, &control.cancel());
         }
-        let split = self.split();
-        let near = split.as_deref().map(|(near, _)| near);
-        let far = split.as_deref().map(|(_, far)| far);
+        let spectra = self.spectra();
+        let near = spectra
+            .near
+            .as_ref()
+            .filter(|near| spectra.split_at(near.radius));
         let lamp_rows: Vec<Option<LampRows>> = inputs
             .iter()
             .map(|input| (near.is_some() && !input.lamps.is_empty()).then(|| self.lamp_rows(input)))
@@ -244,7 +305,7 @@ impl Convolver {
         self.column_pass(
             inputs,
             &lamp_rows,
-            far,
+            &spectra,
             &mut buffers,
             strips,
             &control.cancel(),
@@ -356,7 +417,7 @@ impl Convolver {
         &self,
         inputs: &[Input],
         lamp_rows: &[Option<LampRows>],
-        far: Option<&Vec<Vec<Complex<f32>>>>,
+        spectra: &Spectra,
         buffers: &mut [Buffers],
         strips: usize,
         cancel: &Cancel,
@@ -381,27 +442,24 @@ impl Convolver {
             || {
                 (
                     vec![zero; h * STRIP],
-                    vec![zero; py],
-                    vec![zero; py],
+                    [vec![zero; py], vec![zero; py], vec![zero; py]],
                     vec![zero; scratch_len],
                 )
             },
-            |(out, column, extra, scratch), (s, mut tiles)| {
+            |(out, columns, scratch), (s, mut tiles)| {
                 for ((input, lamps), tiles) in inputs.iter().zip(lamp_rows).zip(tiles.iter_mut()) {
                     if cancel.is_cancelled() {
                         return;
                     }
                     let strip = Strip {
                         index: s,
-                        spectrum: &self.spectra[input.kernel_plane],
-                        lamps: lamps
-                            .as_ref()
-                            .zip(far)
-                            .map(|(lamps, far)| (lamps, far[input.kernel_plane].as_slice())),
+                        spectra,
+                        kernel_plane: input.kernel_plane,
+                        lamps: lamps.as_ref(),
                     };
                     super::simd::widest(
                         #[inline(always)]
-                        || self.strip(&strip, tiles, out, column, extra, scratch),
+                        || self.strip(&strip, tiles, out, columns, scratch),
                     );
                 }
             },
@@ -419,8 +477,7 @@ impl Convolver {
         strip: &Strip,
         tiles: &mut [&mut [Complex<f32>]],
         out: &mut [Complex<f32>],
-        column: &mut [Complex<f32>],
-        extra: &mut [Complex<f32>],
+        columns: &mut [Vec<Complex<f32>>; 3],
         scratch: &mut [Complex<f32>],
     ) {
         let h = self.height;
@@ -435,13 +492,7 @@ impl Convolver {
         }
         for j in 0..width {
             let u = first + j;
-            let kernel = &strip.spectrum[u * py..(u + 1) * py];
-            let lamps = strip.lamps.map(|(rows, far)| LampColumn {
-                rows,
-                u,
-                far: &far[u * py..(u + 1) * py],
-            });
-            self.column(out, j, kernel, lamps, column, extra, scratch);
+            self.column(out, j, u, strip.column(u, py), columns, scratch);
         }
         for (block, tile) in tiles.iter_mut().enumerate() {
             let at = block * TILE;
@@ -450,21 +501,21 @@ impl Convolver {
         }
     }
 
-    /// Column `j` of a strip (H rows of [`STRIP`] values) through the
-    /// padded column transform, the product with `kernel`'s column spectrum
-    /// and back, in place; with lamps (their row spectra, the column's
-    /// index among them, and the far kernel's column spectrum), their
-    /// column through the far kernel is added before going back.
-    #[allow(clippy::too_many_arguments)]
+    /// Column `j` (the spectrum's column `u`) of a strip (H rows of
+    /// [`STRIP`] values) through the padded column transform, the product
+    /// with the kernel's column spectrum and back, in place. With the
+    /// kernel split, its column is the far spectrum's plus the window's,
+    /// transformed here from the window's row spectra; lamps (their row
+    /// spectra) go through the far spectrum alone, added before going
+    /// back.
     #[inline(always)]
     fn column(
         &self,
         strip: &mut [Complex<f32>],
         j: usize,
-        kernel: &[Complex<f32>],
-        lamps: Option<LampColumn>,
-        column: &mut [Complex<f32>],
-        extra: &mut [Complex<f32>],
+        u: usize,
+        kernel: KernelColumn,
+        [column, window, lamps]: &mut [Vec<Complex<f32>>; 3],
         scratch: &mut [Complex<f32>],
     ) {
         let h = self.height;
@@ -494,23 +545,45 @@ impl Convolver {
         // For pruned columns both halves go in one call: rustfft transforms
         // a buffer of several lengths one after the other.
         self.column_fft.process_with_scratch(column, scratch);
-        for (a, b) in column.iter_mut().zip(kernel) {
-            *a *= *b;
-        }
-        if let Some(LampColumn { rows, u, far }) = lamps {
-            extra.iter_mut().for_each(|v| *v = zero);
-            for (y, spectrum) in rows {
-                match self.grid.columns {
-                    ColumnTransform::Full(_) => extra[*y] = spectrum[u],
-                    ColumnTransform::Halves(n) => {
-                        extra[*y] = spectrum[u];
-                        extra[n + *y] = spectrum[u] * self.twiddles[*y];
-                    }
+        match kernel {
+            KernelColumn::Whole(spectrum) => {
+                for (a, b) in column.iter_mut().zip(spectrum) {
+                    *a *= *b;
                 }
             }
-            self.column_fft.process_with_scratch(extra, scratch);
-            for ((a, e), f) in column.iter_mut().zip(extra.iter()).zip(far) {
-                *a += e * f;
+            KernelColumn::Split {
+                far,
+                window: window_rows,
+                lamps: lamp_rows,
+            } => {
+                // The window's column: its rows' spectra at u, centred.
+                let width = self.grid.spectrum_width();
+                let r = window_rows.len() / width / 2;
+                let rows = window_rows.chunks(width).map(|row| row[u]);
+                self.place_rows(
+                    window,
+                    rows.enumerate().map(|(i, v)| (i as i64 - r as i64, v)),
+                );
+                self.column_fft.process_with_scratch(window, scratch);
+                if let Some(lamp_rows) = lamp_rows {
+                    let rows = lamp_rows
+                        .iter()
+                        .map(|(y, spectrum)| (*y as i64, spectrum[u]));
+                    self.place_rows(lamps, rows);
+                    self.column_fft.process_with_scratch(lamps, scratch);
+                    for (((a, w), e), f) in column
+                        .iter_mut()
+                        .zip(window.iter())
+                        .zip(lamps.iter())
+                        .zip(far)
+                    {
+                        *a = *a * (f + w) + e * f;
+                    }
+                } else {
+                    for ((a, w), f) in column.iter_mut().zip(window.iter()).zip(far) {
+                        *a *= f + w;
+                    }
+                }
             }
         }
         self.column_ifft.process_with_scratch(column, scratch);
@@ -525,6 +598,38 @@ impl Convolver {
                 let (even, odd) = column.split_at(n);
                 for (((v, e), o), t) in values.zip(even).zip(odd).zip(&self.twiddles) {
                     *v = e + o * t.conj();
+                }
+            }
+        }
+    }
+
+    /// A column of zeros but for `rows` (row of the period, from −P/2 to
+    /// P/2, and value), laid out for the column transform: as it is, or
+    /// for pruned columns as the even and odd halves' inputs.
+    #[inline(always)]
+    fn place_rows(
+        &self,
+        column: &mut [Complex<f32>],
+        rows: impl Iterator<Item = (i64, Complex<f32>)>,
+    ) {
+        let zero = Complex::new(0.0, 0.0);
+        column.iter_mut().for_each(|v| *v = zero);
+        match self.grid.columns {
+            ColumnTransform::Full(p) => {
+                for (y, v) in rows {
+                    column[y.rem_euclid(p as i64) as usize] = v;
+                }
+            }
+            ColumnTransform::Halves(n) => {
+                // Row y of the period of 2N: the even transform takes it at
+                // y mod N, the odd one times e^{−iπy/N} (= −e^{−iπ(y−N)/N}
+                // for y ≥ N).
+                let (even, odd) = column.split_at_mut(n);
+                for (y, v) in rows {
+                    let y = y.rem_euclid(2 * n as i64) as usize;
+                    let (at, sign) = if y < n { (y, 1.0) } else { (y - n, -1.0) };
+                    even[at] += v;
+                    odd[at] += v * self.twiddles[at] * sign;
                 }
             }
         }
@@ -640,11 +745,11 @@ impl Engine for Convolver {
     }
 
     fn kernel_planes(&self) -> usize {
-        self.spectra.len()
+        self.planes
     }
 
     fn has_split(&self, radius: usize) -> bool {
-        self.split().is_some_and(|split| split.0.radius == radius)
+        self.spectra().split_at(radius)
     }
 
     fn split_near(&self, planes: &[&[f32]], radius: usize, control: &mut Control) -> Result<bool> {
@@ -655,32 +760,60 @@ impl Engine for Convolver {
         let (cx, cy) = (size.0 / 2, size.1 / 2);
         let fits = radius <= cx.min(cy).min(size.0 - 1 - cx).min(size.1 - 1 - cy);
         let shaped =
-            planes.len() == self.spectra.len() && planes.iter().all(|p| p.len() == size.0 * size.1);
+            planes.len() == self.planes && planes.iter().all(|p| p.len() == size.0 * size.1);
         if !fits || !shaped {
             return Ok(false);
         }
         let near = Near::new(planes, size, radius);
         let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(self.grid.px);
         let full_column = FftPlanner::<f32>::new().plan_fft_forward(self.grid.columns.length());
-        let mut far = Vec::with_capacity(planes.len());
+        // Held while the split is built, so that no application starts on
+        // spectra half replaced; one already running keeps its own.
+        let mut held = self.spectra.lock().unwrap_or_else(PoisonError::into_inner);
+        let empty = Spectra {
+            near: None,
+            planes: Vec::new(),
+        };
+        let current = std::mem::replace(&mut *held, Arc::new(empty));
+        // Where nothing else holds them, each plane's old spectrum goes as
+        // its new one comes, rather than all at the end; a plane split
+        // before a cancellation is not split again.
+        let (mut owned, shared) = match Arc::try_unwrap(current) {
+            Ok(spectra) => (Some(spectra.planes), None),
+            Err(shared) => (None, Some(shared)),
+        };
+        let mut built = Vec::with_capacity(planes.len());
         for (k, plane) in planes.iter().enumerate() {
-            let rest = near.far_plane(plane, size);
-            let placed = Placement {
-                plane: &rest,
-                size,
-                centre: Centre::Include,
-            };
+            let done = owned.as_ref().is_some_and(
+                |p| matches!(p[k], PlaneSpectrum::Split { radius: r, .. } if r == radius),
+            );
+            if done {
+                continue;
+            }
             let share = 1.0 / planes.len() as f64;
             let mut part = control.part(k as f64 * share, (k + 1) as f64 * share);
-            far.push(kernel_spectrum(
-                &*row_fft,
-                &*full_column,
-                &self.grid,
-                &placed,
-                &mut part,
-            )?);
+            let split = self.split_plane(plane, k, &near, (&*row_fft, &*full_column), &mut part);
+            match (split, &mut owned) {
+                (Ok(split), Some(planes)) => planes[k] = split,
+                (Ok(split), None) => built.push(split),
+                (Err(error), _) => {
+                    *held = match (owned, shared) {
+                        (Some(planes), _) => Arc::new(Spectra { near: None, planes }),
+                        (None, shared) => shared.unwrap_or_else(|| {
+                            Arc::new(Spectra {
+                                near: None,
+                                planes: Vec::new(),
+                            })
+                        }),
+                    };
+                    return Err(error);
+                }
+            }
         }
-        *self.near.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::new((near, far)));
+        *held = Arc::new(Spectra {
+            near: Some(near),
+            planes: owned.unwrap_or(built),
+        });
         Ok(true)
     }
 
@@ -735,12 +868,61 @@ impl Engine for Convolver {
 }
 
 impl Convolver {
-    /// The kernel split for lamps, if one was asked for.
-    fn split(&self) -> Option<Arc<Split>> {
-        self.near
+    /// The spectra as they are now.
+    fn spectra(&self) -> Arc<Spectra> {
+        self.spectra
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
             .clone()
+    }
+
+    /// Kernel plane `k` (`plane`) split at `near`'s radius: the spectrum of
+    /// the rest, and the window's row spectra.
+    fn split_plane(
+        &self,
+        plane: &[f32],
+        k: usize,
+        near: &Near,
+        (row_fft, full_column): (&dyn RealToComplex<f32>, &dyn Fft<f32>),
+        control: &mut Control,
+    ) -> Result<PlaneSpectrum> {
+        let rest = near.far_plane(plane, self.kernel_size);
+        let placed = Placement {
+            plane: &rest,
+            size: self.kernel_size,
+            centre: Centre::Include,
+        };
+        let far = kernel_spectrum(row_fft, full_column, &self.grid, &placed, control)?;
+        let window = self.window_rows(near.window(k), near.radius, row_fft);
+        Ok(PlaneSpectrum::Split {
+            radius: near.radius,
+            far,
+            window,
+        })
+    }
+
+    /// The 2r + 1 rows of a near window (row-major, centre left out) as row
+    /// spectra, each row placed in the period as the kernel's rows are.
+    fn window_rows(
+        &self,
+        window: &[f32],
+        radius: usize,
+        row_fft: &dyn RealToComplex<f32>,
+    ) -> Vec<Complex<f32>> {
+        let side = 2 * radius + 1;
+        let px = self.grid.px;
+        let count = self.grid.spectrum_width();
+        let mut spectra = vec![Complex::new(0.0, 0.0); side * count];
+        let mut input = row_fft.make_input_vec();
+        let mut scratch = row_fft.make_scratch_vec();
+        for (row, out) in window.chunks(side).zip(spectra.chunks_mut(count)) {
+            input.iter_mut().for_each(|v| *v = 0.0);
+            for (x, &v) in row.iter().enumerate() {
+                input[(x + px - radius) % px] = v;
+            }
+            let _ = row_fft.process_with_scratch(&mut input, out, &mut scratch);
+        }
+        spectra
     }
 
     /// One output of several weighted terms: the bright part goes through
