@@ -5,10 +5,13 @@
 use rayon::prelude::*;
 
 use super::Extent;
-use crate::control::{for_each_row, Control};
+use crate::control::{for_each, for_each_row, Control};
 use crate::error::Result;
 use crate::image::sum_f64;
 use crate::optics::shape::{Grid, SpreadShape};
+
+/// Pixels of a row rasterised together where f has no mirror symmetry.
+const PIECE: usize = 256;
 
 /// f averaged over every pixel's area and normalised to ΣF = 1; `None` when
 /// f puts nothing inside the extent. A mirror-symmetric f is computed on a
@@ -41,10 +44,24 @@ pub(super) fn shape_plane(
                 }
             });
     } else {
-        for_each_row(&mut plane, width, control, |j, row| {
+        // Pieces of rows rather than rows: the few rows through the centre,
+        // where every ray is sampled finely, would otherwise hold a batch
+        // up on one thread.
+        let mut pieces: Vec<(usize, usize, &mut [f32])> = plane
+            .chunks_mut(width)
+            .enumerate()
+            .flat_map(|(j, row)| {
+                row.chunks_mut(PIECE)
+                    .enumerate()
+                    .map(move |(p, piece)| (j, p * PIECE, piece))
+            })
+            .collect();
+        for_each(&mut pieces, control, |_, (j, first, piece)| {
+            let (j, first) = (*j, *first);
             let y = cy as f64 - j as f64;
             let spans = shape.lit_spans(y);
-            for (i, value) in row.iter_mut().enumerate() {
+            for (i, value) in piece.iter_mut().enumerate() {
+                let i = first + i;
                 let x = i as f64 - cx as f64;
                 // Pixels outside the lit spans stay 0.
                 if let Some(spans) = &spans {

@@ -159,18 +159,23 @@ fn compose(s: &[f32], t: &[f32], extent: &Extent, control: &mut Control) -> Resu
     let (kw, kh) = (2 * rx + 1, 2 * ry + 1);
     // The reach is the farther side's: the nearer side is padded with 0.
     let (w, h) = (extent.width, extent.height);
-    let mut cut = vec![0.0; kw * kh];
-    for (row, j) in cut.chunks_mut(kw).zip(cy as i64 - ry as i64..) {
-        if j < 0 || j >= h as i64 {
-            continue;
+    let cut = if (kw, kh) == (w, h) {
+        None
+    } else {
+        let mut cut = vec![0.0; kw * kh];
+        for (row, j) in cut.chunks_mut(kw).zip(cy as i64 - ry as i64..) {
+            if j < 0 || j >= h as i64 {
+                continue;
+            }
+            let first = cx.saturating_sub(rx);
+            let last = (cx + rx).min(w - 1);
+            let at = j as usize * w;
+            row[first + rx - cx..=last + rx - cx].copy_from_slice(&kernel[at + first..=at + last]);
         }
-        let first = cx.saturating_sub(rx);
-        let last = (cx + rx).min(w - 1);
-        let at = j as usize * w;
-        row[first + rx - cx..=last + rx - cx].copy_from_slice(&kernel[at + first..=at + last]);
-    }
+        Some(cut)
+    };
     let convolver = Convolver::new(
-        &[&cut],
+        &[cut.as_deref().unwrap_or(kernel)],
         (kw, kh),
         extent.width,
         extent.height,
