@@ -1,9 +1,10 @@
 """End to end, as a user runs it: files in, files out, a batch of frames.
 
-python e2e.py AUREOLE WORKDIR WORKLOAD_DIR   prints the markdown section of
-bench/RESULTS.md. For each workload (the demo night street at 4K and 1080p
-with a `camera-f8-7blade` kernel file; the issue-5 workload scene at 4K
-with its kernel, from WORKLOAD_DIR/*.npy) it times, in this run:
+python e2e.py AUREOLE BENCH_CODEC WORKDIR WORKLOAD_DIR   prints the markdown
+sections of bench/RESULTS.md. For each workload (the demo night street at
+4K and 1080p with a `camera-f8-7blade` kernel file; the issue-5 workload
+scene at 4K with its kernel, from WORKLOAD_DIR/*.npy) it times, in this
+run:
 
 - aureole: `aureole apply s.%04d.exr --frames … --kernel K -o out/ --half`,
   a batch of 1 and of FRAMES + 1 frames; the steady-state time per frame is
@@ -16,10 +17,17 @@ with its kernel, from WORKLOAD_DIR/*.npy) it times, in this run:
 
 Both read the same input files and the same kernel file, and their first
 results are compared (relative L2 over the image).
+
+Then the kernels: the 4K lens kernel written by `psf` and read back as
+`apply --kernel` reads it (`bench_codec kernel`), one frame with the kernel
+file against one frame building it, and the issue-5 bloom + corona kernel
+built at 7679x4319; and four issue-5 PFM frames with the kernel built from
+bench/issue5.toml in the same run, against scipy given the kernel ready.
 """
 
 import json
 import os
+import pathlib
 import re
 import resource
 import shutil
@@ -31,6 +39,8 @@ import time
 import numpy as np
 
 FRAMES = 4
+RUNS = 3
+ISSUE5 = str(pathlib.Path(__file__).resolve().parent / "issue5.toml")
 
 
 def peer(pattern, frames, kernel_path, out_pattern):
@@ -67,6 +77,32 @@ def peer(pattern, frames, kernel_path, out_pattern):
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     # The first frame pays for planning and caches: the rest are the batch.
     print(json.dumps({k: statistics.median(v[1:]) for k, v in stages.items()} | {"peak_mb": peak}))
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        magic = f.readline().strip()
+        width, height = map(int, f.readline().split())
+        scale = float(f.readline())
+        data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
+    channels = 3 if magic == b"PF" else 1
+    return data.reshape(height, width, channels)[::-1].transpose(2, 0, 1).astype(np.float32)
+
+
+def pfm_peer(pattern, frames, kernel_npy, out_pattern):
+    """scipy's fftconvolve (2 workers) on PFM frames, the kernel ready-made
+    (loaded before the clock starts); prints one JSON line."""
+    import scipy.fft
+    import scipy.signal
+
+    kernel = np.load(kernel_npy).astype(np.float32)
+    start = time.perf_counter()
+    for n in frames:
+        planes = read_pfm(pattern % n)
+        with scipy.fft.set_workers(2):
+            out = [scipy.signal.fftconvolve(p, kernel, mode="same") for p in planes]
+        write_pfm(out_pattern % n, out)
+    print(json.dumps({"total": time.perf_counter() - start}))
 
 
 def run(command):
@@ -128,6 +164,84 @@ def pfm_batch(name, aureole, work, kernel):
     print(f"| {name} | aureole | {(many - one) / FRAMES:.2f} s | {read:.2f} s | {camera:.2f} s | {write:.2f} s | {peak:.0f} MB | | |")
 
 
+def timed(command):
+    start = time.perf_counter()
+    done = run(command)
+    return time.perf_counter() - start, done
+
+
+def kernels(aureole, bench_codec, work):
+    """The kernel rows: a lens kernel file written, read and applied, and
+    the issue-5 kernel built."""
+    dir = os.path.join(work, "street-4K")
+    kernel = os.path.join(dir, "lens.exr")
+    psf = ["psf", "--preset", "camera-f8-7blade", "--size", "7679x4319", "--image-width", "3840"]
+    writes = [timed([aureole, *psf, "-o", kernel])[0] for _ in range(RUNS)]
+    read = json.loads(run([bench_codec, "kernel", kernel, str(RUNS)]).stdout)["kernel_read"]
+    frame = os.path.join(dir, "s.0001.exr")
+    out = os.path.join(dir, "one.exr")
+    given = [timed([aureole, "apply", frame, "--kernel", kernel, "--half", "-o", out, "-q"])[0]
+             for _ in range(RUNS)]
+    built = [timed([aureole, "apply", frame, "--preset", "camera-f8-7blade", "--half", "-o", out,
+                    "-q"])[0] for _ in range(RUNS)]
+    builds = []
+    for _ in range(RUNS):
+        done = run([aureole, "psf", "--config", ISSUE5, "--size", "7679x4319",
+                    "-o", os.path.join(work, "issue5.pfm")])
+        builds.append(float(re.search(r"built in ([\d.]+) s", done.stderr).group(1)))
+    median = statistics.median
+    print("## Kernels: written, read, built\n")
+    print(f"Medians of {RUNS}. The 4K lens kernel is `camera-f8-7blade` at 7679x4319 for")
+    print("3840-px frames (3 planes, float, stored uncompressed); one frame is the")
+    print("night street, EXR in, half EXR out.\n")
+    print("| what | time |")
+    print("|---|---|")
+    print(f"| `psf` of the 4K lens kernel to .exr, build and write | {median(writes):.2f} s "
+          f"({os.path.getsize(kernel) / 1e6:.0f} MB) |")
+    print(f"| reading it as `apply --kernel` does (file, planes, checks, normalisation) | {read:.2f} s |")
+    print(f"| `apply` of one 4K frame with `--kernel lens.exr` | {median(given):.2f} s |")
+    print(f"| `apply` of one 4K frame with `--preset camera-f8-7blade` (building the kernel) | {median(built):.2f} s |")
+    print(f"| the issue-5 bloom + corona kernel, 7679x4319, built (`psf`'s figure) | {median(builds):.2f} s |")
+    print()
+
+
+def pfm_built(aureole, work, workload_dir):
+    """Four issue-5 PFM frames, the kernel built from the config in the
+    same run, against scipy given the kernel ready."""
+    dir = os.path.join(work, "workload-4K")
+    for n in range(2, FRAMES + 1):
+        shutil.copyfile(os.path.join(dir, "s.0001.pfm"), os.path.join(dir, f"s.{n:04d}.pfm"))
+    out = os.path.join(dir, "built")
+    ours = []
+    for _ in range(RUNS):
+        shutil.rmtree(out, ignore_errors=True)
+        os.makedirs(out)
+        ours.append(timed([aureole, "apply", os.path.join(dir, "s.%04d.pfm"), "--frames",
+                           f"1-{FRAMES}", "--config", ISSUE5, "-o", out + "/", "-q"])[0])
+    peer_out = os.path.join(dir, "peer")
+    os.makedirs(peer_out, exist_ok=True)
+    theirs = [json.loads(run([sys.executable, __file__, "pfm-peer", os.path.join(dir, "s.%04d.pfm"),
+                              str(FRAMES), os.path.join(workload_dir, "kernel.npy"),
+                              os.path.join(peer_out, "s.%04d.pfm")]).stdout)["total"]
+              for _ in range(RUNS)]
+    a = read_pfm(os.path.join(out, "s.0001.pfm")).astype(np.float64)
+    b = read_pfm(os.path.join(peer_out, "s.0001.pfm")).astype(np.float64)
+    difference = np.linalg.norm(a - b) / np.linalg.norm(a)
+    median = statistics.median
+    print(f"## The issue-5 workload: {FRAMES} PFM frames, the kernel built in the same run\n")
+    print(f"Medians of {RUNS} whole runs: aureole builds the kernel from bench/issue5.toml,")
+    print("transforms it and applies it to every frame, files in and out; scipy's")
+    print("fftconvolve (2 workers) is given the kernel ready-made (read before its clock")
+    print("starts) and reads and writes the same PFM files with numpy.\n")
+    print("| implementation | total | per frame | ratio to aureole | agreement |")
+    print("|---|---|---|---|---|")
+    print(f"| aureole (`apply --config`, kernel built) | {median(ours):.2f} s | "
+          f"{median(ours) / FRAMES:.2f} s | 1.0 | reference |")
+    print(f"| scipy.signal.fftconvolve (2 workers), kernel given | {median(theirs):.2f} s | "
+          f"{median(theirs) / FRAMES:.2f} s | {median(theirs) / median(ours):.1f} | {difference:.1e} |")
+    print()
+
+
 def write_pfm(path, planes):
     """Three planes (top row first) as a little-endian PF file."""
     data = np.stack(planes, axis=-1)[::-1].astype("<f4")
@@ -144,7 +258,7 @@ def write_exr(path, planes, names):
         f.write(path)
 
 
-def main(aureole, work, workload_dir):
+def main(aureole, bench_codec, work, workload_dir):
     print(f"## End to end: EXR in, half EXR out, a batch of {FRAMES} frames after the first\n")
     print("Per frame in the batch (the first frame, which loads the kernel file and")
     print("transforms it, is left out); the stages are medians over the frames, and")
@@ -173,11 +287,16 @@ def main(aureole, work, workload_dir):
     write_pfm(os.path.join(dir, "s.0001.pfm"), list(image))
     pfm_batch("issue-5 workload 4K, PFM in and out", aureole, dir, kernel)
     print()
+    kernels(aureole, bench_codec, work)
+    pfm_built(aureole, work, workload_dir)
 
 
 if __name__ == "__main__":
     if sys.argv[1] == "peer":
         _, _, pattern, count, kernel, out = sys.argv
         peer(pattern, range(1, int(count) + 1), kernel, out)
+    elif sys.argv[1] == "pfm-peer":
+        _, _, pattern, count, kernel, out = sys.argv
+        pfm_peer(pattern, range(1, int(count) + 1), kernel, out)
     else:
-        main(*sys.argv[1:4])
+        main(*sys.argv[1:5])

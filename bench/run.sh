@@ -21,12 +21,12 @@ peers=("numpy/scipy rfft2, cached kernel spectrum" "scipy.signal.fftconvolve" "s
 if "$venv/bin/python" -c "import pyfftw" 2>/dev/null; then
   peers+=("pyFFTW rfft2 (FFTW, 2 threads, measured plans), cached kernel spectrum")
 fi
-cargo build --release --locked -p aureole-tools --bin bench_workload
+cargo build --release --locked -p aureole-tools --bin bench_workload --bin bench_codec
 cargo build --release --locked -p aureole-cli
 {
   echo "# Benchmark results"
   echo
-  echo "Produced by \`bash bench/run.sh\` on $(nproc) cores ($(uname -m)), $(date -u +%Y-%m-%d)."
+  echo "Produced by \`bash bench/run.sh\` on $(nproc) cores ($(uname -m)), $(date -u +%Y-%m-%d), load before the run: $(uptime | sed "s/.*load average: //")."
   echo "Workload of issue 5 (3 channels, full-frame kernel, threshold 0); times are the"
   echo "steady state (kernel and its spectrum built beforehand where the tool allows),"
   echo "median of 6 runs after a warm-up. Agreement: relative L2 difference to aureole."
@@ -60,8 +60,15 @@ PY
   rm -f "$rows"
 done
 # End to end (EXR in, EXR out, batches through the CLI) against OpenEXR +
-# scipy, on the demo night street and, at 4K, the workload scene above.
+# scipy, on the demo night street and, at 4K, the workload scene above; the
+# kernel files; the codecs against OpenEXR on the 4K night street through
+# the camera.
 if [ -f bench/out/4k/image.npy ]; then
-  "$venv/bin/python" bench/e2e.py target/release/aureole "$(mktemp -d)" bench/out/4k >> bench/RESULTS.md
+  "$venv/bin/python" bench/e2e.py target/release/aureole target/release/bench_codec "$(mktemp -d)" bench/out/4k >> bench/RESULTS.md
 fi
+work=$(mktemp -d)
+./target/release/aureole demo --size 3840x2160 --hdr "$work/street.exr" -o "$work/street.png" -q
+./target/release/aureole apply "$work/street.exr" --preset camera-f8-7blade -o "$work/camera.exr" -q
+"$venv/bin/python" bench/codec.py target/release/bench_codec "$work/camera.exr" "$work/codec" >> bench/RESULTS.md
+rm -rf "$work"
 cat bench/RESULTS.md

@@ -134,6 +134,11 @@ pub enum Error {
     /// The caller cancelled the run.
     #[error("cancelled")]
     Cancelled,
+
+    /// An engine was asked to spread light through a kernel it has not
+    /// transformed ([`crate::convolve::Engine::prepare`] comes first).
+    #[error("the kernel's spectrum is not built: prepare the engine first")]
+    NotTransformed,
 }
 
 /// A smaller kernel that would fit a memory limit.

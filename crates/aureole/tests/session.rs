@@ -269,19 +269,15 @@ fn a_session_goes_on_after_a_cancelled_run_with_a_fresh_flag() {
 
 #[test]
 fn a_kernel_given_survives_a_cancelled_plan() {
+    // A kernel given is transformed by the first application: cancelled
+    // there, the session still holds it and the next one runs.
     let kernel = config("paper-fig4-bloom")
         .kernel(&aureole::Extent::new(15, 15).unwrap())
         .unwrap();
     let mut session = Session::with_kernel(kernel);
     let image = street(40, 20, Layout::Rgb);
-    let cancelled = cancelled_at(
-        &mut session,
-        image.clone(),
-        Method::Fft,
-        Stage::BuildingKernel,
-    );
+    let cancelled = cancelled_at(&mut session, image.clone(), Method::Fft, Stage::Convolving);
     assert!(matches!(cancelled, Err(Error::Cancelled)), "{cancelled:?}");
-    assert!(session.plan().is_none());
     session.set_cancel_token(aureole::Cancel::new());
     through(&mut session, &image);
 }

@@ -7,6 +7,10 @@
 //! file's size. It reads the file the peer wrote
 //! (OUT_DIR/openexr-half-zip.exr …) where there is one, so that both read
 //! the same bytes, else its own.
+//!
+//! `bench_codec kernel KERNEL.exr [RUNS]` prints the median seconds of
+//! reading a kernel file as `apply --kernel` does (file, planes, checks and
+//! normalisation).
 
 #![deny(unsafe_code)]
 
@@ -41,6 +45,22 @@ fn cpu_seconds() -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("kernel") {
+        let path = Path::new(
+            args.get(2)
+                .ok_or("usage: bench_codec kernel KERNEL.exr [RUNS]")?,
+        );
+        let runs: usize = args.get(3).map_or(Ok(5), |r| r.parse())?;
+        let mut reads = Vec::new();
+        for _ in 0..runs {
+            let start = Instant::now();
+            let kernel = aureole_io::kernel::read_kernel_file(path, Limits::NONE)?;
+            reads.push(start.elapsed().as_secs_f64());
+            drop(kernel);
+        }
+        println!("{{\"kernel_read\": {:.4}}}", median(reads));
+        return Ok(());
+    }
     let (Some(frame), Some(out)) = (args.get(1), args.get(2)) else {
         return Err("usage: bench_codec FRAME.exr OUT_DIR [RUNS]".into());
     };

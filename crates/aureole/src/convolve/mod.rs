@@ -70,7 +70,9 @@ pub enum Precision {
 
 /// The engine that convolves `width`×`height` images with a kernel given as
 /// planes (row-major, `size` = width × height, centre at its middle) in
-/// `precision`: the one place that chooses among the implementations.
+/// `precision`: the one place that chooses among the implementations. The
+/// f32 engine transforms the kernel when first asked ([`Engine::prepare`],
+/// [`Engine::split_near`]); the f64 engine at once.
 pub fn engine(
     precision: Precision,
     planes: &[&[f32]],
@@ -80,9 +82,9 @@ pub fn engine(
     control: &mut Control,
 ) -> Result<Box<dyn Engine>> {
     Ok(match precision {
-        Precision::Single => Box::new(single::Convolver::new(
-            planes, size, width, height, centre, control,
-        )?),
+        Precision::Single => Box::new(single::Convolver::deferred(
+            planes, size, width, height, centre,
+        )),
         Precision::Double => Box::new(double::Convolver::new(
             planes, size, width, height, centre, control,
         )?),
@@ -115,6 +117,18 @@ pub trait Engine: Send + Sync {
     /// Whether the kernel is split at `radius` already.
     fn has_split(&self, _radius: usize) -> bool {
         false
+    }
+
+    /// Whether every kernel plane is transformed, so that [`Engine::spread`]
+    /// can run.
+    fn ready(&self) -> bool {
+        true
+    }
+
+    /// Transforms the kernel (the planes it was built from) where an engine
+    /// built with its transforms deferred has not yet.
+    fn prepare(&self, _planes: &[&[f32]], _control: &mut Control) -> Result<()> {
+        Ok(())
     }
 
     /// Every output of `outputs`, written into the planes of `recycled`

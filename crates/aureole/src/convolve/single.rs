@@ -48,18 +48,23 @@ const BLOCK: usize = 8;
 /// Values in a tile.
 const TILE: usize = BLOCK * STRIP;
 
-/// The kernel's spectra as the engine holds them.
+/// The kernel's spectra as the engine holds them: each plane on its own,
+/// so that a new set shares the planes it does not change.
+#[derive(Clone)]
 struct Spectra {
     /// The near windows of the split last asked for.
-    near: Option<Near>,
+    near: Option<Arc<Near>>,
     /// Per kernel plane.
-    planes: Vec<PlaneSpectrum>,
+    planes: Vec<Arc<PlaneSpectrum>>,
 }
 
 /// One kernel plane's spectrum, stored column by column (`px/2 + 1`
 /// columns of P values; for pruned columns the even frequencies, then the
 /// odd ones).
 enum PlaneSpectrum {
+    /// Not transformed yet: a plan transforms its kernel once it knows
+    /// whether its first image needs it whole or split for lamps.
+    Pending,
     /// K̂ whole: what every input without lamps needs.
     Whole(Vec<Complex<f32>>),
     /// Split for lamps at a radius: the spectrum of the kernel beyond the
@@ -77,14 +82,21 @@ enum PlaneSpectrum {
 }
 
 impl Spectra {
+    /// Whether every plane is transformed.
+    fn ready(&self) -> bool {
+        !self
+            .planes
+            .iter()
+            .any(|p| matches!(p.as_ref(), PlaneSpectrum::Pending))
+    }
+
     /// Whether every plane is split at `radius`, and the near windows are
     /// that radius's: lamps can go through.
     fn split_at(&self, radius: usize) -> bool {
         self.near.as_ref().is_some_and(|near| near.radius == radius)
-            && self
-                .planes
-                .iter()
-                .all(|p| matches!(p, PlaneSpectrum::Split { radius: r, .. } if *r == radius))
+            && self.planes.iter().all(
+                |p| matches!(p.as_ref(), PlaneSpectrum::Split { radius: r, .. } if *r == radius),
+            )
     }
 }
 
@@ -116,8 +128,10 @@ struct Strip<'a> {
 impl Strip<'_> {
     /// What column `u` is multiplied by; `py` values a column.
     fn column(&self, u: usize, py: usize) -> KernelColumn<'_> {
-        match &self.spectra.planes[self.kernel_plane] {
+        match self.spectra.planes[self.kernel_plane].as_ref() {
             PlaneSpectrum::Whole(whole) => KernelColumn::Whole(&whole[u * py..(u + 1) * py]),
+            // `convolve_all` refuses to start on a pending plane.
+            PlaneSpectrum::Pending => KernelColumn::Whole(&[]),
             PlaneSpectrum::Split { far, window, .. } => KernelColumn::Split {
                 far: &far[u * py..(u + 1) * py],
                 window,
@@ -170,6 +184,8 @@ pub struct Convolver {
     spectra: Mutex<Arc<Spectra>>,
     /// Kernel planes.
     planes: usize,
+    /// Whether the centre weights are left out of the spectra.
+    centre: Centre,
     /// The weight each kernel plane left out of its spectrum (its centre),
     /// applied exactly to the plane itself: in the FFT it would dominate
     /// the round-off of the light that moves.
@@ -196,6 +212,21 @@ impl Convolver {
         centre: Centre,
         control: &mut Control,
     ) -> Result<Convolver> {
+        let convolver = Convolver::deferred(planes, size, width, height, centre);
+        convolver.prepare(planes, control)?;
+        Ok(convolver)
+    }
+
+    /// [`Convolver::new`] with the transforms left to the first call that
+    /// needs them: [`Engine::prepare`] for the whole spectra, or
+    /// [`Engine::split_near`], which then transforms only the split ones.
+    pub fn deferred(
+        planes: &[&[f32]],
+        size: (usize, usize),
+        width: usize,
+        height: usize,
+        centre: Centre,
+    ) -> Convolver {
         let grid = Grid::new(size, (width, height), true);
         let mut real_planner = RealFftPlanner::<f32>::new();
         let mut planner = FftPlanner::<f32>::new();
@@ -208,45 +239,39 @@ impl Convolver {
                 })
                 .collect(),
         };
-        let row_fft = real_planner.plan_fft_forward(grid.px);
-        let full_column = planner.plan_fft_forward(grid.columns.length());
-        let mut spectra = Vec::with_capacity(planes.len());
-        let mut centres = Vec::with_capacity(planes.len());
-        for (k, plane) in planes.iter().enumerate() {
-            let placed = Placement {
-                plane,
-                size,
-                centre,
-            };
-            let share = 1.0 / planes.len() as f64;
-            let mut part = control.part(k as f64 * share, (k + 1) as f64 * share);
-            spectra.push(kernel_spectrum(
-                &*row_fft,
-                &*full_column,
-                &grid,
-                &placed,
-                &mut part,
-            )?);
-            centres.push(placed.left_out());
-        }
-        Ok(Convolver {
+        let centres = planes
+            .iter()
+            .map(|plane| {
+                Placement {
+                    plane,
+                    size,
+                    centre,
+                }
+                .left_out()
+            })
+            .collect();
+        Convolver {
             width,
             height,
             kernel_size: size,
             grid,
-            planes: spectra.len(),
+            planes: planes.len(),
+            centre,
             spectra: Mutex::new(Arc::new(Spectra {
                 near: None,
-                planes: spectra.into_iter().map(PlaneSpectrum::Whole).collect(),
+                planes: planes
+                    .iter()
+                    .map(|_| Arc::new(PlaneSpectrum::Pending))
+                    .collect(),
             })),
             centres,
             twiddles,
-            row_fft,
+            row_fft: real_planner.plan_fft_forward(grid.px),
             row_ifft: real_planner.plan_fft_inverse(grid.px),
             column_fft: planner.plan_fft_forward(grid.columns.transform_length()),
             column_ifft: planner.plan_fft_inverse(grid.columns.transform_length()),
             buffers: Pool::new(),
-        })
+        }
     }
 
     /// `plane` (row-major, `width`×`height`) convolved with kernel plane
@@ -280,6 +305,10 @@ impl Convolver {
         mut recycled: Vec<Vec<f32>>,
         control: &mut Control,
     ) -> Result<Vec<Vec<f32>>> {
+        let spectra = self.spectra();
+        if !spectra.ready() {
+            return Err(crate::error::Error::NotTransformed);
+        }
         let h = self.height;
         let strips = self.grid.spectrum_width().div_ceil(STRIP);
         let zero = Complex::new(0.0, 0.0);
@@ -291,7 +320,6 @@ impl Convolver {
         for (input, rows) in inputs.iter().zip(buffers.iter_mut()) {
             self.forward_rows(input, rows, strips, &control.cancel());
         }
-        let spectra = self.spectra();
         let near = spectra
             .near
             .as_ref()
@@ -752,6 +780,40 @@ impl Engine for Convolver {
         self.spectra().split_at(radius)
     }
 
+    fn ready(&self) -> bool {
+        self.spectra().ready()
+    }
+
+    fn prepare(&self, planes: &[&[f32]], control: &mut Control) -> Result<()> {
+        if self.ready() {
+            return Ok(());
+        }
+        if planes.len() != self.planes {
+            return Err(crate::error::Error::NotTransformed);
+        }
+        let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(self.grid.px);
+        let full_column = FftPlanner::<f32>::new().plan_fft_forward(self.grid.columns.length());
+        let mut held = self.spectra.lock().unwrap_or_else(PoisonError::into_inner);
+        let share = 1.0 / planes.len() as f64;
+        for (k, plane) in planes.iter().enumerate() {
+            if !matches!(held.planes[k].as_ref(), PlaneSpectrum::Pending) {
+                continue;
+            }
+            let placed = Placement {
+                plane,
+                size: self.kernel_size,
+                centre: self.centre,
+            };
+            let mut part = control.part(k as f64 * share, (k + 1) as f64 * share);
+            let whole = kernel_spectrum(&*row_fft, &*full_column, &self.grid, &placed, &mut part)?;
+            // Each plane as it comes: a cancelled run keeps those done.
+            let mut next = Spectra::clone(&held);
+            next.planes[k] = Arc::new(PlaneSpectrum::Whole(whole));
+            *held = Arc::new(next);
+        }
+        Ok(())
+    }
+
     fn split_near(&self, planes: &[&[f32]], radius: usize, control: &mut Control) -> Result<bool> {
         if self.has_split(radius) {
             return Ok(true);
@@ -764,56 +826,30 @@ impl Engine for Convolver {
         if !fits || !shaped {
             return Ok(false);
         }
-        let near = Near::new(planes, size, radius);
+        let near = Arc::new(Near::new(planes, size, radius));
         let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(self.grid.px);
         let full_column = FftPlanner::<f32>::new().plan_fft_forward(self.grid.columns.length());
         // Held while the split is built, so that no application starts on
-        // spectra half replaced; one already running keeps its own.
+        // spectra half replaced. Each plane's new spectrum replaces its old
+        // one as it comes, which then goes unless an application still
+        // running holds it: the engine never holds two whole sets. A plane
+        // split before a cancellation is not split again.
         let mut held = self.spectra.lock().unwrap_or_else(PoisonError::into_inner);
-        let empty = Spectra {
-            near: None,
-            planes: Vec::new(),
-        };
-        let current = std::mem::replace(&mut *held, Arc::new(empty));
-        // Where nothing else holds them, each plane's old spectrum goes as
-        // its new one comes, rather than all at the end; a plane split
-        // before a cancellation is not split again.
-        let (mut owned, shared) = match Arc::try_unwrap(current) {
-            Ok(spectra) => (Some(spectra.planes), None),
-            Err(shared) => (None, Some(shared)),
-        };
-        let mut built = Vec::with_capacity(planes.len());
+        let share = 1.0 / planes.len() as f64;
         for (k, plane) in planes.iter().enumerate() {
-            let done = owned.as_ref().is_some_and(
-                |p| matches!(p[k], PlaneSpectrum::Split { radius: r, .. } if r == radius),
-            );
+            let done = matches!(held.planes[k].as_ref(), PlaneSpectrum::Split { radius: r, .. } if *r == radius);
             if done {
                 continue;
             }
-            let share = 1.0 / planes.len() as f64;
             let mut part = control.part(k as f64 * share, (k + 1) as f64 * share);
-            let split = self.split_plane(plane, k, &near, (&*row_fft, &*full_column), &mut part);
-            match (split, &mut owned) {
-                (Ok(split), Some(planes)) => planes[k] = split,
-                (Ok(split), None) => built.push(split),
-                (Err(error), _) => {
-                    *held = match (owned, shared) {
-                        (Some(planes), _) => Arc::new(Spectra { near: None, planes }),
-                        (None, shared) => shared.unwrap_or_else(|| {
-                            Arc::new(Spectra {
-                                near: None,
-                                planes: Vec::new(),
-                            })
-                        }),
-                    };
-                    return Err(error);
-                }
-            }
+            let split = self.split_plane(plane, k, &near, (&*row_fft, &*full_column), &mut part)?;
+            let mut next = Spectra::clone(&held);
+            next.planes[k] = Arc::new(split);
+            *held = Arc::new(next);
         }
-        *held = Arc::new(Spectra {
-            near: Some(near),
-            planes: owned.unwrap_or(built),
-        });
+        let mut next = Spectra::clone(&held);
+        next.near = Some(near);
+        *held = Arc::new(next);
         Ok(true)
     }
 

@@ -65,7 +65,9 @@ pub struct Plan {
 impl Plan {
     /// Builds the kernel of `config` for `width`×`height` images, by default
     /// large enough that light from any pixel reaches every other
-    /// ((2W − 1)×(2H − 1)), or at most `max_extent`, and transforms it.
+    /// ((2W − 1)×(2H − 1)), or at most `max_extent`, and plans its
+    /// transforms, which the first application makes: whole, or split for
+    /// a scene with lamps.
     pub fn for_image(
         config: &Config,
         width: usize,
@@ -292,6 +294,17 @@ impl Plan {
             }
             other => other,
         };
+        // The f32 engine transforms its kernel when first asked: whole here,
+        // or split for lamps above (never both, for the first image).
+        if method == Method::Fft && route == Route::Single && survey.spread > 0 {
+            if !self.single.ready() {
+                spread_from = 0.5;
+            }
+            self.single.prepare(
+                &kernel_planes(&self.kernel),
+                &mut control.part(0.0, spread_from),
+            )?;
+        }
         let lamps: &[usize] = match &route {
             Route::Lamps { lamps, .. } => lamps,
             _ => &[],
