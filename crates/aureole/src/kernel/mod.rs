@@ -145,10 +145,19 @@ impl Kernel {
             if plane.len() != width * height {
                 return Err(refuse(&format!("a plane of {} values", plane.len())));
             }
-            if plane.par_iter().any(|v| !v.is_finite() || *v < 0.0) {
+            // Row by row, each row checked and summed while it is in cache;
+            // the sums as `plane_sum` adds them.
+            let rows: Vec<(f64, bool)> = plane
+                .par_chunks(width.max(1))
+                .map(|row| {
+                    let bad = row.iter().any(|v| !v.is_finite() || *v < 0.0);
+                    (sum_f64(row), bad)
+                })
+                .collect();
+            if rows.iter().any(|&(_, bad)| bad) {
                 return Err(refuse("a negative or non-finite weight"));
             }
-            let sum = plane_sum(&plane, width);
+            let sum: f64 = rows.iter().map(|&(sum, _)| sum).sum();
             if sum <= 0.0 {
                 return Err(refuse("a plane of zeros"));
             }
