@@ -1,7 +1,8 @@
 //! PIZ's Huffman coding (`ImfHuf`), decoding only: a canonical code of up
 //! to 58 bits per symbol, its lengths stored packed in 6 bits with runs of
 //! zeros, one symbol reserved for runs of the value before, and a 14-bit
-//! lookup table with a list of long codes behind each entry.
+//! lookup table with, behind each entry that long codes share, a second
+//! table of their further bits (float samples make most codes long).
 
 const ENCODE_SIZE: usize = (1 << 16) + 1;
 const DECODE_BITS: u32 = 14;
@@ -18,10 +19,26 @@ type Entry = u32;
 /// The mark of an entry that points to long codes.
 const LONG: u32 = 0xff00_0000;
 
-/// The lookup table of the 14-bit prefixes, and the lists of long codes.
+/// The lookup table of the 14-bit prefixes, and the long codes behind
+/// them.
 struct Table {
     entries: Vec<Entry>,
-    long: Vec<Vec<u32>>,
+    long: Vec<Long>,
+}
+
+/// The further bits a second table takes at most (1024 entries).
+const SECOND_BITS: u32 = 10;
+
+/// The long codes that share a 14-bit prefix.
+#[derive(Default)]
+struct Long {
+    /// Their symbols.
+    symbols: Vec<u32>,
+    /// Bits past the prefix that index `entries`: the longest code's.
+    extra: u32,
+    /// Entries as in the first table, by the further bits; empty where the
+    /// codes are too long for one (they are then tried one by one).
+    entries: Vec<Entry>,
 }
 
 /// Bits read from the front of a byte slice, most significant first, by
@@ -230,11 +247,13 @@ fn lookup(codes: &[u64], min: usize, max: usize) -> Result<Table, String> {
             let slot = &mut table.entries[(code >> (length - DECODE_BITS)) as usize];
             if *slot == 0 {
                 *slot = LONG | table.long.len() as u32;
-                table.long.push(Vec::new());
+                table.long.push(Long::default());
             } else if *slot & LONG != LONG {
                 return Err(damaged());
             }
-            table.long[(*slot & !LONG) as usize].push(symbol as u32);
+            table.long[(*slot & !LONG) as usize]
+                .symbols
+                .push(symbol as u32);
         } else {
             let first = (code << (DECODE_BITS - length)) as usize;
             for slot in &mut table.entries[first..first + (1 << (DECODE_BITS - length))] {
@@ -242,6 +261,31 @@ fn lookup(codes: &[u64], min: usize, max: usize) -> Result<Table, String> {
                     return Err(damaged());
                 }
                 *slot = (length << 24) | symbol as u32;
+            }
+        }
+    }
+    for long in &mut table.long {
+        let lengths = long
+            .symbols
+            .iter()
+            .map(|&s| (codes[s as usize] & 63) as u32);
+        let extra = lengths.max().unwrap_or(DECODE_BITS) - DECODE_BITS;
+        if extra > SECOND_BITS {
+            continue;
+        }
+        long.extra = extra;
+        long.entries = vec![0; 1 << extra];
+        for &symbol in &long.symbols {
+            let entry = codes[symbol as usize];
+            let (code, length) = (entry >> 6, (entry & 63) as u32);
+            let own = length - DECODE_BITS;
+            let suffix = (code & ((1 << own) - 1)) as usize;
+            let first = suffix << (extra - own);
+            for slot in &mut long.entries[first..first + (1 << (extra - own))] {
+                if *slot != 0 {
+                    return Err(damaged());
+                }
+                *slot = (length << 24) | symbol;
             }
         }
     }
@@ -282,13 +326,23 @@ pub(super) fn decompress(data: &[u8], count: usize) -> Result<Vec<u16>, String> 
         bits.refill();
         let entry = table.entries[(bits.buffer >> (64 - DECODE_BITS)) as usize];
         let (symbol, length) = if entry & LONG == LONG {
-            let candidates = &table.long[(entry & !LONG) as usize];
-            let found = candidates.iter().find_map(|&symbol| {
-                let code = codes[symbol as usize];
-                let length = (code & 63) as u32;
-                (bits.peek_long(length) == code >> 6).then_some((symbol, length))
-            });
-            found.ok_or_else(damaged)?
+            let long = &table.long[(entry & !LONG) as usize];
+            if long.entries.is_empty() {
+                let found = long.symbols.iter().find_map(|&symbol| {
+                    let code = codes[symbol as usize];
+                    let length = (code & 63) as u32;
+                    (bits.peek_long(length) == code >> 6).then_some((symbol, length))
+                });
+                found.ok_or_else(damaged)?
+            } else {
+                // The refilled buffer holds at least 32 bits: 14 + 10 fit.
+                let further = (bits.buffer << DECODE_BITS) >> (64 - long.extra);
+                let second = long.entries[further as usize];
+                if second == 0 {
+                    return Err(damaged());
+                }
+                (second & 0xff_ffff, second >> 24)
+            }
         } else if entry == 0 {
             return Err(damaged());
         } else {
