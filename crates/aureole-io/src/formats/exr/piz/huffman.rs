@@ -1,8 +1,11 @@
 //! PIZ's Huffman coding (`ImfHuf`), decoding only: a canonical code of up
 //! to 58 bits per symbol, its lengths stored packed in 6 bits with runs of
 //! zeros, one symbol reserved for runs of the value before, and a 14-bit
-//! lookup table with, behind each entry that long codes share, a second
-//! table of their further bits (float samples make most codes long).
+//! lookup table; a longer code (float samples make most codes long) is
+//! found among the canonical code's ranges by length, from the shortest to
+//! the longest of those that share its first 14 bits. Small tables that
+//! stay in the first cache beat a second level of tables here: decoding
+//! waits on memory, not on the few comparisons.
 
 const ENCODE_SIZE: usize = (1 << 16) + 1;
 const DECODE_BITS: u32 = 14;
@@ -12,33 +15,84 @@ const LONG_ZEROCODE_RUN: u64 = 63;
 const SHORTEST_LONG_RUN: u64 = 2 + LONG_ZEROCODE_RUN - SHORT_ZEROCODE_RUN;
 
 /// An entry of the lookup table: a short code's length (high byte) and
-/// symbol, or [`LONG`] and the index of the list of long codes that start
-/// with its bits, or 0 for none.
+/// symbol, or [`LONG`] and the shortest (bits 8–15) and longest (low
+/// byte) lengths of the long codes that start with its bits, or 0 for
+/// none.
 type Entry = u32;
 
-/// The mark of an entry that points to long codes.
+/// The mark of an entry for long codes.
 const LONG: u32 = 0xff00_0000;
 
-/// The lookup table of the 14-bit prefixes, and the long codes behind
-/// them.
+/// The lookup table of the 14-bit prefixes, and the whole code by length
+/// for the long codes.
 struct Table {
     entries: Vec<Entry>,
-    long: Vec<Long>,
+    canonical: Canonical,
 }
 
-/// The further bits a second table takes at most (1024 entries).
-const SECOND_BITS: u32 = 10;
-
-/// The long codes that share a 14-bit prefix.
-#[derive(Default)]
-struct Long {
-    /// Their symbols.
+/// The canonical code by length (longer codes are numerically lower):
+/// the codes of length `l`, left-aligned in 64 bits, start at `base[l]`,
+/// and their symbols, in code order, at `symbols[first[l]..]`.
+struct Canonical {
+    base: [u64; 59],
+    first: [u32; 59],
+    count: [u32; 59],
     symbols: Vec<u32>,
-    /// Bits past the prefix that index `entries`: the longest code's.
-    extra: u32,
-    /// Entries as in the first table, by the further bits; empty where the
-    /// codes are too long for one (they are then tried one by one).
-    entries: Vec<Entry>,
+}
+
+impl Canonical {
+    fn new(codes: &[u64], min: usize, max: usize) -> Canonical {
+        let mut count = [0u32; 59];
+        let mut base = [u64::MAX; 59];
+        for &entry in &codes[min..=max] {
+            let length = (entry & 63) as usize;
+            if length > 0 {
+                count[length] += 1;
+                base[length] = base[length].min((entry >> 6) << (64 - length));
+            }
+        }
+        let mut first = [0u32; 59];
+        let mut total = 0;
+        for (first, count) in first.iter_mut().zip(count) {
+            *first = total;
+            total += count;
+        }
+        let mut symbols = vec![0; total as usize];
+        let mut next = first;
+        // Codes of one length rise with the symbol (`hufCanonicalCodeTable`).
+        for (symbol, &entry) in codes.iter().enumerate().take(max + 1).skip(min) {
+            let length = (entry & 63) as usize;
+            if length > 0 {
+                symbols[next[length] as usize] = symbol as u32;
+                next[length] += 1;
+            }
+        }
+        Canonical {
+            base,
+            first,
+            count,
+            symbols,
+        }
+    }
+
+    /// The symbol and length of the code at the front of `bits` (left-aligned,
+    /// valid for `longest` bits), among the lengths `shortest..=longest`.
+    #[inline]
+    fn find(&self, bits: u64, shortest: u32, longest: u32) -> Option<(u32, u32)> {
+        for length in shortest..=longest {
+            let l = length as usize;
+            if self.count[l] > 0 && bits >= self.base[l] {
+                let index = (bits - self.base[l]) >> (64 - length);
+                return (index < u64::from(self.count[l])).then(|| {
+                    (
+                        self.symbols[(self.first[l] as u64 + index) as usize],
+                        length,
+                    )
+                });
+            }
+        }
+        None
+    }
 }
 
 /// Bits read from the front of a byte slice, most significant first, by
@@ -230,10 +284,7 @@ fn code_table(bits: &mut Bits, min: usize, max: usize) -> Result<Vec<u64>, Strin
 /// The lookup table of `codes` for symbols `min..=max`
 /// (`hufBuildDecTable`).
 fn lookup(codes: &[u64], min: usize, max: usize) -> Result<Table, String> {
-    let mut table = Table {
-        entries: vec![0; DECODE_SIZE],
-        long: Vec::new(),
-    };
+    let mut entries = vec![0; DECODE_SIZE];
     for (symbol, &entry) in codes.iter().enumerate().take(max + 1).skip(min) {
         let code = entry >> 6;
         let length = (entry & 63) as u32;
@@ -244,19 +295,17 @@ fn lookup(codes: &[u64], min: usize, max: usize) -> Result<Table, String> {
             return Err(damaged());
         }
         if length > DECODE_BITS {
-            let slot = &mut table.entries[(code >> (length - DECODE_BITS)) as usize];
+            let slot = &mut entries[(code >> (length - DECODE_BITS)) as usize];
             if *slot == 0 {
-                *slot = LONG | table.long.len() as u32;
-                table.long.push(Long::default());
+                *slot = LONG | (length << 8) | length;
             } else if *slot & LONG != LONG {
                 return Err(damaged());
             }
-            table.long[(*slot & !LONG) as usize]
-                .symbols
-                .push(symbol as u32);
+            let (shortest, longest) = ((*slot >> 8) & 0xff, *slot & 0xff);
+            *slot = LONG | (shortest.min(length) << 8) | longest.max(length);
         } else {
             let first = (code << (DECODE_BITS - length)) as usize;
-            for slot in &mut table.entries[first..first + (1 << (DECODE_BITS - length))] {
+            for slot in &mut entries[first..first + (1 << (DECODE_BITS - length))] {
                 if *slot != 0 {
                     return Err(damaged());
                 }
@@ -264,32 +313,10 @@ fn lookup(codes: &[u64], min: usize, max: usize) -> Result<Table, String> {
             }
         }
     }
-    for long in &mut table.long {
-        let lengths = long
-            .symbols
-            .iter()
-            .map(|&s| (codes[s as usize] & 63) as u32);
-        let extra = lengths.max().unwrap_or(DECODE_BITS) - DECODE_BITS;
-        if extra > SECOND_BITS {
-            continue;
-        }
-        long.extra = extra;
-        long.entries = vec![0; 1 << extra];
-        for &symbol in &long.symbols {
-            let entry = codes[symbol as usize];
-            let (code, length) = (entry >> 6, (entry & 63) as u32);
-            let own = length - DECODE_BITS;
-            let suffix = (code & ((1 << own) - 1)) as usize;
-            let first = suffix << (extra - own);
-            for slot in &mut long.entries[first..first + (1 << (extra - own))] {
-                if *slot != 0 {
-                    return Err(damaged());
-                }
-                *slot = (length << 24) | symbol;
-            }
-        }
-    }
-    Ok(table)
+    Ok(Table {
+        entries,
+        canonical: Canonical::new(codes, min, max),
+    })
 }
 
 /// `count` values from a Huffman-coded chunk (`hufUncompress`).
@@ -326,23 +353,12 @@ pub(super) fn decompress(data: &[u8], count: usize) -> Result<Vec<u16>, String> 
         bits.refill();
         let entry = table.entries[(bits.buffer >> (64 - DECODE_BITS)) as usize];
         let (symbol, length) = if entry & LONG == LONG {
-            let long = &table.long[(entry & !LONG) as usize];
-            if long.entries.is_empty() {
-                let found = long.symbols.iter().find_map(|&symbol| {
-                    let code = codes[symbol as usize];
-                    let length = (code & 63) as u32;
-                    (bits.peek_long(length) == code >> 6).then_some((symbol, length))
-                });
-                found.ok_or_else(damaged)?
-            } else {
-                // The refilled buffer holds at least 32 bits: 14 + 10 fit.
-                let further = (bits.buffer << DECODE_BITS) >> (64 - long.extra);
-                let second = long.entries[further as usize];
-                if second == 0 {
-                    return Err(damaged());
-                }
-                (second & 0xff_ffff, second >> 24)
-            }
+            let (shortest, longest) = ((entry >> 8) & 0xff, entry & 0xff);
+            let front = bits.peek_long(longest) << (64 - longest);
+            table
+                .canonical
+                .find(front, shortest, longest)
+                .ok_or_else(damaged)?
         } else if entry == 0 {
             return Err(damaged());
         } else {
