@@ -14,6 +14,9 @@ use aureole_io::limits::Limits;
 use aureole_io::read::read_image;
 use exr::prelude::f16;
 
+mod common;
+use common::images;
+
 const FILES: [&str; 6] = [
     "LuminanceChroma/CrissyField.exr",
     "LuminanceChroma/Flowers.exr",
@@ -22,16 +25,6 @@ const FILES: [&str; 6] = [
     "Chromaticities/Rec709_YC.exr",
     "Chromaticities/XYZ_YC.exr",
 ];
-
-fn images() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/openexr-images");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: {} is absent", dir.display());
-        None
-    }
-}
 
 /// The reference program, built in `dir`; `None` (said) where it cannot be.
 fn reference(dir: &Path) -> Option<PathBuf> {

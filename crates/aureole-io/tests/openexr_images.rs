@@ -14,15 +14,8 @@ use aureole_io::write::{write_linear_into, LinearOptions};
 use exr::meta::attribute::SampleType;
 use exr::prelude::*;
 
-fn images() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/openexr-images");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: {} is absent", dir.display());
-        None
-    }
-}
+mod common;
+use common::{images, read_all};
 
 fn files(dir: &Path, out: &mut Vec<PathBuf>) {
     let Ok(entries) = std::fs::read_dir(dir) else {
@@ -57,17 +50,6 @@ fn samples_of(samples: &FlatSamples) -> (SampleType, Vec<u32>) {
         ),
         FlatSamples::U32(v) => (SampleType::U32, v.clone()),
     }
-}
-
-fn read_all(path: &Path) -> FlatImage {
-    read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// The refusals we allow: features that are not ours to spread.

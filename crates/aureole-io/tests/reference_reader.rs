@@ -15,6 +15,9 @@ use aureole_io::read::read_image;
 use aureole_io::write::{write_linear, write_linear_into, LinearOptions};
 use exr::prelude::*;
 
+mod common;
+use common::read_all;
+
 fn installed(tool: &str) -> bool {
     let found = Command::new(tool).arg("--help").output().is_ok();
     if !found {
@@ -77,17 +80,6 @@ fn scene(layout: Layout) -> Image {
     image
 }
 
-fn flat(path: &Path) -> FlatImage {
-    read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_file(path)
-        .unwrap()
-}
-
 #[test]
 fn zip_files_are_read_back_bit_for_bit_by_exr_and_openexr() {
     let dir = tempfile::tempdir().unwrap();
@@ -123,7 +115,7 @@ fn zip_files_are_read_back_bit_for_bit_by_exr_and_openexr() {
                 assert_eq!(back.alpha.as_ref().map(Vec::len), Some(333 * 77), "{what}");
                 // The reference library, against what exr itself writes.
                 let theirs = dir.path().join("theirs.exr");
-                flat(&ours).write().to_file(&theirs).unwrap();
+                read_all(&ours).write().to_file(&theirs).unwrap();
                 same_pixels(&ours, &theirs);
                 header_says(
                     &ours,
@@ -170,7 +162,7 @@ fn tiled_zip_files_stay_tiled_and_read_back_by_openexr() {
         loaded.original,
     )
     .unwrap();
-    let back = flat(&ours);
+    let back = read_all(&ours);
     assert_eq!(
         back.layer_data[0].encoding.blocks,
         Blocks::Tiles(Vec2(64, 32))
