@@ -34,15 +34,19 @@ def main():
     server = subprocess.Popen([BINARY, "studio", "--no-browser", "-q", "--root", ROOT],
                               stdout=subprocess.PIPE, text=True)
     try:
-        url = server.stdout.readline().strip()
-        presets = {p["name"]: p["toml"] for p in json.load(urllib.request.urlopen(url + "api/presets"))}
+        # http://127.0.0.1:PORT/?token=TOKEN: scripts send the token as a header.
+        opened = server.stdout.readline().strip()
+        url, token = opened.split("?token=")
+        auth = {"authorization": f"Bearer {token}"}
+        presets = {p["name"]: p["toml"] for p in json.load(urllib.request.urlopen(
+            urllib.request.Request(url + "api/presets", headers=auth)))}
 
         def render(config, **extra):
             # As the page asks: the linear preview, which it tone-maps itself.
             body = json.dumps({"image": "demo", "config": config, "width": 1280,
                                "format": "linear", **extra}).encode()
             request = urllib.request.Request(url + "api/render", data=body,
-                                             headers={"content-type": "application/json"})
+                                             headers={"content-type": "application/json", **auth})
             start = time.time()
             with urllib.request.urlopen(request) as reply:
                 reply.read()
@@ -70,7 +74,7 @@ def main():
         if browser:
             print("In the page, exposure only (no server), median of 60 redraws (ms):")
             for display in ("webgl2", "2d"):
-                ms = page_redraw(browser, f"{url}?drawbench=1&display={display}")
+                ms = page_redraw(browser, f"{opened}&drawbench=1&display={display}")
                 print(f"  {display:20s} {ms:6.2f}")
     finally:
         server.terminate()

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::anyhow;
 use aureole_io::limits::default_memory_limit;
-use aureole_studio::{Roots, Studio};
+use aureole_studio::{Access, Roots, Studio};
 
 use crate::Failure;
 
@@ -13,7 +13,9 @@ use crate::Failure;
 #[command(
     after_help = "The page, its script and style are in this binary: nothing is fetched from \
 the network. Files are read only under the --root folders (default: the folders of the IMAGE \
-arguments, else the current folder); a path outside them is refused."
+arguments, else the current folder); a path outside them is refused. Only the address printed at \
+start, with its secret token, opens the studio: scripts send the token as `Authorization: Bearer \
+TOKEN` or `?token=TOKEN`; pages of other sites and other host names are refused."
 )]
 pub struct Args {
     /// Images to offer first (their folders become roots).
@@ -57,7 +59,20 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
             "aureole: warning: listening on {address}: other machines can reach the studio and read the images under its folders"
         );
     }
-    let studio = Studio::new(roots, default_memory_limit());
+    // The first image opens first, named as the studio names it.
+    let first = match args.images.first() {
+        Some(image) => {
+            let absolute = image
+                .canonicalize()
+                .map_err(|e| Failure::Usage(anyhow!("{}: {e}", image.display())))?;
+            Some(
+                roots
+                    .resolve(&absolute.display().to_string())
+                    .map_err(|e| Failure::Usage(anyhow!("{e}")))?,
+            )
+        }
+        None => None,
+    };
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -70,7 +85,14 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         let bound = listener
             .local_addr()
             .map_err(|e| Failure::Run(anyhow!("{e}")))?;
-        let url = format!("http://{bound}/");
+        let access = Access::new(bound)
+            .map_err(|e| Failure::Run(anyhow!("cannot start the studio: {e}")))?;
+        let mut url = access.url(bound);
+        if let Some(first) = &first {
+            url.push_str("&image=");
+            url.push_str(&query_escaped(&first.display().to_string()));
+        }
+        let studio = Studio::new(roots, default_memory_limit(), access);
         // The URL goes to stdout so that a script can read it.
         println!("{url}");
         if !quiet {
@@ -83,6 +105,19 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
             .await
             .map_err(|e| Failure::Run(anyhow!("the server stopped: {e}")))
     })
+}
+
+/// `text` as a URL query value: unreserved characters kept, the rest
+/// percent-encoded byte by byte.
+fn query_escaped(text: &str) -> String {
+    text.bytes()
+        .map(|b| match b {
+            b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'-' | b'_' | b'.' | b'~' | b'/' => {
+                (b as char).to_string()
+            }
+            _ => format!("%{b:02X}"),
+        })
+        .collect()
 }
 
 /// Opens `url` with the desktop's opener; without one, the URL printed is

@@ -3,6 +3,9 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
+// Each tab is a client of its own: a new render replaces only this tab's
+// last one, never another tab's.
+const client = self.crypto && crypto.randomUUID ? crypto.randomUUID() : `${Date.now()}-${Math.random()}`;
 const state = { view: "result", split: 0.5, controller: null, timer: null, presets: [] };
 
 function previewWidth() {
@@ -21,6 +24,7 @@ function request(view) {
     view,
     tonemap: $("tonemap").value,
     knee: Number($("knee").value) || 0,
+    client,
   };
   if (threshold !== "") body.threshold = Number(threshold);
   body.exposure = $("auto").checked ? "auto" : Number($("ev").value);
@@ -576,7 +580,9 @@ async function readConfig() {
 
 async function writeConfig() {
   const table = { ...state.top, effect: state.effects.filter((e) => e.on).map((e) => e.table) };
-  const reply = await fetch("/api/config/write", { method: "POST", body: JSON.stringify(table) });
+  const reply = await fetch("/api/config/write", {
+    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(table),
+  });
   const text = await reply.text();
   if (!reply.ok) { showError(JSON.parse(text).error); return; }
   $("config").value = text;

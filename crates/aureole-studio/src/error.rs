@@ -18,6 +18,12 @@ pub enum StudioError {
     /// A file that cannot be read as an image, or a frame that does not fit.
     #[error("{0}")]
     Unprocessable(String),
+    /// The file asked for exists and may not be replaced.
+    #[error("{0}")]
+    Conflict(String),
+    /// The studio's memory budget is taken by other jobs.
+    #[error("{0}")]
+    Busy(String),
     /// A newer render took its place.
     #[error("superseded by a newer render")]
     Superseded,
@@ -34,6 +40,8 @@ impl StudioError {
             StudioError::Forbidden(_) => StatusCode::FORBIDDEN,
             StudioError::NotFound(_) => StatusCode::NOT_FOUND,
             StudioError::Unprocessable(_) => StatusCode::UNPROCESSABLE_ENTITY,
+            StudioError::Conflict(_) => StatusCode::CONFLICT,
+            StudioError::Busy(_) => StatusCode::SERVICE_UNAVAILABLE,
             StudioError::Superseded => StatusCode::CONFLICT,
             StudioError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }

@@ -13,13 +13,15 @@ use aureole_io::limits::Limits;
 use aureole_io::write::{output_format, write_image_into, WriteOptions};
 use serde::Serialize;
 
+use crate::budget::Budget;
 use crate::error::StudioError;
 use crate::locked;
-use crate::render::{display_options, parse_config, RenderRequest, DEMO};
+use crate::render::{display_options, max_extent, needs, parse_config, RenderRequest, DEMO};
 use crate::roots::Roots;
 
-/// `POST /api/export`: a render request's fields (without `width`) and
-/// `output`, where to write the full-resolution result.
+/// `POST /api/export`: a render request's fields (without `width`),
+/// `output`, where to write the full-resolution result, and `overwrite`,
+/// whether a file already there may be replaced (by default it is not).
 #[derive(Debug, Clone)]
 pub struct ExportRequest {
     /// The camera, image and display settings, as for a preview.
@@ -27,6 +29,8 @@ pub struct ExportRequest {
     /// The file to write, under a root (absolute, or relative to the first
     /// root); its extension chooses the format, as for `aureole apply -o`.
     pub output: String,
+    /// Whether an existing file at `output` may be replaced.
+    pub overwrite: bool,
 }
 
 impl ExportRequest {
@@ -42,10 +46,19 @@ impl ExportRequest {
             Some(serde_json::Value::String(output)) => output,
             _ => return Err(refuse("`output`, the file to write, is missing".into())),
         };
+        let overwrite = match fields.remove("overwrite") {
+            None => false,
+            Some(serde_json::Value::Bool(overwrite)) => overwrite,
+            Some(other) => return Err(refuse(format!("`overwrite` is {other}: true or false"))),
+        };
         // The full image is rendered: the preview's width does not apply.
         fields.insert("width".into(), serde_json::Value::from(1));
         let render = serde_json::from_value(value).map_err(|e| refuse(e.to_string()))?;
-        Ok(ExportRequest { render, output })
+        Ok(ExportRequest {
+            render,
+            output,
+            overwrite,
+        })
     }
 }
 
@@ -72,17 +85,18 @@ struct Job {
 /// The export jobs of a studio.
 pub struct Exports {
     roots: Roots,
-    memory_limit: u64,
+    budget: Arc<Budget>,
     next: AtomicU64,
     jobs: Mutex<HashMap<u64, Arc<Job>>>,
 }
 
 impl Exports {
-    /// Jobs that read and write under `roots`.
-    pub fn new(roots: Roots, memory_limit: u64) -> Exports {
+    /// Jobs that read and write under `roots`, within `budget`, which
+    /// previews share.
+    pub fn new(roots: Roots, budget: Arc<Budget>) -> Exports {
         Exports {
             roots,
-            memory_limit,
+            budget,
             next: AtomicU64::new(1),
             jobs: Mutex::new(HashMap::new()),
         }
@@ -93,6 +107,7 @@ impl Exports {
     pub fn start(&self, request: ExportRequest) -> Result<u64, StudioError> {
         let config = parse_config(&request.render.config)?;
         let display = display_options(&request.render)?;
+        let max_extent = max_extent(&request.render)?;
         let input = match request.render.image.as_str() {
             DEMO => None,
             name => Some(self.roots.resolve(name)?),
@@ -101,6 +116,9 @@ impl Exports {
         if let Some(input) = &input {
             aureole_io::write::refuse_overwrite(&output, input)
                 .map_err(|e| StudioError::BadRequest(e.to_string()))?;
+        }
+        if !request.overwrite && output.symlink_metadata().is_ok() {
+            return Err(StudioError::Conflict(exists(&request.output)));
         }
         let id = self.next.fetch_add(1, Ordering::Relaxed);
         let job = Arc::new(Job {
@@ -112,17 +130,15 @@ impl Exports {
             cancel: Cancel::new(),
         });
         locked(&self.jobs).insert(id, job.clone());
-        let memory_limit = self.memory_limit;
+        let budget = self.budget.clone();
         std::thread::spawn(move || {
-            let outcome = run(
-                &job,
-                &request,
-                config,
-                display,
-                input.as_deref(),
-                &output,
-                memory_limit,
-            );
+            let target = Target {
+                input: input.as_deref(),
+                output: &output,
+                overwrite: request.overwrite,
+                max_extent,
+            };
+            let outcome = run(&job, &request, config, display, target, &budget);
             let mut progress = locked(&job.progress);
             progress.done = true;
             if let Err(error) = outcome {
@@ -190,15 +206,36 @@ impl Exports {
     }
 }
 
+fn exists(requested: &str) -> String {
+    format!(
+        "{requested}: exists; choose another name, or ask with \"overwrite\": true to replace it"
+    )
+}
+
+/// Where an export reads and writes.
+struct Target<'a> {
+    /// The image, or the demo.
+    input: Option<&'a Path>,
+    output: &'a Path,
+    overwrite: bool,
+    max_extent: Option<(usize, usize)>,
+}
+
 fn run(
     job: &Job,
     request: &ExportRequest,
     config: aureole::Config,
     display: DisplayOptions,
-    input: Option<&Path>,
-    output: &Path,
-    memory_limit: u64,
+    target: Target,
+    budget: &Arc<Budget>,
 ) -> Result<(), StudioError> {
+    let memory_limit = budget.total();
+    let Target {
+        input,
+        output,
+        overwrite,
+        max_extent,
+    } = target;
     let (image, original) = match input {
         None => (
             aureole_io::demo::night_street(1280, 720),
@@ -215,7 +252,13 @@ fn run(
         }
     };
     let frame = Frame::new(image, &FrameOptions::default())?;
-    let mut session = Session::new(config).with_memory_limit(memory_limit);
+    let bytes = needs(&config, &frame, max_extent)?;
+    let _lease = budget.lease(bytes, &job.cancel, None, || {
+        locked(&job.progress).stage = "waiting for memory".into();
+    })?;
+    let mut session = Session::new(config)
+        .with_memory_limit(memory_limit)
+        .with_max_extent(max_extent);
     session.set_cancel_token(job.cancel.clone());
     let options = ApplyOptions {
         threshold: request.render.threshold,
@@ -230,6 +273,10 @@ fn run(
     })?;
     job.cancel.check()?;
     locked(&job.progress).stage = "writing".into();
+    // Another program may have made the file while the camera ran.
+    if !overwrite && output.symlink_metadata().is_ok() {
+        return Err(StudioError::Conflict(exists(&output.display().to_string())));
+    }
     let write = WriteOptions {
         linear: Default::default(),
         display,

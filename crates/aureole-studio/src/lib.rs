@@ -4,7 +4,8 @@
 //! the allowed folders, tune the camera, and watch the light. The page, its
 //! script and its style are compiled in; nothing is fetched at run time.
 //!
-//! The HTTP API the page uses, for scripts too:
+//! The HTTP API the page uses, for scripts too. Every request carries the
+//! token printed at start (see [`access`]).
 //!
 //! - `GET /api/presets`: `[{"name", "description", "toml"}]`.
 //! - `GET /api/images`: `{"roots": [...], "images": [...]}`, the images
@@ -15,12 +16,19 @@
 //!   `X-Preview-Size`, `X-Full-Size`, `X-Scale`, `X-Luminance` (min, median,
 //!   max of the full image) and `X-Auto-White-{Filmic,Reinhard,Clip}`
 //!   headers; the kernel view adds `X-Profile-Radial` and
-//!   `X-Profile-Angular`. A
-//!   refusal is a 4xx with `{"error": "one line"}`.
+//!   `X-Profile-Angular`. `max_kernel` caps the kernel as `--max-kernel`
+//!   does; `client` names the tab, whose newer render replaces its older.
+//! - `POST /api/export`: the same fields and `output` (and `overwrite`):
+//!   a job, followed at `GET /api/export/{id}` and cancelled by `DELETE`.
+//!
+//! A refusal is a 4xx with `{"error": "one line"}`; a render that finds the
+//! memory budget taken by exports for too long, a 503.
 
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod access;
+pub mod budget;
 pub mod camera;
 pub mod error;
 pub mod export;
@@ -32,10 +40,12 @@ use std::sync::Arc;
 use axum::body::Bytes;
 use axum::extract::{DefaultBodyLimit, Path, State};
 use axum::http::header;
+use axum::middleware;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
 
+pub use access::Access;
 pub use error::StudioError;
 pub use render::{RenderRequest, Renderer};
 pub use roots::Roots;
@@ -47,20 +57,25 @@ const INDEX: &str = include_str!("../assets/index.html");
 const SCRIPT: &str = include_str!("../assets/app.js");
 const STYLE: &str = include_str!("../assets/app.css");
 
-/// What the routes share: previews and full-resolution exports.
+/// What the routes share: who may drive the studio, previews and
+/// full-resolution exports.
 #[derive(Clone)]
 pub struct Studio {
+    access: Access,
     renderer: Arc<Renderer>,
     exports: Arc<export::Exports>,
 }
 
 impl Studio {
-    /// A studio reading (and exporting) under `roots`, each render within
-    /// `memory_limit` bytes.
-    pub fn new(roots: Roots, memory_limit: u64) -> Studio {
+    /// A studio reading (and exporting) under `roots`, its renders and
+    /// exports together within `memory_limit` bytes, driven by whoever
+    /// `access` lets in.
+    pub fn new(roots: Roots, memory_limit: u64, access: Access) -> Studio {
+        let budget = budget::Budget::new(memory_limit);
         Studio {
-            renderer: Arc::new(Renderer::new(roots.clone(), memory_limit)),
-            exports: Arc::new(export::Exports::new(roots, memory_limit)),
+            access,
+            renderer: Arc::new(Renderer::new(roots.clone(), budget.clone())),
+            exports: Arc::new(export::Exports::new(roots, budget)),
         }
     }
 }
@@ -96,6 +111,10 @@ pub fn router(studio: Studio) -> Router {
             get(export_progress).delete(cancel_export),
         )
         .layer(DefaultBodyLimit::max(MAX_BODY))
+        .layer(middleware::from_fn_with_state(
+            studio.access.clone(),
+            access::gate,
+        ))
         .with_state(studio)
 }
 

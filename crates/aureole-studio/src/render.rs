@@ -3,15 +3,18 @@
 //! it), through the same session as `aureole apply`, then exposed and
 //! tone-mapped as a PNG.
 
+use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
-use std::time::{Instant, SystemTime};
+use std::time::{Duration, Instant, SystemTime};
 
 use aureole::config::ConfigFile;
+use aureole::memory::Workload;
 use aureole::{ApplyOptions, Cancel, Config, Frame, FrameOptions, Image, Method, Session};
 use aureole_io::display::{meter, render, DisplayOptions, Exposure, ToneCurve};
 use aureole_io::limits::Limits;
 use serde::Deserialize;
 
+use crate::budget::Budget;
 use crate::error::StudioError;
 use crate::locked;
 use crate::roots::Roots;
@@ -21,6 +24,10 @@ pub const MAX_WIDTH: usize = 4096;
 
 /// The image the studio shows when none is chosen: the demo night street.
 pub const DEMO: &str = "demo";
+
+/// How long a preview waits for memory that exports hold before it is
+/// answered "busy".
+const PATIENCE: Duration = Duration::from_secs(20);
 
 /// What a render shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
@@ -72,6 +79,67 @@ pub struct RenderRequest {
     /// the luminance itself, for the page to expose as the user drags.
     #[serde(default)]
     pub format: Format,
+    /// The kernel's largest extent in the full image's pixels, as
+    /// `--max-kernel`: a number or `"WxH"`; by default light reaches the
+    /// whole frame.
+    #[serde(default)]
+    pub max_kernel: Option<MaxKernel>,
+    /// Who asks (the page makes one per tab): a client's render cancels
+    /// that client's render still running, and no one else's.
+    #[serde(default)]
+    pub client: Option<String>,
+}
+
+/// `max_kernel`: `257`, `"257"` or `"511x255"`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum MaxKernel {
+    /// W×W.
+    Side(usize),
+    /// `W` or `WxH`.
+    Text(String),
+}
+
+impl MaxKernel {
+    /// Width and height, each a whole number above 0.
+    pub fn size(&self) -> Result<(usize, usize), StudioError> {
+        let refuse = || {
+            StudioError::BadRequest(format!(
+                "max_kernel {self:?}: write a whole number of pixels above 0, W or \"WxH\" (e.g. 257 or \"511x255\")"
+            ))
+        };
+        let number = |s: &str| s.trim().parse::<usize>().ok().filter(|&n| n > 0);
+        match self {
+            MaxKernel::Side(n) if *n > 0 => Ok((*n, *n)),
+            MaxKernel::Side(_) => Err(refuse()),
+            MaxKernel::Text(text) => match text.split_once(['x', 'X']) {
+                Some((w, h)) => number(w).zip(number(h)).ok_or_else(refuse),
+                None => number(text).map(|n| (n, n)).ok_or_else(refuse),
+            },
+        }
+    }
+}
+
+/// The kernel cap of `request` in the full image's pixels, as the
+/// session takes it.
+pub(crate) fn max_extent(request: &RenderRequest) -> Result<Option<(usize, usize)>, StudioError> {
+    request.max_kernel.as_ref().map(MaxKernel::size).transpose()
+}
+
+/// The bytes a run of `config` on `frame` takes at its peak, with the
+/// frame itself, from the library's own estimate.
+pub(crate) fn needs(
+    config: &Config,
+    frame: &Frame,
+    max_extent: Option<(usize, usize)>,
+) -> Result<u64, StudioError> {
+    let image = frame.image();
+    let planes = image.planes.len();
+    let alpha = image.alpha.is_some();
+    let workload =
+        Workload::of_config(config, image.width, image.height, planes, alpha, max_extent)?;
+    let frame_bytes = (image.width * image.height * (planes + usize::from(alpha)) * 4) as u64;
+    Ok(workload.estimate(&config.effects).bytes + frame_bytes)
 }
 
 /// How a render is sent.
@@ -169,19 +237,24 @@ struct Preview {
 /// The session of the last camera and preview size, kept so that a change
 /// of threshold or exposure reuses its kernel and spectra.
 struct Camera {
-    key: (String, (usize, usize)),
+    key: CameraKey,
     session: Session,
 }
+
+/// A camera's config, preview size and kernel cap.
+type CameraKey = ((String, (usize, usize)), Option<(usize, usize)>);
 
 /// What renders share: the roots, the memory limit, the last image, its
 /// preview, the last camera, and the running render's cancellation.
 pub struct Renderer {
     roots: Roots,
     memory_limit: u64,
+    budget: Arc<Budget>,
     loaded: Mutex<Option<Loaded>>,
     preview: Mutex<Option<Preview>>,
     camera: Mutex<Option<Camera>>,
-    running: Mutex<Cancel>,
+    /// Each client's running render.
+    running: Mutex<HashMap<String, Cancel>>,
     /// Renders under way, and renders that ended cancelled.
     active: std::sync::atomic::AtomicUsize,
     cancelled: std::sync::atomic::AtomicU64,
@@ -197,15 +270,17 @@ pub struct Status {
 }
 
 impl Renderer {
-    /// Renders from files under `roots`, within `memory_limit` bytes.
-    pub fn new(roots: Roots, memory_limit: u64) -> Renderer {
+    /// Renders from files under `roots`, within `budget`, which exports
+    /// share.
+    pub fn new(roots: Roots, budget: Arc<Budget>) -> Renderer {
         Renderer {
             roots,
-            memory_limit,
+            memory_limit: budget.total(),
+            budget,
             loaded: Mutex::new(None),
             preview: Mutex::new(None),
             camera: Mutex::new(None),
-            running: Mutex::new(Cancel::new()),
+            running: Mutex::new(HashMap::new()),
             active: std::sync::atomic::AtomicUsize::new(0),
             cancelled: std::sync::atomic::AtomicU64::new(0),
         }
@@ -217,8 +292,8 @@ impl Renderer {
     }
 
     /// Renders `request`, stopping when `cancel` is set (the page went
-    /// away); a render still running is cancelled first, as the newer
-    /// request replaces it.
+    /// away); the same client's render still running is cancelled first,
+    /// as the newer request replaces it.
     pub fn render(&self, request: &RenderRequest, cancel: Cancel) -> Result<Rendered, StudioError> {
         use std::sync::atomic::Ordering;
         self.active.fetch_add(1, Ordering::SeqCst);
@@ -245,10 +320,12 @@ impl Renderer {
         cancel: Cancel,
     ) -> Result<Rendered, StudioError> {
         let start = Instant::now();
-        {
+        if let Some(client) = &request.client {
             let mut running = locked(&self.running);
-            running.cancel();
-            *running = cancel.clone();
+            running.retain(|_, c| !c.is_cancelled());
+            if let Some(before) = running.insert(client.clone(), cancel.clone()) {
+                before.cancel();
+            }
         }
         if request.width == 0 || request.width > MAX_WIDTH {
             return Err(StudioError::BadRequest(format!(
@@ -257,6 +334,7 @@ impl Renderer {
             )));
         }
         let display = display_options(request)?;
+        let max_full = max_extent(request)?;
         let (full, summary) = self.load(&request.image)?;
         let preview = self.preview(&full, request.width)?;
         let image = preview.image();
@@ -285,17 +363,31 @@ impl Renderer {
             view => {
                 let mut camera = locked(&self.camera);
                 let key = (request.config.clone(), (width, height));
+                // The cap, like every length in px, shrinks with the preview.
+                let max_extent = max_full.map(|(w, h)| {
+                    let scaled = |n: usize| ((n as f64 * factor).round() as usize).max(1);
+                    (scaled(w), scaled(h))
+                });
+                let key = (key, max_extent);
                 if camera.as_ref().is_none_or(|c| c.key != key) {
                     let config = parse_config(&request.config)?.with_pixels_scaled(factor);
                     *camera = Some(Camera {
                         key,
-                        session: Session::new(config).with_memory_limit(self.memory_limit),
+                        session: Session::new(config)
+                            .with_memory_limit(self.memory_limit)
+                            .with_max_extent(max_extent),
                     });
                 }
                 let Some(camera) = camera.as_mut() else {
                     return Err(StudioError::Internal("no camera".into()));
                 };
                 camera.session.set_cancel_token(cancel.clone());
+                let config = camera
+                    .session
+                    .config()
+                    .ok_or_else(|| StudioError::Internal("no camera".into()))?;
+                let bytes = needs(config, &preview, max_extent)?;
+                let _lease = self.budget.lease(bytes, &cancel, Some(PATIENCE), || {})?;
                 let options = ApplyOptions {
                     threshold: request.threshold,
                     knee: request.knee,

@@ -5,7 +5,7 @@ use std::net::{SocketAddr, TcpStream};
 
 mod common;
 
-use common::server;
+use common::{server, server_within, TOKEN};
 
 struct Reply {
     status: u16,
@@ -38,12 +38,21 @@ impl Reply {
     }
 }
 
-/// One HTTP/1.1 request, the connection closed after it.
+/// One HTTP/1.1 request with the studio's token, the connection closed
+/// after it.
 fn http(addr: SocketAddr, method: &str, path: &str, body: &str) -> Reply {
+    let headers = format!(
+        "Host: {addr}\r\nAuthorization: Bearer {TOKEN}\r\nContent-Type: application/json\r\n"
+    );
+    raw(addr, method, path, &headers, body)
+}
+
+/// One HTTP/1.1 request with exactly `headers` (each line ending in CRLF).
+fn raw(addr: SocketAddr, method: &str, path: &str, headers: &str, body: &str) -> Reply {
     let mut stream = TcpStream::connect(addr).unwrap();
     write!(
         stream,
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        "{method} {path} HTTP/1.1\r\n{headers}Content-Length: {}\r\nConnection: close\r\n\r\n{body}",
         body.len()
     )
     .unwrap();
@@ -605,7 +614,7 @@ fn a_render_whose_page_goes_away_is_cancelled() {
     let mut stream = TcpStream::connect(addr).unwrap();
     write!(
         stream,
-        "POST /api/render HTTP/1.1\r\nHost: {addr}\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
+        "POST /api/render HTTP/1.1\r\nHost: {addr}\r\nAuthorization: Bearer {TOKEN}\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
         body.len()
     )
     .unwrap();
@@ -623,4 +632,345 @@ fn a_render_whose_page_goes_away_is_cancelled() {
         std::thread::sleep(std::time::Duration::from_millis(20));
     };
     assert_eq!(status["cancelled"], 1, "{status}");
+}
+
+/// Starts a render on a connection of its own and returns it with the
+/// reply still to come.
+fn render_started(addr: SocketAddr, body: &str) -> TcpStream {
+    let mut stream = TcpStream::connect(addr).unwrap();
+    write!(
+        stream,
+        "POST /api/render HTTP/1.1\r\nHost: {addr}\r\nAuthorization: Bearer {TOKEN}\r\nContent-Type: application/json\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        body.len()
+    )
+    .unwrap();
+    stream
+}
+
+fn status_of(mut stream: TcpStream) -> u16 {
+    let mut raw = Vec::new();
+    let _ = stream.read_to_end(&mut raw);
+    String::from_utf8_lossy(&raw[..raw.len().min(32)])
+        .split(' ')
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0)
+}
+
+#[test]
+fn only_the_studios_own_page_and_scripts_with_its_token_are_served() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = server(dir.path());
+    let port = addr.port();
+    let export = render_body("demo", preset("paper-fig5-both"), 1, "")
+        .replace(r#", "width": 1"#, r#", "output": "stolen.exr""#);
+    let host = format!("Host: {addr}\r\n");
+    let json = "Content-Type: application/json\r\n";
+    let bearer = format!("Authorization: Bearer {TOKEN}\r\n");
+    let refused: [(&str, &str, String, &str, u16, &str); 9] = [
+        ("GET", "/api/images", host.clone(), "", 403, "no token"),
+        ("GET", "/", host.clone(), "", 403, "no token"),
+        (
+            "POST",
+            "/api/export",
+            format!("{host}{json}"),
+            &export,
+            403,
+            "no token",
+        ),
+        (
+            "GET",
+            "/api/images?token=guess",
+            host.clone(),
+            "",
+            403,
+            "wrong token",
+        ),
+        (
+            "GET",
+            "/api/images",
+            format!("{host}Cookie: aureole-studio-{port}=guess\r\n"),
+            "",
+            403,
+            "wrong token",
+        ),
+        // A DNS-rebinding page: the right address, another name.
+        (
+            "GET",
+            "/api/images",
+            format!("Host: evil.test:{port}\r\n{bearer}"),
+            "",
+            403,
+            "not this studio's address",
+        ),
+        // Another site's page, even with the cookie a browser would send.
+        (
+            "GET",
+            "/api/images",
+            format!(
+                "{host}Cookie: aureole-studio-{port}={TOKEN}\r\nOrigin: http://127.0.0.1:1\r\n"
+            ),
+            "",
+            403,
+            "another site",
+        ),
+        (
+            "POST",
+            "/api/export",
+            format!("{host}{bearer}Origin: null\r\n{json}"),
+            &export,
+            403,
+            "another site",
+        ),
+        // A form or a no-cors fetch can only send text/plain.
+        (
+            "POST",
+            "/api/export",
+            format!("{host}{bearer}Content-Type: text/plain\r\n"),
+            &export,
+            415,
+            "application/json",
+        ),
+    ];
+    for (method, path, headers, body, status, words) in &refused {
+        let reply = raw(addr, method, path, headers, body);
+        assert_eq!(reply.status, *status, "{method} {path} {headers:?}");
+        assert!(reply.error().contains(words), "{path}: {}", reply.error());
+        assert_eq!(reply.header("x-frame-options"), Some("DENY"));
+    }
+    assert!(!dir.path().join("stolen.exr").exists());
+
+    for headers in [
+        format!("{host}{bearer}"),
+        format!("{host}Cookie: other=1; aureole-studio-{port}={TOKEN}\r\n"),
+        format!("Host: localhost:{port}\r\n{bearer}Origin: http://localhost:{port}\r\n"),
+    ] {
+        let reply = raw(addr, "GET", "/api/images", &headers, "");
+        assert_eq!(reply.status, 200, "{headers:?}");
+    }
+    assert_eq!(
+        raw(
+            addr,
+            "GET",
+            &format!("/api/images?token={TOKEN}"),
+            &host,
+            ""
+        )
+        .status,
+        200
+    );
+
+    // Opened with its token, the page keeps it in a cookie and drops it
+    // from the address; the page forbids framing and foreign scripts.
+    let opened = raw(
+        addr,
+        "GET",
+        &format!("/?token={TOKEN}&image=a.exr"),
+        &host,
+        "",
+    );
+    assert_eq!(opened.status, 303);
+    assert_eq!(opened.header("location"), Some("/?image=a.exr"));
+    let cookie = opened.header("set-cookie").unwrap();
+    assert!(
+        cookie.starts_with(&format!("aureole-studio-{port}={TOKEN};")),
+        "{cookie}"
+    );
+    assert!(
+        cookie.contains("HttpOnly") && cookie.contains("SameSite=Strict"),
+        "{cookie}"
+    );
+    let page = raw(
+        addr,
+        "GET",
+        "/",
+        &format!("{host}Cookie: aureole-studio-{port}={TOKEN}\r\n"),
+        "",
+    );
+    assert_eq!(page.status, 200);
+    let policy = page.header("content-security-policy").unwrap();
+    assert!(
+        policy.contains("frame-ancestors 'none'") && policy.contains("script-src 'self'"),
+        "{policy}"
+    );
+}
+
+#[test]
+fn exports_replace_a_file_only_when_asked_and_take_a_kernel_cap() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("taken.exr"), b"the user's own file").unwrap();
+    let addr = server(dir.path());
+    let body = |extra: &str| {
+        render_body("demo", preset("paper-fig5-both"), 1, "").replace(
+            r#", "width": 1"#,
+            &format!(r#", "output": "taken.exr"{extra}"#),
+        )
+    };
+    let reply = http(addr, "POST", "/api/export", &body(""));
+    assert_eq!(reply.status, 409);
+    assert!(reply.error().contains("exists"), "{}", reply.error());
+    assert_eq!(
+        std::fs::read(dir.path().join("taken.exr")).unwrap(),
+        b"the user's own file"
+    );
+    assert_eq!(
+        http(
+            addr,
+            "POST",
+            "/api/export",
+            &body(r#", "overwrite": "yes""#)
+        )
+        .status,
+        400
+    );
+
+    let started = http(
+        addr,
+        "POST",
+        "/api/export",
+        &body(r#", "overwrite": true, "max_kernel": "65x33""#),
+    );
+    assert_eq!(
+        started.status,
+        200,
+        "{}",
+        String::from_utf8_lossy(&started.body)
+    );
+    let job = started.json()["job"].as_u64().unwrap();
+    let progress = loop {
+        let progress = http(addr, "GET", &format!("/api/export/{job}"), "").json();
+        if progress["done"].as_bool() == Some(true) {
+            break progress;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    assert!(progress["error"].is_null(), "{progress}");
+    assert!(aureole_io::read::read_image(
+        &dir.path().join("taken.exr"),
+        aureole_io::limits::Limits::NONE
+    )
+    .is_ok());
+
+    for cap in ["0", r#""7x0""#, r#""wide""#] {
+        let reply = http(
+            addr,
+            "POST",
+            "/api/render",
+            &render_body(
+                "demo",
+                preset("paper-fig5-both"),
+                64,
+                &format!(r#", "max_kernel": {cap}"#),
+            ),
+        );
+        assert_eq!(reply.status, 400, "{cap}");
+        assert!(reply.error().contains("max_kernel"), "{}", reply.error());
+    }
+}
+
+#[test]
+fn a_kernel_capped_at_one_pixel_leaves_the_light_where_it_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = server(dir.path());
+    let linear = |view: &str, extra: &str| {
+        let body = render_body(
+            "demo",
+            preset("paper-fig5-both"),
+            160,
+            &format!(r#", "view": "{view}", "format": "linear"{extra}"#),
+        );
+        let reply = http(addr, "POST", "/api/render", &body);
+        assert_eq!(
+            reply.status,
+            200,
+            "{}",
+            String::from_utf8_lossy(&reply.body)
+        );
+        reply.floats()
+    };
+    let original = linear("original", "");
+    let capped = linear("result", r#", "max_kernel": 1"#);
+    let spread = linear("result", "");
+    let differs = |a: &[f32], b: &[f32]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs() / x.abs().max(1e-3))
+            .fold(0.0f32, f32::max)
+    };
+    assert!(
+        differs(&original, &capped) < 1e-5,
+        "{}",
+        differs(&original, &capped)
+    );
+    assert!(differs(&original, &spread) > 1e-2);
+}
+
+#[test]
+fn clients_cancel_only_their_own_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let addr = server(dir.path());
+    // A spectral aperture at 1280 px: seconds of work.
+    let slow = |client: &str| {
+        render_body(
+            "demo",
+            preset("camera-f8-7blade"),
+            1280,
+            &format!(r#", "client": "{client}""#),
+        )
+    };
+    let wait_rendering = |n: u64| {
+        while http(addr, "GET", "/api/status", "").json()["rendering"].as_u64() < Some(n) {
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+    };
+    let first = render_started(addr, &slow("tab-a"));
+    wait_rendering(1);
+    let other = render_started(addr, &slow("tab-b"));
+    wait_rendering(2);
+    let again = render_started(addr, &slow("tab-a"));
+    // tab-a's newer render replaces its first; tab-b's goes on.
+    assert_eq!(status_of(first), 409);
+    assert_eq!(status_of(other), 200);
+    assert_eq!(status_of(again), 200);
+}
+
+#[test]
+fn exports_beyond_the_memory_budget_wait_their_turn() {
+    let dir = tempfile::tempdir().unwrap();
+    // Room for one 1280x720 export of this camera at a time, not two.
+    // (each needs about 195 MiB: `apply --max-memory` says how much).
+    let addr = server_within(dir.path(), 300 << 20);
+    let body = |output: &str| {
+        render_body("demo", preset("paper-fig5-both"), 1, "")
+            .replace(r#", "width": 1"#, &format!(r#", "output": "{output}""#))
+    };
+    let jobs: Vec<u64> = ["one.exr", "two.exr", "three.exr"]
+        .iter()
+        .map(|o| {
+            let reply = http(addr, "POST", "/api/export", &body(o));
+            assert_eq!(
+                reply.status,
+                200,
+                "{}",
+                String::from_utf8_lossy(&reply.body)
+            );
+            reply.json()["job"].as_u64().unwrap()
+        })
+        .collect();
+    let mut waited = false;
+    for job in jobs {
+        loop {
+            let progress = http(addr, "GET", &format!("/api/export/{job}"), "").json();
+            waited |= progress["stage"] == "waiting for memory";
+            if progress["done"].as_bool() == Some(true) {
+                assert!(progress["error"].is_null(), "{progress}");
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    }
+    assert!(waited, "no export waited for another");
+    for output in ["one.exr", "two.exr", "three.exr"] {
+        assert!(dir.path().join(output).is_file(), "{output}");
+    }
 }

@@ -10,7 +10,7 @@ use std::process::Command;
 
 mod common;
 
-use common::server;
+use common::{server, TOKEN};
 
 fn chromium() -> Option<PathBuf> {
     ["chromium", "chromium-browser", "google-chrome"]
@@ -101,7 +101,9 @@ fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("broken.exr"), b"v/1\x01 cut short").unwrap();
     let addr = server(dir.path());
-    let base = format!("http://{addr}/");
+    // Opened as `aureole studio` prints it: with the token, which the page
+    // keeps in a cookie.
+    let base = format!("http://{addr}/?token={TOKEN}&");
 
     let first = visit(&browser, &base, "result");
     assert!(first.attribute("data-rendered") >= 1, "{}", first.dom);
@@ -151,7 +153,7 @@ fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
         // The dump may come before the page's second fetch is decoded: a
         // few tries.
         let page = (0..4)
-            .map(|_| visit(&browser, &format!("{base}?{query}"), name))
+            .map(|_| visit(&browser, &format!("{base}{query}"), name))
             .find(|page| page.dom.contains("data-display-mismatch"))
             .unwrap_or_else(|| panic!("{name}: the page never finished its self-check"));
         let worst = page.attribute("data-display-mismatch");
@@ -162,7 +164,7 @@ fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
     }
 
     for view in ["split", "kernel", "glare", "original"] {
-        let page = visit(&browser, &format!("{base}?view={view}"), view);
+        let page = visit(&browser, &format!("{base}view={view}"), view);
         assert!(page.attribute("data-rendered") >= 1, "{view}");
         assert_eq!(
             page.attribute("data-failed"),
@@ -172,13 +174,13 @@ fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
         );
     }
     // The split view puts the original under a handle.
-    let split = visit(&browser, &format!("{base}?view=split"), "split");
+    let split = visit(&browser, &format!("{base}view=split"), "split");
     assert!(
         !split.dom.contains(r#"id="handle" hidden"#),
         "the handle is hidden"
     );
 
-    let broken = visit(&browser, &format!("{base}?image=broken.exr"), "broken");
+    let broken = visit(&browser, &format!("{base}image=broken.exr"), "broken");
     assert!(broken.attribute("data-failed") >= 1);
     assert!(
         broken.text_of("error").contains("broken.exr"),
@@ -186,10 +188,178 @@ fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
         broken.text_of("error")
     );
 
-    let outside = visit(&browser, &format!("{base}?image=/etc/hostname"), "outside");
+    let outside = visit(&browser, &format!("{base}image=/etc/hostname"), "outside");
     assert!(
         outside.text_of("error").contains("outside the folders"),
         "{}",
         outside.text_of("error")
     );
+}
+
+/// Serves `page` as HTML to every request on a port of its own: another
+/// site, as far as the browser knows.
+fn other_site(page: String) -> std::net::SocketAddr {
+    use std::io::{Read, Write};
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap();
+    std::thread::spawn(move || {
+        for mut stream in listener.incoming().flatten() {
+            let mut head = [0u8; 4096];
+            let _ = stream.read(&mut head);
+            let _ = write!(
+                stream,
+                "HTTP/1.1 200 OK\r\nContent-Type: text/html\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{page}",
+                page.len()
+            );
+        }
+    });
+    addr
+}
+
+/// Chromium with a profile of its own in `profile`, so that a cookie set
+/// by one visit is there for the next, as in a user's browser.
+fn dump(browser: &Path, profile: &Path, extra: &[&str], url: &str) -> String {
+    let output = Command::new(browser)
+        .args([
+            "--headless=new",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--virtual-time-budget=20000",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .args(["--dump-dom", url])
+        .output()
+        .unwrap();
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+#[test]
+fn pages_of_other_sites_cannot_drive_the_studio_in_a_real_browser() {
+    let Some(browser) = chromium() else {
+        eprintln!("skipped: no chromium (apt-get install chromium)");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let profile = tempfile::tempdir().unwrap();
+    let addr = server(dir.path());
+    let studio = format!("http://{addr}");
+    // The user opens the studio: the browser now holds its cookie.
+    let opened = dump(
+        &browser,
+        profile.path(),
+        &[],
+        &format!("{studio}/?token={TOKEN}"),
+    );
+    assert!(opened.contains(r#"id="stage""#), "{opened}");
+
+    // Then a page of another site tries everything a page can send: a
+    // listing and a render read with the user's cookie, and the simple
+    // (text/plain, no-cors) export that needs no reading at all.
+    let config = serde_json::to_string(aureole::presets::PRESETS[0].toml).unwrap();
+    let page = format!(
+        r#"<!doctype html><body><script>
+const studio = "{studio}";
+const job = JSON.stringify({{ image: "demo", config: {config}, output: "stolen.exr" }});
+const tries = {{
+  list: () => fetch(studio + "/api/images", {{ credentials: "include" }}).then((r) => r.text()),
+  render: () => fetch(studio + "/api/render", {{ method: "POST", credentials: "include",
+    headers: {{ "Content-Type": "application/json" }}, body: JSON.stringify({{ image: "demo", config: {config}, width: 64 }}) }})
+    .then((r) => r.status),
+  export: () => fetch(studio + "/api/export", {{ method: "POST", mode: "no-cors", credentials: "include",
+    headers: {{ "Content-Type": "text/plain" }}, body: job }}).then((r) => r.type),
+}};
+(async () => {{
+  const out = {{}};
+  for (const [name, attempt] of Object.entries(tries)) {{
+    try {{ out[name] = String(await attempt()); }} catch (e) {{ out[name] = "blocked"; }}
+  }}
+  document.body.dataset.result = JSON.stringify(out);
+}})();
+</script></body>"#
+    );
+    let attacker = other_site(page);
+    let dom = dump(
+        &browser,
+        profile.path(),
+        &[],
+        &format!("http://{attacker}/"),
+    );
+    assert!(
+        dom.contains("data-result"),
+        "the other site's page did not finish: {dom}"
+    );
+    // The listing's JSON names the roots: the other site never sees it.
+    assert!(
+        !dom.contains("roots"),
+        "the other site read the listing: {dom}"
+    );
+    assert!(
+        !dir.path().join("stolen.exr").exists(),
+        "the other site exported"
+    );
+    let status: serde_json::Value = {
+        let url = format!("{studio}/api/status?token={TOKEN}");
+        let text = dump(&browser, profile.path(), &[], &url);
+        let json = &text[text.find('{').unwrap()..=text.rfind('}').unwrap()];
+        serde_json::from_str(json).unwrap()
+    };
+    assert_eq!(status["rendering"], 0);
+    // Nothing rendered for it: a render that had run would have left the
+    // camera built, which the studio's own next render reuses; simpler,
+    // its export job list is empty.
+    let job = dump(
+        &browser,
+        profile.path(),
+        &[],
+        &format!("{studio}/api/export/1?token={TOKEN}"),
+    );
+    assert!(job.contains("no export 1"), "{job}");
+
+    // A DNS-rebinding page: another name for the studio's own address,
+    // even with the token, is refused.
+    let rebound = dump(
+        &browser,
+        profile.path(),
+        &["--host-resolver-rules=MAP evil.test 127.0.0.1"],
+        &format!("http://evil.test:{}/api/images?token={TOKEN}", addr.port()),
+    );
+    assert!(rebound.contains("not this studio"), "{rebound}");
+    assert!(!rebound.contains("roots"), "{rebound}");
+}
+
+#[test]
+fn two_tabs_render_side_by_side_without_cancelling_each_other() {
+    let Some(browser) = chromium() else {
+        eprintln!("skipped: no chromium (apt-get install chromium)");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let addr = server(dir.path());
+    // A spectral aperture: seconds of work, so the two renders overlap.
+    let url = format!("http://{addr}/?token={TOKEN}&preset=camera-f8-7blade");
+    let tabs: Vec<_> = (0..2)
+        .map(|_| {
+            let (browser, url) = (browser.clone(), url.clone());
+            std::thread::spawn(move || {
+                let profile = tempfile::tempdir().unwrap();
+                dump(&browser, profile.path(), &["--window-size=1400,860"], &url)
+            })
+        })
+        .collect();
+    for tab in tabs {
+        let dom = tab.join().unwrap();
+        assert!(dom.contains("data-rendered"), "{dom}");
+        assert!(!dom.contains("data-failed=\"1\""), "{dom}");
+    }
+    let mut stream = std::net::TcpStream::connect(addr).unwrap();
+    use std::io::{Read, Write};
+    write!(
+        stream,
+        "GET /api/status HTTP/1.1\r\nHost: {addr}\r\nAuthorization: Bearer {TOKEN}\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
+    let mut reply = String::new();
+    stream.read_to_string(&mut reply).unwrap();
+    assert!(reply.contains("\"cancelled\":0"), "{reply}");
 }

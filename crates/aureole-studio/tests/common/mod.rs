@@ -3,12 +3,19 @@
 use std::net::SocketAddr;
 use std::path::Path;
 
-use aureole_studio::{Roots, Studio};
+use aureole_studio::{Access, Roots, Studio};
+
+/// The token of the tests' servers.
+pub const TOKEN: &str = "a-token-for-the-tests";
 
 /// A server reading from `root`, on an ephemeral port, for the test's life.
 pub fn server(root: &Path) -> SocketAddr {
+    server_within(root, 4 << 30)
+}
+
+/// A server whose renders and exports share `memory` bytes.
+pub fn server_within(root: &Path, memory: u64) -> SocketAddr {
     let roots = Roots::new(&[root.to_path_buf()]).unwrap();
-    let studio = Studio::new(roots, 4 << 30);
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         let runtime = tokio::runtime::Builder::new_multi_thread()
@@ -18,7 +25,9 @@ pub fn server(root: &Path) -> SocketAddr {
             .unwrap();
         runtime.block_on(async {
             let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-            tx.send(listener.local_addr().unwrap()).unwrap();
+            let bound = listener.local_addr().unwrap();
+            let studio = Studio::new(roots, memory, Access::with_token(bound, TOKEN.into()));
+            tx.send(bound).unwrap();
             aureole_studio::serve(listener, studio).await.unwrap();
         });
     });

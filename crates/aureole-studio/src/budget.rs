@@ -1,0 +1,140 @@
+//! One memory budget for every render and export of a studio: each takes
+//! its estimated peak from the budget before its large buffers, and gives
+//! it back when it ends, so that six exports started together run as the
+//! budget allows instead of all at once.
+
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+
+use aureole::memory::format_bytes;
+use aureole::Cancel;
+
+use crate::error::StudioError;
+use crate::locked;
+
+/// How often a waiting job looks at its cancellation.
+const POLL: Duration = Duration::from_millis(100);
+
+/// The bytes a studio's jobs may hold together.
+pub struct Budget {
+    total: u64,
+    used: Mutex<u64>,
+    freed: Condvar,
+}
+
+/// Bytes taken from a [`Budget`], given back when dropped.
+pub struct Lease {
+    budget: Arc<Budget>,
+    bytes: u64,
+}
+
+impl Drop for Lease {
+    fn drop(&mut self) {
+        let mut used = locked(&self.budget.used);
+        *used -= self.bytes;
+        self.budget.freed.notify_all();
+    }
+}
+
+impl Budget {
+    /// A budget of `total` bytes.
+    pub fn new(total: u64) -> Arc<Budget> {
+        Arc::new(Budget {
+            total,
+            used: Mutex::new(0),
+            freed: Condvar::new(),
+        })
+    }
+
+    /// The bytes of the whole budget.
+    pub fn total(&self) -> u64 {
+        self.total
+    }
+
+    /// Takes `bytes` (at most the whole budget: a job larger than it is
+    /// refused by its session, with the reason), waiting while other jobs
+    /// hold too much, until `cancel` is raised or, with `patience`, that
+    /// long has passed: then the studio is busy (503). `waiting` hears
+    /// when it has to wait.
+    pub fn lease(
+        self: &Arc<Self>,
+        bytes: u64,
+        cancel: &Cancel,
+        patience: Option<Duration>,
+        waiting: impl FnOnce(),
+    ) -> Result<Lease, StudioError> {
+        let bytes = bytes.min(self.total);
+        let start = Instant::now();
+        let mut used = locked(&self.used);
+        let mut waiting = Some(waiting);
+        while *used + bytes > self.total {
+            if let Some(say) = waiting.take() {
+                say();
+            }
+            cancel.check()?;
+            if patience.is_some_and(|p| start.elapsed() >= p) {
+                return Err(StudioError::Busy(format!(
+                    "the studio's memory is taken by other renders and exports ({} of {} in use, this one needs {}): try again when they end",
+                    format_bytes(*used),
+                    format_bytes(self.total),
+                    format_bytes(bytes)
+                )));
+            }
+            used = self
+                .freed
+                .wait_timeout(used, POLL)
+                .map(|(guard, _)| guard)
+                .unwrap_or_else(|poisoned| poisoned.into_inner().0);
+        }
+        *used += bytes;
+        Ok(Lease {
+            budget: self.clone(),
+            bytes,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn leases_wait_for_each_other_and_give_back() {
+        let budget = Budget::new(100);
+        let cancel = Cancel::new();
+        let first = budget.lease(70, &cancel, None, || {}).unwrap();
+        let refused = budget.lease(40, &cancel, Some(Duration::from_millis(200)), || {});
+        assert!(matches!(refused, Err(StudioError::Busy(_))));
+        let waiting = {
+            let budget = budget.clone();
+            std::thread::spawn(move || {
+                budget
+                    .lease(40, &Cancel::new(), None, || {})
+                    .map(|l| l.bytes)
+            })
+        };
+        std::thread::sleep(Duration::from_millis(150));
+        drop(first);
+        assert_eq!(waiting.join().unwrap().unwrap(), 40);
+        assert_eq!(*locked(&budget.used), 0);
+    }
+
+    #[test]
+    fn a_cancelled_wait_ends() {
+        let budget = Budget::new(10);
+        let _held = budget.lease(10, &Cancel::new(), None, || {}).unwrap();
+        let cancel = Cancel::new();
+        cancel.cancel();
+        assert!(matches!(
+            budget.lease(5, &cancel, None, || {}),
+            Err(StudioError::Superseded)
+        ));
+    }
+
+    #[test]
+    fn a_job_larger_than_the_budget_takes_all_of_it() {
+        let budget = Budget::new(10);
+        let lease = budget.lease(50, &Cancel::new(), None, || {}).unwrap();
+        assert_eq!(lease.bytes, 10);
+    }
+}
