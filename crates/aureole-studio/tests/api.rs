@@ -101,6 +101,26 @@ fn unchunk(mut data: &[u8]) -> Vec<u8> {
     }
 }
 
+/// Starts the export `body` asks for and waits until it is written.
+fn export_done(addr: SocketAddr, body: &str) {
+    let started = http(addr, "POST", "/api/export", body);
+    assert_eq!(
+        started.status,
+        200,
+        "{}",
+        String::from_utf8_lossy(&started.body)
+    );
+    let job = started.json()["job"].as_u64().unwrap();
+    let progress = loop {
+        let progress = http(addr, "GET", &format!("/api/export/{job}"), "").json();
+        if progress["done"].as_bool() == Some(true) {
+            break progress;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    assert!(progress["error"].is_null(), "{progress}");
+}
+
 fn render_body(image: &str, config: &str, width: usize, extra: &str) -> String {
     format!(
         r#"{{"image": {}, "config": {}, "width": {width}{extra}}}"#,
@@ -500,22 +520,7 @@ fn a_full_resolution_render_is_written_under_the_roots_with_its_progress() {
             &format!(r#", "output": {}"#, serde_json::to_string(output).unwrap()),
         )
     };
-    let started = http(addr, "POST", "/api/export", &body("camera.exr"));
-    assert_eq!(
-        started.status,
-        200,
-        "{}",
-        String::from_utf8_lossy(&started.body)
-    );
-    let job = started.json()["job"].as_u64().unwrap();
-    let progress = loop {
-        let progress = http(addr, "GET", &format!("/api/export/{job}"), "").json();
-        if progress["done"].as_bool() == Some(true) {
-            break progress;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    };
-    assert!(progress["error"].is_null(), "{progress}");
+    export_done(addr, &body("camera.exr"));
     let written = aureole_io::read::read_image(
         &dir.path().join("camera.exr"),
         aureole_io::limits::Limits::NONE,
@@ -824,27 +829,7 @@ fn exports_replace_a_file_only_when_asked_and_take_a_kernel_cap() {
         400
     );
 
-    let started = http(
-        addr,
-        "POST",
-        "/api/export",
-        &body(r#", "overwrite": true, "max_kernel": "65x33""#),
-    );
-    assert_eq!(
-        started.status,
-        200,
-        "{}",
-        String::from_utf8_lossy(&started.body)
-    );
-    let job = started.json()["job"].as_u64().unwrap();
-    let progress = loop {
-        let progress = http(addr, "GET", &format!("/api/export/{job}"), "").json();
-        if progress["done"].as_bool() == Some(true) {
-            break progress;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    };
-    assert!(progress["error"].is_null(), "{progress}");
+    export_done(addr, &body(r#", "overwrite": true, "max_kernel": "65x33""#));
     assert!(aureole_io::read::read_image(
         &dir.path().join("taken.exr"),
         aureole_io::limits::Limits::NONE
