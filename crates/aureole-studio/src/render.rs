@@ -126,8 +126,8 @@ pub(crate) fn max_extent(request: &RenderRequest) -> Result<Option<(usize, usize
     request.max_kernel.as_ref().map(MaxKernel::size).transpose()
 }
 
-/// The bytes a run of `config` on `frame` takes at its peak, with the
-/// frame itself, from the library's own estimate.
+/// The bytes a run of `config` on `frame` takes at its peak, the frame
+/// included, from the library's own estimate (as `--max-memory` judges).
 pub(crate) fn needs(
     config: &Config,
     frame: &Frame,
@@ -138,8 +138,7 @@ pub(crate) fn needs(
     let alpha = image.alpha.is_some();
     let workload =
         Workload::of_config(config, image.width, image.height, planes, alpha, max_extent)?;
-    let frame_bytes = (image.width * image.height * (planes + usize::from(alpha)) * 4) as u64;
-    Ok(workload.estimate(&config.effects).bytes + frame_bytes)
+    Ok(workload.estimate(&config.effects).bytes)
 }
 
 /// How a render is sent.
@@ -244,11 +243,11 @@ struct Camera {
 /// A camera's config, preview size and kernel cap.
 type CameraKey = ((String, (usize, usize)), Option<(usize, usize)>);
 
-/// What renders share: the roots, the memory limit, the last image, its
+/// What renders share: the roots, the memory budget, the last image, its
 /// preview, the last camera, and the running render's cancellation.
 pub struct Renderer {
     roots: Roots,
-    memory_limit: u64,
+    /// Shared with the exports; its total is each session's limit too.
     budget: Arc<Budget>,
     loaded: Mutex<Option<Loaded>>,
     preview: Mutex<Option<Preview>>,
@@ -275,7 +274,6 @@ impl Renderer {
     pub fn new(roots: Roots, budget: Arc<Budget>) -> Renderer {
         Renderer {
             roots,
-            memory_limit: budget.total(),
             budget,
             loaded: Mutex::new(None),
             preview: Mutex::new(None),
@@ -374,7 +372,7 @@ impl Renderer {
                     *camera = Some(Camera {
                         key,
                         session: Session::new(config)
-                            .with_memory_limit(self.memory_limit)
+                            .with_memory_limit(self.budget.total())
                             .with_max_extent(max_extent),
                     });
                 }
@@ -474,7 +472,7 @@ impl Renderer {
         }
         let image = match &path {
             None => aureole_io::demo::night_street(1280, 720),
-            Some(path) => read(path, self.memory_limit)?,
+            Some(path) => read(path, self.budget.total())?,
         };
         let frame = Arc::new(
             Frame::new(image, &FrameOptions::default())

@@ -923,7 +923,7 @@ fn clients_cancel_only_their_own_renders() {
 fn exports_beyond_the_memory_budget_wait_their_turn() {
     let dir = tempfile::tempdir().unwrap();
     // Room for one 1280x720 export of this camera at a time, not two.
-    // (each needs about 195 MiB: `apply --max-memory` says how much).
+    // (each needs about 183 MiB: `apply --max-memory` says how much).
     let addr = server_within(dir.path(), 300 << 20);
     let body = |output: &str| {
         render_body("demo", preset("paper-fig5-both"), 1, "")

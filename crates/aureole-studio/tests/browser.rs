@@ -305,9 +305,8 @@ const tries = {{
         serde_json::from_str(json).unwrap()
     };
     assert_eq!(status["rendering"], 0);
-    // Nothing rendered for it: a render that had run would have left the
-    // camera built, which the studio's own next render reuses; simpler,
-    // its export job list is empty.
+    // The export may still be running when the file is looked for: the
+    // studio's job list says whether it was ever started.
     let job = dump(
         &browser,
         profile.path(),
