@@ -97,12 +97,21 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     );
     if image.layout == aureole::Layout::Rgb {
         let [wr, wg, wb] = image.luminance_weights();
-        let source = if image.primaries.is_some() {
-            "the file's chromaticities"
-        } else {
-            "Rec.709"
+        let source = match image.primaries.map(|p| p.luminance_weights()) {
+            Some(Some(_)) => "the file's chromaticities",
+            Some(None) => "Rec.709: the file's chromaticities are degenerate",
+            None => "Rec.709",
         };
-        text += &format!("luminance: Y = {wr:.5} R + {wg:.5} G + {wb:.5} B ({source})\n");
+        // ACES AP0 weighs blue negatively: "− 0.07213 B", not "+ -0.07213 B".
+        let term = |w: f32, c: char| {
+            let sign = if w < 0.0 { '−' } else { '+' };
+            format!(" {sign} {:.5} {c}", w.abs())
+        };
+        text += &format!(
+            "luminance: Y = {wr:.5} R{}{} ({source})\n",
+            term(wg, 'G'),
+            term(wb, 'B')
+        );
     }
     if let (Some(min), Some(max)) = (luminance.first(), luminance.last()) {
         text += &format!(

@@ -239,6 +239,80 @@ fn info_describes_luminance_and_bright_pixels() {
 }
 
 #[test]
+fn aces_ap0_primaries_give_luminance_with_a_negative_blue_weight() {
+    let dir = tempfile::tempdir().unwrap();
+    let ap0 = aureole::image::Primaries {
+        red: [0.7347, 0.2653],
+        green: [0.0, 1.0],
+        blue: [0.0001, -0.0770],
+        white: [0.32168, 0.33767],
+    };
+    // A red lamp of 1000 units: Y = 344 cd/m² on AP0, 213 on Rec.709.
+    let mut image = Image::filled(32, 24, Layout::Rgb, 0.01);
+    image.planes[0][12 * 32 + 16] = 1000.0;
+    image.primaries = Some(ap0);
+    let exr = dir.path().join("aces.exr");
+    write_linear(&exr, &image, LinearOptions::default()).unwrap();
+    // The same pixels in a Radiance file whose header names AP0.
+    let plain = dir.path().join("plain.hdr");
+    write_linear(
+        &plain,
+        &Image {
+            primaries: None,
+            ..image.clone()
+        },
+        LinearOptions::default(),
+    )
+    .unwrap();
+    let bytes = std::fs::read(&plain).unwrap();
+    let format = b"FORMAT=32-bit_rle_rgbe\n";
+    let at = bytes
+        .windows(format.len())
+        .position(|w| w == format)
+        .unwrap()
+        + format.len();
+    let mut edited = bytes[..at].to_vec();
+    edited.extend_from_slice(b"PRIMARIES=0.7347 0.2653 0 1 0.0001 -0.077 0.32168 0.33767\n");
+    edited.extend_from_slice(&bytes[at..]);
+    let hdr = dir.path().join("aces.hdr");
+    std::fs::write(&hdr, edited).unwrap();
+
+    for input in [&exr, &hdr] {
+        aureole()
+            .arg("info")
+            .arg(input)
+            .assert()
+            .success()
+            .stdout(predicate::str::contains(
+                "luminance: Y = 0.34397 R + 0.72817 G − 0.07213 B (the file's chromaticities)",
+            ));
+        // Spread at 300 cd/m²: the lamp passes on AP0's luminance.
+        let out = dir.path().join("out.exr");
+        aureole()
+            .args([
+                "apply",
+                "--preset",
+                "paper-fig4-bloom",
+                "--threshold",
+                "300",
+                "-o",
+            ])
+            .arg(&out)
+            .arg(input)
+            .assert()
+            .success()
+            .stderr(predicate::str::contains("degenerate").not());
+        let result = read_image(&out, Limits::NONE).unwrap().image;
+        let beside = 12 * 32 + 18;
+        assert!(
+            result.planes[0][beside] > 0.02,
+            "{}: the lamp was not spread",
+            input.display()
+        );
+    }
+}
+
+#[test]
 fn apply_reuses_a_kernel_written_by_psf() {
     let dir = tempfile::tempdir().unwrap();
     let (input, image) = scene(dir.path(), "night.exr");

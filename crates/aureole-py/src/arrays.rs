@@ -27,9 +27,11 @@ impl Shape {
     }
 }
 
-/// `image` (any array-like of float16, float32 or float64) as a
-/// C-contiguous float32 array: one that already is passes through
-/// untouched, not copied.
+/// `image` (any array-like of float16, float32 or float64) as an aligned,
+/// C-contiguous, native float32 array: one that already is passes through
+/// untouched, not copied; any other (another dtype or byte order, strided,
+/// Fortran-ordered, or unaligned as a frame unpickled on a Dask worker
+/// arrives) is copied once. Read-only arrays are only read.
 pub fn float32<'py>(image: &Bound<'py, PyAny>) -> PyResult<PyReadonlyArrayDyn<'py, f32>> {
     let numpy = image.py().import("numpy")?;
     let array = numpy.call_method1("asarray", (image,))?;
@@ -41,10 +43,13 @@ pub fn float32<'py>(image: &Bound<'py, PyAny>) -> PyResult<PyReadonlyArrayDyn<'p
             "image: dtype {dtype} is not allowed: float16, float32 or float64"
         )));
     }
+    // `ascontiguousarray` keeps an unaligned array as it is, and numpy's
+    // slice view refuses one: `require` copies for either reason.
     let options = PyDict::new(image.py());
     options.set_item("dtype", numpy.getattr("float32")?)?;
-    let contiguous = numpy.call_method("ascontiguousarray", (array,), Some(&options))?;
-    contiguous.extract::<PyReadonlyArrayDyn<'py, f32>>()
+    options.set_item("requirements", ["C", "A"])?;
+    let ready = numpy.call_method("require", (array,), Some(&options))?;
+    ready.extract::<PyReadonlyArrayDyn<'py, f32>>()
 }
 
 /// The planes of a C-contiguous float32 array, read straight from its
@@ -65,9 +70,14 @@ pub fn to_image(array: &PyReadonlyArrayDyn<'_, f32>) -> PyResult<(Image, Shape)>
             "image: shape {dims:?} is empty: at least 1×1 pixels"
         )));
     }
-    let data = array
-        .as_slice()
-        .map_err(|_| PyValueError::new_err("image: not C-contiguous (np.ascontiguousarray)"))?;
+    // `float32` made it C-contiguous and aligned; numpy refusing a view now
+    // would be numpy's doing, so its strides go in the message.
+    let data = array.as_slice().map_err(|_| {
+        PyValueError::new_err(format!(
+            "image: numpy gave no contiguous view of the {dims:?} float32 array (strides {:?})",
+            array.strides()
+        ))
+    })?;
     let channels = match shape {
         Shape::Flat => 1,
         Shape::Channels(c) => c,

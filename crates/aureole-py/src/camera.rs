@@ -380,6 +380,16 @@ impl Camera {
         Ok(report)
     }
 
+    /// Pickled as its TOML, so a camera goes to Dask or multiprocessing
+    /// workers as it is; each rebuilds its own plans there.
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (String, &'static str))> {
+        let rebuild = py.get_type::<Camera>().getattr("from_toml")?;
+        Ok((rebuild, (self.toml()?, "pickled camera")))
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "<aureole.Camera: {} effect(s), seed {}, threshold {} cd/m²>",

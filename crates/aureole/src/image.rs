@@ -22,8 +22,23 @@ pub struct Primaries {
 
 impl Primaries {
     /// The Y row of the RGB → XYZ matrix, normalised so that RGB (1, 1, 1)
-    /// is white of Y = 1; `None` for degenerate primaries.
+    /// is white of Y = 1; `None` for degenerate primaries (not finite, a
+    /// chromaticity with y = 0, or three primaries on one line).
+    ///
+    /// Primaries outside the spectrum locus are valid: ACES AP0's blue has
+    /// y < 0, which gives it a negative weight (Y = 0.344 R + 0.728 G −
+    /// 0.072 B), as SMPTE ST 2065-1 states.
     pub fn luminance_weights(&self) -> Option<[f32; 3]> {
+        let points = [self.red, self.green, self.blue, self.white];
+        let usable = points
+            .iter()
+            .all(|[x, y]| x.is_finite() && y.is_finite() && y.abs() > 1e-6);
+        let [[rx, ry], [gx, gy], [bx, by]] =
+            [self.red, self.green, self.blue].map(|p| p.map(f64::from));
+        let twice_area = (gx - rx) * (by - ry) - (bx - rx) * (gy - ry);
+        if !usable || twice_area.abs() < 1e-6 {
+            return None;
+        }
         // Columns: XYZ of each primary at Y = 1; solve M·s = XYZ(white).
         let xyz = |[x, y]: [f32; 2]| {
             let (x, y) = (f64::from(x), f64::from(y));
@@ -43,7 +58,7 @@ impl Primaries {
         let weights = [det(w, g, b) / d, det(r, w, b) / d, det(r, g, w) / d];
         weights
             .iter()
-            .all(|v| v.is_finite() && *v > 0.0)
+            .all(|v| v.is_finite())
             .then(|| weights.map(|v| v as f32))
     }
 }
@@ -352,11 +367,44 @@ mod tests {
             assert!((a - b).abs() < 1e-4, "{w:?}");
         }
         assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+        // Green halfway between red and blue: no basis of colour.
         let degenerate = Primaries {
-            green: [0.64, 0.33],
+            green: [0.3892, 0.2061],
             ..tree
         };
         assert!(degenerate.luminance_weights().is_none());
+        let flat = Primaries {
+            blue: [0.1489, 0.0],
+            ..tree
+        };
+        assert!(flat.luminance_weights().is_none());
+    }
+
+    #[test]
+    fn aces_primaries_give_the_rows_of_smpte_st_2065_1_and_s_2014_004() {
+        let white = [0.32168, 0.33767];
+        let ap0 = Primaries {
+            red: [0.7347, 0.2653],
+            green: [0.0, 1.0],
+            blue: [0.0001, -0.0770],
+            white,
+        };
+        let ap1 = Primaries {
+            red: [0.713, 0.293],
+            green: [0.165, 0.830],
+            blue: [0.128, 0.044],
+            white,
+        };
+        // The Y rows of the standards' normalised primary matrices.
+        for (primaries, row) in [
+            (ap0, [0.343_966_45, 0.728_166_1, -0.072_132_55]),
+            (ap1, [0.272_228_72, 0.674_081_77, 0.053_689_52]),
+        ] {
+            let w = primaries.luminance_weights().unwrap();
+            for (a, b) in w.iter().zip(row) {
+                assert!((a - b).abs() < 2e-6, "{w:?} against {row:?}");
+            }
+        }
     }
 
     #[test]
