@@ -400,7 +400,11 @@ impl Run<'_> {
         })
     }
 
-    fn apply<'j>(&self, session: &mut Session, read: Read<'j>) -> Result<Convolved<'j>, Failure> {
+    fn apply<'j>(
+        &self,
+        session: &mut Session,
+        mut read: Read<'j>,
+    ) -> Result<Convolved<'j>, Failure> {
         let args = self.args;
         let job = read.job;
         let width = read.frame.image().width;
@@ -445,6 +449,23 @@ impl Run<'_> {
                 progress.update(stage, done)
             })
             .map_err(|e| input::about(&job.input, e))?;
+        // A stereo plate's other eye through the same camera, as one frame.
+        let frame_options = FrameOptions {
+            input_scale: args.input_scale,
+            sanitize: args.sanitize,
+        };
+        for (_, image) in read.original.views_mut() {
+            let about = |e| input::about(&job.input, e);
+            let empty = aureole::Image::filled(0, 0, image.layout, 0.0);
+            let frame =
+                Frame::new(std::mem::replace(image, empty), &frame_options).map_err(about)?;
+            *image = session
+                .apply(&frame, &options, &mut |stage, done| {
+                    progress.update(stage, done)
+                })
+                .map_err(about)?
+                .image;
+        }
         let kernel = session
             .plan()
             .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));

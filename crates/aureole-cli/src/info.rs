@@ -43,6 +43,27 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         layer: args.layer.clone(),
         part: args.part.clone(),
     };
+    // A file apply cannot spread (deep, no single colour layer) is still
+    // described, from its headers; a damaged one is refused when decoded.
+    if let Err(refused) = aureole_io::read::probe(&args.input, limits, &choice) {
+        let Some(lines) = aureole_io::read::exr_structure(&args.input) else {
+            return Err(refused.into());
+        };
+        let reason = match &refused {
+            aureole_io::Error::Decode { message, .. } => message.clone(),
+            other => other.to_string(),
+        };
+        let mut text = format!(
+            "{}: OpenEXR; apply cannot spread it: {reason}\n",
+            args.input.display()
+        );
+        for line in lines {
+            text += &line;
+            text.push('\n');
+        }
+        let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
+        return Ok(());
+    }
     let mut loaded = aureole_io::read::read_image_with(&args.input, limits, &choice)?;
     let format = loaded.format;
     let structure = loaded.original.describe();

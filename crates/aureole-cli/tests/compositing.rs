@@ -283,6 +283,155 @@ fn a_file_whose_only_layer_is_prefixed_is_read() {
 }
 
 #[test]
+fn vector_and_data_layers_are_never_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("aovs.exr"), dir.path().join("out.exr"));
+    let values = plate(32, 24, 1.0);
+    // A normal's Y of 1 everywhere would pass any threshold were it light;
+    // a Cryptomatte ID is a float that may read as anything.
+    let channels = ["diffuse.R", "diffuse.G", "diffuse.B"]
+        .iter()
+        .map(|n| AnyChannel::new(*n, FlatSamples::F32(values.clone())))
+        .chain(
+            ["N.X", "N.Y", "N.Z"]
+                .iter()
+                .map(|n| AnyChannel::new(*n, FlatSamples::F32(vec![1e6; 32 * 24]))),
+        )
+        .chain(
+            [
+                "CryptoObject00.R",
+                "CryptoObject00.G",
+                "CryptoObject00.B",
+                "CryptoObject00.A",
+            ]
+            .iter()
+            .map(|n| AnyChannel::new(*n, FlatSamples::F32(vec![3e5; 32 * 24]))),
+        )
+        .collect();
+    write(
+        &input,
+        vec![layer((32, 24), channels, LayerAttributes::default())],
+        (32, 24),
+    );
+    aureole()
+        .args(["apply", "--threshold", "100", "--max-kernel", "17"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains(
+            "spreading layer diffuse (R, G, B)",
+        ));
+    let (a, b) = (read_all(&input), read_all(&output));
+    for kept in ["N.Y", "CryptoObject00.R"] {
+        assert_eq!(channel(&a, 0, kept), channel(&b, 0, kept), "{kept}");
+    }
+    assert_ne!(channel(&a, 0, "diffuse.R"), channel(&b, 0, "diffuse.R"));
+
+    // A vector layer asked for by name is refused, naming its channels.
+    aureole()
+        .args(["apply", "--layer", "N"])
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("no.exr"))
+        .assert()
+        .code(1)
+        .stderr(
+            predicate::str::contains("layer \"N\" holds vectors (X, Y, Z), not light")
+                .and(predicate::str::contains("diffuse (R, G, B)")),
+        );
+    // A data layer with colour channels is taken only when named.
+    aureole()
+        .args([
+            "apply",
+            "-q",
+            "--max-kernel",
+            "17",
+            "--layer",
+            "CryptoObject00",
+        ])
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("crypto.exr"))
+        .assert()
+        .success();
+
+    // Blender's normal pass beside its Combined, as Cycles writes them.
+    let blender = dir.path().join("normals.exr");
+    let channels = [
+        "ViewLayer.Normal.X",
+        "ViewLayer.Normal.Y",
+        "ViewLayer.Normal.Z",
+    ]
+    .iter()
+    .map(|n| AnyChannel::new(*n, FlatSamples::F32(vec![1.0; 32 * 24])))
+    .collect();
+    write(
+        &blender,
+        vec![layer((32, 24), channels, LayerAttributes::default())],
+        (32, 24),
+    );
+    aureole()
+        .args(["apply", "--layer", "ViewLayer.Normal"])
+        .arg(&blender)
+        .arg("-o")
+        .arg(dir.path().join("no.exr"))
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains(
+            "holds vectors (X, Y, Z), not light",
+        ));
+    // info describes what apply cannot spread.
+    aureole()
+        .arg("info")
+        .arg(&blender)
+        .assert()
+        .success()
+        .stdout(
+            predicate::str::contains("apply cannot spread it: no colour layer").and(
+                predicate::str::contains(
+                    "layer ViewLayer.Normal (vectors): X float, Y float, Z float",
+                ),
+            ),
+        );
+    assert!(!dir.path().join("no.exr").exists());
+
+    // Two colour layers and no beauty: apply asks which; info describes both.
+    let passes = dir.path().join("passes.exr");
+    let channels = [
+        "diffuse.R",
+        "diffuse.G",
+        "diffuse.B",
+        "specular.R",
+        "specular.G",
+        "specular.B",
+    ]
+    .iter()
+    .map(|n| AnyChannel::new(*n, half(&values)))
+    .collect();
+    write(
+        &passes,
+        vec![layer((32, 24), channels, LayerAttributes::default())],
+        (32, 24),
+    );
+    aureole()
+        .arg("info")
+        .arg(&passes)
+        .assert()
+        .success()
+        .stdout(
+            predicate::str::contains("apply cannot spread it: several colour layers")
+                .and(predicate::str::contains(
+                    "layer diffuse: B half, G half, R half",
+                ))
+                .and(predicate::str::contains(
+                    "layer specular: B half, G half, R half",
+                )),
+        );
+}
+
+#[test]
 fn a_multi_part_file_keeps_its_other_parts_and_a_part_can_be_chosen() {
     let dir = tempfile::tempdir().unwrap();
     let (input, output) = (dir.path().join("parts.exr"), dir.path().join("out.exr"));

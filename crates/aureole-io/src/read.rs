@@ -129,6 +129,22 @@ pub fn probe(path: &Path, limits: Limits, choice: &Choice) -> Result<Option<Shap
     Ok(shape)
 }
 
+/// An OpenEXR file's parts, views, layers and channels, a line each, from
+/// its headers alone: what can be said of a file that cannot be spread
+/// (deep data, no single colour layer). `None` for another format or
+/// headers that cannot be read.
+pub fn exr_structure(path: &Path) -> Option<Vec<String>> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(256);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(256).read_to_end(&mut head))
+        .ok()?;
+    match by_content(&head) {
+        Some(format) if format.name == "OpenEXR" => crate::formats::exr::structure(path),
+        _ => None,
+    }
+}
+
 /// Reads the image at `path`, recognising the format by its content, and
 /// refusing a file whose decoding would need more than `limits` allows.
 pub fn read_image(path: &Path, limits: Limits) -> Result<Loaded> {

@@ -345,7 +345,7 @@ impl Camera {
         let mut loaded = py
             .detach(|| read_image_with(&input, limits, &choice))
             .map_err(file_error)?;
-        let original = std::mem::take(&mut loaded.original);
+        let mut original = std::mem::take(&mut loaded.original);
         let mut notes = loaded.notes;
         let frame = Frame::new(
             loaded.image,
@@ -358,8 +358,25 @@ impl Camera {
         let scale = frame.scale();
         let size = (frame.image().width, frame.image().height);
         let (applied, written) = self.with_session(py, size, progress, |session, report| {
-            session
-                .apply(&frame, &options, report)
+            let applied = session.apply(&frame, &options, &mut *report);
+            // A stereo plate's other eyes through the same camera.
+            let mut views = Ok(());
+            let others = original.views_mut().filter(|_| applied.is_ok());
+            for (_, image) in others {
+                let empty = aureole::Image::filled(0, 0, image.layout, 0.0);
+                let frame_options = FrameOptions {
+                    input_scale,
+                    sanitize: false,
+                };
+                views = Frame::new(std::mem::replace(image, empty), &frame_options)
+                    .and_then(|frame| session.apply(&frame, &options, &mut *report))
+                    .map(|done| *image = done.image);
+                if views.is_err() {
+                    break;
+                }
+            }
+            views
+                .and(applied)
                 .map_err(|e| value_error_about(&input, e))
                 .and_then(|applied| {
                     write_image_into(&output, &applied.image, scale, &write_options, original)

@@ -8,7 +8,7 @@ import pytest
 
 import aureole
 
-from conftest import run
+from conftest import ROOT, run
 
 CAMERAS = ["paper-fig4-bloom", "paper-fig5-corona", "camera-f8-7blade"]
 
@@ -38,6 +38,19 @@ def test_apply_file_writes_the_command_lines_exr_byte_for_byte(cli, street, tmp_
     assert (tmp_path / "py.exr").read_bytes() == (tmp_path / "cli.exr").read_bytes()
     assert report["energy_out"] <= report["energy_in"] * (1 + 1e-6)
     assert report["threshold"] == 300.0
+
+
+STEREO = ROOT.parent / "shared/data/openexr-images/Beachball/multipart.0001.exr"
+
+
+@pytest.mark.skipif(not STEREO.is_file(), reason="OpenEXR's sample set is absent")
+def test_apply_file_puts_both_eyes_of_a_stereo_plate_through_the_camera(cli, tmp_path):
+    run(cli, "apply", STEREO, "-o", tmp_path / "cli.exr", "--preset", "paper-fig4-bloom",
+        "--threshold", "0.3")
+    report = aureole.Camera.preset("paper-fig4-bloom").apply_file(
+        STEREO, tmp_path / "py.exr", threshold=0.3)
+    assert any("every view goes through the camera" in n for n in report["notes"])
+    assert (tmp_path / "py.exr").read_bytes() == (tmp_path / "cli.exr").read_bytes()
 
 
 def test_apply_file_refuses_to_overwrite_its_input(street, tmp_path):

@@ -236,7 +236,7 @@ fn run(
         overwrite,
         max_extent,
     } = target;
-    let (image, original) = match input {
+    let (image, mut original) = match input {
         None => (
             aureole_io::demo::night_street(1280, 720),
             Default::default(),
@@ -266,11 +266,18 @@ fn run(
         glare_only: request.render.view == crate::render::View::Glare,
         method: Method::Auto,
     };
-    let applied = session.apply(&frame, &options, &mut |stage, fraction| {
+    let mut report = |stage: aureole::Stage, fraction| {
         let mut progress = locked(&job.progress);
         progress.stage = stage.describe().to_string();
         progress.fraction = fraction;
-    })?;
+    };
+    let applied = session.apply(&frame, &options, &mut report)?;
+    // A stereo plate's other eyes through the same camera.
+    for (_, image) in original.views_mut() {
+        let empty = aureole::Image::filled(0, 0, image.layout, 0.0);
+        let frame = Frame::new(std::mem::replace(image, empty), &FrameOptions::default())?;
+        *image = session.apply(&frame, &options, &mut report)?.image;
+    }
     job.cancel.check()?;
     locked(&job.progress).stage = "writing".into();
     // Another program may have made the file while the camera ran.

@@ -11,7 +11,7 @@ pub(crate) mod radiance;
 
 use std::path::Path;
 
-use aureole::image::Primaries;
+use aureole::image::{Image, Primaries};
 
 use crate::compression::Compression;
 use crate::display::Depth;
@@ -106,6 +106,13 @@ impl Original {
     /// person; empty for a format without them.
     pub fn describe(&self) -> Vec<String> {
         self.exr.as_ref().map(|k| k.describe()).unwrap_or_default()
+    }
+
+    /// The images of a multi-view file's other views (an EXR's second eye),
+    /// by view name: each front end puts every one through the camera, and
+    /// an EXR result holds whatever they hold when written.
+    pub fn views_mut(&mut self) -> impl Iterator<Item = (&str, &mut Image)> {
+        self.exr.iter_mut().flat_map(|k| k.views_mut())
     }
 
     /// The image width a kernel file records ([`crate::kernel::write_kernel_for`]).

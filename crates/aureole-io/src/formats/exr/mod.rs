@@ -52,6 +52,20 @@ pub(crate) struct Kept {
     taken: Vec<Taken>,
     /// They were luminance and chroma (`Y`, `RY`, `BY`): the result is RGB.
     chroma: bool,
+    /// The same layer in the file's other views, each with its image,
+    /// which the front ends replace by the camera's result.
+    views: Vec<KeptView>,
+}
+
+/// The spread layer of another view of a multi-view file.
+#[derive(Debug, Clone)]
+struct KeptView {
+    name: String,
+    part: usize,
+    prefix: String,
+    taken: Vec<Taken>,
+    chroma: bool,
+    image: Image,
 }
 
 /// A channel taken out of the file, to be put back under its own name.
@@ -64,6 +78,13 @@ struct Taken {
 }
 
 impl Kept {
+    /// The other views' names and images, to be replaced by results.
+    pub(crate) fn views_mut(&mut self) -> impl Iterator<Item = (&str, &mut Image)> {
+        self.views
+            .iter_mut()
+            .map(|v| (v.name.as_str(), &mut v.image))
+    }
+
     /// The image width a kernel file records.
     pub(crate) fn recorded_image_width(&self) -> Option<usize> {
         // A custom attribute may be read as the file's or as its part's.
@@ -186,6 +207,7 @@ fn by_prefix<'a, T>(
 }
 
 /// A layer that holds colour: where, and which of its channels.
+#[derive(Clone)]
 struct Candidate {
     part: usize,
     part_name: Option<String>,
@@ -194,6 +216,45 @@ struct Candidate {
     colour: Vec<String>,
     alpha: Option<String>,
     chroma: bool,
+    /// Its name says it holds data in colour channels (normals, positions,
+    /// Cryptomatte IDs): chosen only by name, never as the beauty.
+    data: bool,
+}
+
+/// Layer names (the last part of the prefix) that renderers use for data
+/// written into R, G, B: Arnold's and RenderMan's `N` and `P`, Nuke's
+/// `Pref`, motion and UV passes, Cryptomatte's `CryptoObject00`.
+fn holds_data(prefix: &str) -> bool {
+    const DATA: [&str; 14] = [
+        "n",
+        "p",
+        "pref",
+        "normal",
+        "normals",
+        "position",
+        "vector",
+        "vectors",
+        "motion",
+        "motionvector",
+        "uv",
+        "depth",
+        "z",
+        "id",
+    ];
+    let last = prefix
+        .trim_end_matches('.')
+        .rsplit('.')
+        .next()
+        .unwrap_or("");
+    let last = last.to_ascii_lowercase();
+    DATA.contains(&last.as_str()) || last.starts_with("crypto")
+}
+
+/// A layer of vectors (`N.X`, `N.Y`, `N.Z`; Blender's `Normal`, `Vector`,
+/// `Position`): its `Y` is a component, not luminance. `X` tells them
+/// apart; `Z` alone does not, as a luminance image's depth is `Y` and `Z`.
+fn is_vector(short: &[&str]) -> bool {
+    find(short, "X").is_some() && find(short, "Y").is_some()
 }
 
 impl Candidate {
@@ -247,6 +308,11 @@ fn find<'a>(names: &[&'a str], wanted: &str) -> Option<&'a str> {
 struct Part {
     name: Option<String>,
     channels: Vec<String>,
+    /// The `view` it belongs to, in a multi-part stereo file.
+    view: Option<String>,
+    /// The `multiView` attribute: the views of a single-part stereo file,
+    /// the default (unprefixed) view first.
+    views: Vec<String>,
 }
 
 fn parts_of_headers(headers: &[Header]) -> Vec<Part> {
@@ -262,6 +328,18 @@ fn parts_of_headers(headers: &[Header]) -> Vec<Part> {
             .iter()
             .map(|c| c.name.to_string())
             .collect(),
+        view: header
+            .own_attributes
+            .view_name
+            .as_ref()
+            .map(|v| v.to_string()),
+        views: header
+            .own_attributes
+            .multi_view_names
+            .iter()
+            .flatten()
+            .map(|v| v.to_string())
+            .collect(),
     });
     parts.collect()
 }
@@ -275,6 +353,8 @@ fn candidates(parts: &[Part]) -> Vec<Candidate> {
             let rgb = ["R", "G", "B"].map(|c| find(&short, c));
             let (colour, chroma) = if let [Some(r), Some(g), Some(b)] = rgb {
                 (vec![full(r), full(g), full(b)], false)
+            } else if is_vector(&short) {
+                continue;
             } else if let Some(y) = find(&short, "Y") {
                 match (find(&short, "RY"), find(&short, "BY")) {
                     (Some(ry), Some(by)) => (vec![full(y), full(ry), full(by)], true),
@@ -290,6 +370,7 @@ fn candidates(parts: &[Part]) -> Vec<Candidate> {
                 colour,
                 alpha: find(&short, "A").map(full),
                 chroma,
+                data: holds_data(&prefix),
             });
         }
     }
@@ -314,6 +395,7 @@ fn lone_channels(parts: &[Part]) -> Vec<Candidate> {
                 colour: vec![name],
                 alpha: None,
                 chroma: false,
+                data: false,
             });
         }
     }
@@ -371,13 +453,21 @@ fn choose(parts: &[Part], choice: &Choice) -> std::result::Result<Candidate, Str
             .or_else(|| all.iter().position(|c| matches(c, false)));
         return match at {
             Some(at) => Ok(all.swap_remove(at)),
-            None if all.is_empty() => Err(no_colour(parts)),
-            None => Err(format!(
-                "there is no colour layer {wanted:?}; the layers that can be chosen are {}",
-                listing(&all)
-            )),
+            None => Err(match vectors_named(parts, wanted) {
+                Some(channels) => format!(
+                    "layer {wanted:?} holds vectors ({channels}), not light; the layers that can be chosen are {}",
+                    listing(&all)
+                ),
+                None if all.is_empty() => no_colour(parts),
+                None => format!(
+                    "there is no colour layer {wanted:?}; the layers that can be chosen are {}",
+                    listing(&all)
+                ),
+            }),
         };
     }
+    let data: Vec<Candidate> = all.iter().filter(|c| c.data).cloned().collect();
+    all.retain(|c| !c.data);
     let at = all
         .iter()
         .position(Candidate::is_beauty)
@@ -385,12 +475,32 @@ fn choose(parts: &[Part], choice: &Choice) -> std::result::Result<Candidate, Str
         .or_else(|| all.iter().position(Candidate::is_combined));
     match at {
         Some(at) => Ok(all.swap_remove(at)),
-        None if all.is_empty() => Err(no_colour(parts)),
+        None if all.is_empty() && data.is_empty() => Err(no_colour(parts)),
+        None if all.is_empty() => Err(format!(
+            "no colour layer: the layers with colour channels hold data ({}); choose one by name (--layer) if it is light",
+            listing(&data)
+        )),
         None => Err(format!(
             "several colour layers and none is the beauty (unprefixed R, G, B or Blender's Combined): {}; choose one by name (--layer)",
             listing(&all)
         )),
     }
+}
+
+/// The channels of a vector layer called `wanted`, if there is one.
+fn vectors_named(parts: &[Part], wanted: &str) -> Option<String> {
+    parts.iter().find_map(|part| {
+        by_prefix(part.channels.iter().map(|n| (n.as_str(), ())))
+            .into_iter()
+            .find(|(prefix, channels)| {
+                let short: Vec<&str> = channels.iter().map(|(n, _)| *n).collect();
+                prefix.trim_end_matches('.').eq_ignore_ascii_case(wanted) && is_vector(&short)
+            })
+            .map(|(_, channels)| {
+                let names: Vec<&str> = channels.iter().map(|(n, _)| *n).collect();
+                names.join(", ")
+            })
+    })
 }
 
 fn no_colour(parts: &[Part]) -> String {
@@ -404,13 +514,80 @@ fn no_colour(parts: &[Part]) -> String {
     )
 }
 
+/// The same layer in each other view of a stereo or multi-view file, as
+/// OpenEXR's multi-view convention names them: in a multi-part file, the
+/// part of another `view` holding the layer under the same prefix (the one
+/// whose name differs only by the view's, where several do); in a
+/// single-part file with a `multiView` list, the layer whose prefix has the
+/// view's name as its last component (`left.R`, `beauty.left.R`), the
+/// default view's being unprefixed.
+/// Returns the chosen layer's view and the others'.
+fn other_views(parts: &[Part], chosen: &Candidate) -> (Option<String>, Vec<(String, Candidate)>) {
+    let all = candidates(parts);
+    let alike = |c: &Candidate, prefix: &str| {
+        c.prefix == prefix && c.colour.len() == chosen.colour.len() && c.chroma == chosen.chroma
+    };
+    let part = &parts[chosen.part];
+    let mut found: Vec<(String, Candidate)> = Vec::new();
+    if let Some(view) = &part.view {
+        for other_view in parts.iter().filter_map(|p| p.view.as_ref()) {
+            if other_view == view || found.iter().any(|(v, _)| v == other_view) {
+                continue;
+            }
+            let renamed = part
+                .name
+                .as_ref()
+                .map(|n| n.replace(view.as_str(), other_view));
+            let matching: Vec<&Candidate> = all
+                .iter()
+                .filter(|c| alike(c, &chosen.prefix))
+                .filter(|c| parts[c.part].view.as_ref() == Some(other_view))
+                .collect();
+            let best = matching
+                .iter()
+                .find(|c| c.part_name.is_some() && c.part_name == renamed)
+                .or(matching.first());
+            if let Some(best) = best {
+                found.push((other_view.clone(), (*best).clone()));
+            }
+        }
+        (Some(view.clone()), found)
+    } else if let Some((default, named)) = part.views.split_first() {
+        let trimmed = chosen.prefix.trim_end_matches('.');
+        let (base, view) = match trimmed.rsplit_once('.') {
+            Some((base, last)) if named.iter().any(|v| v == last) => (format!("{base}."), last),
+            None if named.iter().any(|v| v == trimmed) => (String::new(), trimmed),
+            _ => (chosen.prefix.clone(), default.as_str()),
+        };
+        for other in part.views.iter().filter(|v| v.as_str() != view) {
+            let prefix = if other == default {
+                base.clone()
+            } else {
+                format!("{base}{other}.")
+            };
+            if let Some(c) = all
+                .iter()
+                .find(|c| c.part == chosen.part && alike(c, &prefix))
+            {
+                found.push((other.clone(), c.clone()));
+            }
+        }
+        (Some(view.to_string()), found)
+    } else {
+        (None, found)
+    }
+}
+
 /// The layers and parts besides `chosen`, for a note: a few names.
-fn other_layers(parts: &[Part], chosen: &Candidate) -> String {
+fn other_layers(parts: &[Part], chosen: &[&Candidate]) -> String {
     let mut names = Vec::new();
     for (index, part) in parts.iter().enumerate() {
         let groups = by_prefix(part.channels.iter().map(|n| (n.as_str(), ())));
         for prefix in groups.keys() {
-            if index == chosen.part && *prefix == chosen.prefix {
+            if chosen
+                .iter()
+                .any(|c| index == c.part && *prefix == c.prefix)
+            {
                 continue;
             }
             let name = layer_name(prefix);
@@ -501,8 +678,84 @@ pub(crate) fn probe(
     }))
 }
 
+/// The file's parts, views, layers and channels, a line each, from its
+/// headers alone (deep parts included); `None` when they cannot be read.
+pub(crate) fn structure(path: &Path) -> Option<Vec<String>> {
+    let meta = x::MetaData::read_from_file(path, false).ok()?;
+    let first = meta.headers.first()?;
+    let display = first.shared_attributes.display_window;
+    let mut lines = vec![format!(
+        "display window ({}, {})–({}, {}), pixel aspect {}",
+        display.position.0,
+        display.position.1,
+        display.position.0 + display.size.0 as i32 - 1,
+        display.position.1 + display.size.1 as i32 - 1,
+        first.shared_attributes.pixel_aspect
+    )];
+    for (i, header) in meta.headers.iter().enumerate() {
+        let own = &header.own_attributes;
+        let name = own
+            .layer_name
+            .as_ref()
+            .map(|n| format!(" {:?}", n.to_string()))
+            .unwrap_or_default();
+        let view = own
+            .view_name
+            .as_ref()
+            .map(|v| format!(", view {v}"))
+            .unwrap_or_default();
+        let views = own
+            .multi_view_names
+            .as_ref()
+            .map(|v| {
+                let names: Vec<String> = v.iter().map(ToString::to_string).collect();
+                format!(", views {}", names.join(", "))
+            })
+            .unwrap_or_default();
+        let kind = match (header.deep, header.blocks) {
+            (true, _) => "deep",
+            (false, BlockDescription::ScanLines) => "scanlines",
+            (false, BlockDescription::Tiles(_)) => "tiles",
+        };
+        let at = own.layer_position;
+        let compression = Compression::from_exr(header.compression)
+            .map_or_else(|| format!("{:?}", header.compression), |c| c.to_string());
+        lines.push(format!(
+            "part {i}{name}: {kind}, data window ({}, {})–({}, {}), {compression}{view}{views}",
+            at.0,
+            at.1,
+            at.0 + header.layer_size.0 as i32 - 1,
+            at.1 + header.layer_size.1 as i32 - 1,
+        ));
+        let channels = header.channels.list.iter().map(|c| {
+            let sampling = if c.sampling == x::Vec2(1, 1) {
+                String::new()
+            } else {
+                format!(" (sampled {}x{})", c.sampling.0, c.sampling.1)
+            };
+            (c.name.to_string(), (c.sample_type, sampling))
+        });
+        let channels: Vec<(String, (SampleType, String))> = channels.collect();
+        for (prefix, list) in by_prefix(channels.iter().map(|(n, t)| (n.as_str(), t))) {
+            let short: Vec<&str> = list.iter().map(|(n, _)| *n).collect();
+            let what = if is_vector(&short) { " (vectors)" } else { "" };
+            let list: Vec<String> = list
+                .iter()
+                .map(|(c, (t, sampling))| format!("{c} {}{sampling}", type_name(*t)))
+                .collect();
+            lines.push(format!(
+                "  layer {}{what}: {}",
+                layer_name(&prefix),
+                list.join(", ")
+            ));
+        }
+    }
+    Some(lines)
+}
+
 /// Decodes an OpenEXR file: the colour layer chosen by `choice` (or the
-/// beauty), with everything else kept for writing back.
+/// beauty), and the same layer in the file's other views, with everything
+/// else kept for writing back.
 pub(crate) fn decode(
     bytes: &[u8],
     limits: Limits,
@@ -512,17 +765,35 @@ pub(crate) fn decode(
     let levels = check_headers(&file.headers, limits)?;
     let parts = parts_of_headers(&file.headers);
     let chosen = choose(&parts, choice)?;
+    let (view, views) = other_views(&parts, &chosen);
     // The channels we spread come as f32, converted as they are placed.
-    let wanted: Vec<(usize, &str)> = chosen
-        .colour
-        .iter()
-        .chain(&chosen.alpha)
-        .map(|name| (chosen.part, name.as_str()))
+    let wanted: Vec<(usize, &str)> = std::iter::once(&chosen)
+        .chain(views.iter().map(|(_, c)| c))
+        .flat_map(|c| {
+            c.colour
+                .iter()
+                .chain(&c.alpha)
+                .map(move |name| (c.part, name.as_str()))
+        })
         .collect();
     let mut channels = read::read(bytes, &file, &wanted).map_err(|e| explain("OpenEXR", e))?;
 
     let mut notes = Vec::new();
-    let others = other_layers(&parts, &chosen);
+    let mut spread: Vec<&Candidate> = vec![&chosen];
+    spread.extend(views.iter().map(|(_, c)| c));
+    let others = other_layers(&parts, &spread);
+    if !views.is_empty() {
+        let names: Vec<String> = views
+            .iter()
+            .map(|(view, c)| format!("{view}: {}", c.describe()))
+            .collect();
+        notes.push(format!(
+            "a multi-view file: every view goes through the camera ({}{}; {}); a result in another format than EXR holds the first alone",
+            view.map(|v| format!("{v}: ")).unwrap_or_default(),
+            chosen.describe(),
+            names.join("; ")
+        ));
+    }
     if !others.is_empty() {
         notes.push(format!(
             "spreading layer {}; the others ({others}) go back unchanged into an EXR output",
@@ -550,7 +821,68 @@ pub(crate) fn decode(
     if primaries.is_some_and(|p| p.luminance_weights().is_none()) && !chosen.chroma {
         notes.push("the chromaticities attribute is degenerate: luminance uses Rec.709".into());
     }
-    let header = &file.headers[chosen.part];
+    let (image, taken) = extract(&chosen, &file.headers, &mut channels, primaries, &mut notes)?;
+    let mut kept_views = Vec::new();
+    for (name, candidate) in views {
+        let (image, taken) = extract(
+            &candidate,
+            &file.headers,
+            &mut channels,
+            primaries,
+            &mut Vec::new(),
+        )?;
+        kept_views.push(KeptView {
+            name,
+            part: candidate.part,
+            prefix: candidate.prefix,
+            taken,
+            chroma: candidate.chroma,
+            image,
+        });
+    }
+    let subsampled: Vec<String> = channels
+        .iter()
+        .flatten()
+        .filter(|c| c.sampling != (1, 1))
+        .map(|c| c.name.to_string())
+        .collect();
+    if !subsampled.is_empty() {
+        notes.push(format!(
+            "channels {} are subsampled: an EXR output holds them at full resolution",
+            subsampled.join(", ")
+        ));
+    }
+    let compression = Compression::from_exr(file.headers[chosen.part].compression);
+    let kept = kept_image(&file.headers, channels);
+    Ok(Decoded {
+        image,
+        display_referred: false,
+        notes,
+        compression,
+        original: super::Original {
+            radiance: None,
+            exr: Some(Box::new(Kept {
+                image: kept,
+                part: chosen.part,
+                prefix: chosen.prefix,
+                taken,
+                chroma: chosen.chroma,
+                views: kept_views,
+            })),
+        },
+    })
+}
+
+/// The candidate's channels taken out of `channels` as an image (RGB for
+/// luminance/chroma), with what is needed to put them back.
+fn extract(
+    chosen: &Candidate,
+    headers: &[Header],
+    channels: &mut [Vec<read::Channel>],
+    primaries: Option<Primaries>,
+    notes: &mut Vec<String>,
+) -> std::result::Result<(Image, Vec<Taken>), String> {
+    let header = &headers[chosen.part];
     let (width, height) = (header.layer_size.0, header.layer_size.1);
     let origin = header.own_attributes.layer_position;
     let white_luminance = header
@@ -631,44 +963,16 @@ pub(crate) fn decode(
             .collect()
     };
     let alpha = alpha.map(|a| full_resolution(a, (width, height)));
-    let subsampled: Vec<String> = channels
-        .iter()
-        .flatten()
-        .filter(|c| c.sampling != (1, 1))
-        .map(|c| c.name.to_string())
-        .collect();
-    if !subsampled.is_empty() {
-        notes.push(format!(
-            "channels {} are subsampled: an EXR output holds them at full resolution",
-            subsampled.join(", ")
-        ));
-    }
-    let compression = Compression::from_exr(header.compression);
-    let image = kept_image(&file.headers, channels);
-    Ok(Decoded {
-        image: Image {
-            width,
-            height,
-            layout,
-            planes,
-            alpha,
-            white_luminance,
-            primaries,
-        },
-        display_referred: false,
-        notes,
-        compression,
-        original: super::Original {
-            radiance: None,
-            exr: Some(Box::new(Kept {
-                image,
-                part: chosen.part,
-                prefix: chosen.prefix,
-                taken,
-                chroma: chosen.chroma,
-            })),
-        },
-    })
+    let image = Image {
+        width,
+        height,
+        layout,
+        planes,
+        alpha,
+        white_luminance,
+        primaries,
+    };
+    Ok((image, taken))
 }
 
 /// The f32 samples of a channel read as float.
@@ -792,6 +1096,80 @@ fn samples(plane: &[f32], half: bool, clamp: bool, clamped: &mut usize) -> x::Fl
     x::FlatSamples::F16(out)
 }
 
+/// A result to put back where its channels were taken from.
+struct Layer<'a> {
+    part: usize,
+    prefix: &'a str,
+    taken: &'a [Taken],
+    chroma: bool,
+    size: (usize, usize),
+    colour: &'a [&'a [f32]],
+    alpha: Option<&'a [f32]>,
+}
+
+/// Puts `result` into its part of `image` under the channel names and
+/// sample types it was read with (unless `samples` says otherwise, or the
+/// colour changed form from luminance/chroma to RGB).
+fn put_back(
+    image: &mut FlatImage,
+    result: &Layer,
+    samples: Option<Samples>,
+    clamped: &mut usize,
+) -> std::result::Result<(), String> {
+    let colours = result.colour.len();
+    let layer = &mut image.layer_data[result.part];
+    if (layer.size.0, layer.size.1) != result.size {
+        return Err(format!(
+            "the result is {}x{} but the layer read was {}x{}",
+            result.size.0, result.size.1, layer.size.0, layer.size.1
+        ));
+    }
+    let taken = result.taken;
+    let like = |name: &str| Taken {
+        name: format!("{}{name}", result.prefix),
+        kind: taken.first().map_or(SampleType::F32, |t| t.kind),
+        linear: false,
+    };
+    let colour_ids: Vec<Taken> = if result.chroma || taken.len() < colours {
+        let names: &[&str] = if colours == 3 {
+            &["R", "G", "B"]
+        } else {
+            &["Y"]
+        };
+        names.iter().map(|n| like(n)).collect()
+    } else {
+        taken[..colours].to_vec()
+    };
+    let alpha_id = taken
+        .get(if result.chroma { 3 } else { colours })
+        .cloned()
+        .unwrap_or_else(|| like("A"));
+    let channel = |id: &Taken, plane: &[f32], clamp: bool, clamped: &mut usize| {
+        let half = match samples {
+            Some(Samples::Half) => true,
+            Some(Samples::Float) => false,
+            None => id.kind == SampleType::F16,
+        };
+        x::AnyChannel {
+            name: id.name.as_str().into(),
+            sample_data: self::samples(plane, half, clamp, clamped),
+            quantize_linearly: id.linear,
+            sampling: x::Vec2(1, 1),
+        }
+    };
+    let mut list = std::mem::take(&mut layer.channel_data.list);
+    for (id, plane) in colour_ids.iter().zip(result.colour) {
+        list.push(channel(id, plane, true, clamped));
+    }
+    if let Some(alpha) = result.alpha {
+        list.push(channel(&alpha_id, alpha, false, clamped));
+    }
+    layer.channel_data = x::AnyChannels::sort(list);
+    // A preview shows the picture before the camera: no longer true.
+    layer.attributes.preview = None;
+    Ok(())
+}
+
 /// Writes the planes to `path` atomically: into the file they were read
 /// from when it is given, else as a new file. With half samples, values
 /// beyond the half range are clamped to it (and counted).
@@ -817,58 +1195,32 @@ pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
                 prefix,
                 taken,
                 chroma,
+                views,
             } = *kept;
-            let layer = &mut image.layer_data[part];
-            if (layer.size.0, layer.size.1) != (planes.width, planes.height) {
-                return Err(encode_error(format!(
-                    "the result is {}x{} but the layer read was {}x{}",
-                    planes.width, planes.height, layer.size.0, layer.size.1
-                )));
-            }
-            // The result's colour channels take the names and types of those
-            // read, unless the colour changed form (luminance/chroma).
-            let like = |name: &str| Taken {
-                name: format!("{prefix}{name}"),
-                kind: taken.first().map_or(SampleType::F32, |t| t.kind),
-                linear: false,
+            let result = Layer {
+                part,
+                prefix: &prefix,
+                taken: &taken,
+                chroma,
+                size: (planes.width, planes.height),
+                colour: &planes.colour,
+                alpha: planes.alpha,
             };
-            let colour_ids: Vec<Taken> = if chroma || taken.len() < colours {
-                let names: &[&str] = if colours == 3 {
-                    &["R", "G", "B"]
-                } else {
-                    &["Y"]
+            put_back(&mut image, &result, planes.samples, &mut clamped).map_err(encode_error)?;
+            for view in &views {
+                let colour: Vec<&[f32]> = view.image.planes.iter().map(Vec::as_slice).collect();
+                let result = Layer {
+                    part: view.part,
+                    prefix: &view.prefix,
+                    taken: &view.taken,
+                    chroma: view.chroma,
+                    size: (view.image.width, view.image.height),
+                    colour: &colour,
+                    alpha: view.image.alpha.as_deref(),
                 };
-                names.iter().map(|n| like(n)).collect()
-            } else {
-                taken[..colours].to_vec()
-            };
-            let alpha_id = taken
-                .get(if chroma { 3 } else { colours })
-                .cloned()
-                .unwrap_or_else(|| like("A"));
-            let channel = |id: &Taken, plane: &[f32], clamp: bool, clamped: &mut usize| {
-                let half = match planes.samples {
-                    Some(Samples::Half) => true,
-                    Some(Samples::Float) => false,
-                    None => id.kind == SampleType::F16,
-                };
-                x::AnyChannel {
-                    name: id.name.as_str().into(),
-                    sample_data: samples(plane, half, clamp, clamped),
-                    quantize_linearly: id.linear,
-                    sampling: x::Vec2(1, 1),
-                }
-            };
-            let mut list = std::mem::take(&mut layer.channel_data.list);
-            for (id, plane) in colour_ids.iter().zip(&planes.colour) {
-                list.push(channel(id, plane, true, &mut clamped));
+                put_back(&mut image, &result, planes.samples, &mut clamped)
+                    .map_err(|e| encode_error(format!("view {}: {e}", view.name)))?;
             }
-            if let Some(alpha) = planes.alpha {
-                list.push(channel(&alpha_id, alpha, false, &mut clamped));
-            }
-            layer.channel_data = x::AnyChannels::sort(list);
-            // A preview shows the picture before the camera: no longer true.
-            layer.attributes.preview = None;
             if let Some(compression) = planes.compression {
                 for layer in image.layer_data.iter_mut() {
                     layer.encoding.compression = compression.to_exr();
