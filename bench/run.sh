@@ -71,4 +71,6 @@ work=$(mktemp -d)
 ./target/release/aureole apply "$work/street.exr" --preset camera-f8-7blade -o "$work/camera.exr" -q
 "$venv/bin/python" bench/codec.py target/release/bench_codec "$work/camera.exr" "$work/codec" >> bench/RESULTS.md
 rm -rf "$work"
+# The --max-memory estimate against the measured peaks of whole runs.
+{ echo "## Memory: the estimate against measured peaks"; echo; python3 bench/memory.py target/release/aureole; echo; } >> bench/RESULTS.md
 cat bench/RESULTS.md

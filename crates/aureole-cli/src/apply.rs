@@ -66,7 +66,8 @@ pub struct Args {
 
     /// Apply a --kernel to frames of another width than the one it was
     /// built for (`psf --image-width`), which its µm and mm became pixels
-    /// for: rays and halos then have the wrong size on the sensor.
+    /// for: rays and halos then have the wrong size on the sensor. Needed
+    /// too for a kernel that records no width (a .pfm).
     #[arg(long, requires = "kernel")]
     kernel_any_width: bool,
 
@@ -191,6 +192,12 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     let session = match &args.kernel {
         Some(path) => {
             let (kernel, width) = read_kernel_file(path, Limits { max_bytes: limit })?;
+            if width.is_none() && !args.kernel_any_width {
+                return Err(Failure::Usage(anyhow::anyhow!(
+                    "{}: the kernel records no image width (a .pfm cannot; `aureole psf -o K.exr` records it), so whether its µm and mm became pixels at these frames' pitch cannot be checked; write it as .exr, or pass --kernel-any-width if it was built for frames this wide (psf --image-width)",
+                    path.display()
+                )));
+            }
             kernel_width = width.filter(|_| !args.kernel_any_width);
             Session::with_kernel(kernel)
         }

@@ -51,7 +51,8 @@ pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
             .map(drop)
     })
     .map_err(|e| {
-        Failure::Run(anyhow!(
+        // An output path that cannot be used is the user's to change: 2.
+        Failure::Usage(anyhow!(
             "{}: cannot write in the folder {}: {}",
             output.display(),
             folder.display(),

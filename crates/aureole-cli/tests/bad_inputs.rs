@@ -475,7 +475,7 @@ fn files_it_may_not_read_or_write_are_refused() {
         case(
             "unwritable folder",
             apply("scene.exr", "closed/r.exr", &[]),
-            1,
+            2,
             &["closed/r.exr", "cannot write", "permission denied"],
         ),
     ];

@@ -389,6 +389,42 @@ fn apply_reuses_a_kernel_written_by_psf() {
         .arg(&out)
         .assert()
         .success();
+    // A .pfm kernel records no width: refused unless told.
+    let pfm = dir.path().join("k.pfm");
+    aureole()
+        .args([
+            "psf",
+            "--preset",
+            "paper-fig5-both",
+            "--size",
+            "95x63",
+            "-o",
+        ])
+        .arg(&pfm)
+        .assert()
+        .success();
+    aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("--kernel")
+        .arg(&pfm)
+        .arg("-o")
+        .arg(&out)
+        .assert()
+        .code(2)
+        .stderr(
+            predicate::str::contains("k.pfm: the kernel records no image width")
+                .and(predicate::str::contains("--kernel-any-width")),
+        );
+    aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("--kernel")
+        .arg(&pfm)
+        .args(["--kernel-any-width", "-q", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
     aureole()
         .arg("apply")
         .arg(&input)

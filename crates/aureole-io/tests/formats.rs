@@ -443,3 +443,41 @@ fn radiance_exposure_colour_correction_and_primaries_are_honoured_and_kept() {
         assert!((first(&again, c) - first(&loaded, c)).abs() < 0.02 * first(&loaded, c));
     }
 }
+
+#[test]
+fn a_radiance_exposure_of_zero_or_less_is_ignored_with_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = dir.path().join("plain.hdr");
+    let image = aureole::Image::filled(8, 4, Layout::Rgb, 2.0);
+    write_linear(&plain, &image, LinearOptions::default()).unwrap();
+    let bytes = std::fs::read(&plain).unwrap();
+    let format = b"FORMAT=32-bit_rle_rgbe\n";
+    let at = bytes
+        .windows(format.len())
+        .position(|w| w == format)
+        .unwrap()
+        + format.len();
+    for (line, said) in [
+        (&b"EXPOSURE=0\n"[..], "EXPOSURE=0 is not a factor above 0"),
+        (b"EXPOSURE=-2\n", "EXPOSURE=-2 is not a factor above 0"),
+        (b"COLORCORR=1 0 1\n", "COLORCORR=1 0 1 holds a factor"),
+    ] {
+        let mut edited = bytes[..at].to_vec();
+        edited.extend_from_slice(line);
+        edited.extend_from_slice(&bytes[at..]);
+        let path = dir.path().join("bad.hdr");
+        std::fs::write(&path, &edited).unwrap();
+        let loaded = read_image(&path, Limits::NONE).unwrap();
+        assert!(
+            loaded.notes.iter().any(|n| n.contains(said)),
+            "{said}: {:?}",
+            loaded.notes
+        );
+        assert!(loaded
+            .image
+            .planes
+            .iter()
+            .flatten()
+            .all(|&v| (v - 2.0).abs() < 0.02));
+    }
+}

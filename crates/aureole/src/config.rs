@@ -192,6 +192,8 @@ fn is_type_error(message: &str) -> bool {
 /// least 0".
 fn plain_types(message: &str) -> String {
     let words = [
+        ("expected u8", "expected a whole number of at least 0"),
+        ("expected u16", "expected a whole number of at least 0"),
         ("expected u64", "expected a whole number of at least 0"),
         ("expected u32", "expected a whole number of at least 0"),
         ("expected usize", "expected a whole number of at least 0"),
@@ -222,7 +224,8 @@ fn key_holding(table: &toml::Table, message: &str) -> Option<String> {
     let shown = |value: &toml::Value| match value {
         toml::Value::String(s) => Some(format!("string {s:?}")),
         toml::Value::Integer(i) => Some(format!("integer `{i}`")),
-        toml::Value::Float(f) => Some(format!("floating point `{f}`")),
+        // serde quotes 7.0 as `7.0`, which `{}` would print as 7.
+        toml::Value::Float(f) => Some(format!("floating point `{f:?}`")),
         toml::Value::Boolean(b) => Some(format!("boolean `{b}`")),
         toml::Value::Array(_) => Some("sequence".to_string()),
         toml::Value::Table(_) => Some("map".to_string()),
@@ -420,6 +423,19 @@ exponent = 2.0
     fn lengths_need_units() {
         let e = error("[[effect]]\ntype = \"bloom\"\nepsilon = 0.1\nbeta = 2.0\nradius = 10.4\n");
         assert!(e.contains("no unit") && e.contains("\"10.4px\""), "{e}");
+    }
+
+    #[test]
+    fn a_float_where_a_whole_number_belongs_names_the_key_and_its_line() {
+        let text = "seed = 3\n\n[[effect]]\ntype = \"aperture\"\nblades = 7.0\n";
+        let e = ConfigFile::parse(text, "lens.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("lens.toml:5:"), "{e}");
+        assert!(
+            e.contains("`blades`") && e.contains("7.0") && e.contains("a whole number"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -7,7 +7,7 @@ use crate::config::Config;
 use crate::convolve::padded_size;
 use crate::error::{Fit, Result};
 use crate::kernel::Extent;
-use crate::optics::Effect;
+use crate::optics::{Context, Effect};
 
 /// The peak memory of applying a camera to one image, in bytes, and the
 /// stage where it peaks.
@@ -34,7 +34,14 @@ pub struct Workload {
     pub kernel: (usize, usize),
     /// Kernel planes (1, or 3 for a coloured kernel).
     pub kernel_planes: usize,
+    /// How far each effect's light reaches from the centre, in pixels
+    /// (the first [`REACHES`] effects; `u32::MAX` for the whole kernel).
+    pub reaches: [u32; REACHES],
 }
+
+/// The effects whose reach a [`Workload`] records; later ones count as
+/// reaching the whole kernel.
+pub const REACHES: usize = 8;
 
 impl Workload {
     /// The workload of `config` on a `width`×`height` image of `planes`
@@ -49,6 +56,23 @@ impl Workload {
         max_extent: Option<(usize, usize)>,
     ) -> Result<Workload> {
         let extent = Extent::for_image_within(width, height, max_extent)?;
+        let pitch_mm = config.camera.pixel_pitch_mm(extent.image_width);
+        let mut reaches = [u32::MAX; REACHES];
+        for (index, (reach, effect)) in reaches.iter_mut().zip(&config.effects).enumerate() {
+            let context = Context {
+                camera: &config.camera,
+                pitch_mm,
+                seed: config.seed,
+                index_of_kind: config.effects[..index]
+                    .iter()
+                    .filter(|e| e.kind() == effect.kind())
+                    .count(),
+                kernel_size: (extent.width, extent.height),
+            };
+            if let Some(px) = effect.reach_px(&context).filter(|r| r.is_finite()) {
+                *reach = px.ceil().clamp(0.0, f64::from(u32::MAX - 1)) as u32;
+            }
+        }
         Ok(Workload {
             width,
             height,
@@ -56,15 +80,17 @@ impl Workload {
             alpha,
             kernel: (extent.width, extent.height),
             kernel_planes: config.effects.iter().map(Effect::planes).max().unwrap_or(1),
+            reaches,
         })
     }
 
     /// The peak memory of building the kernel of `effects` (empty when the
     /// kernel is loaded from a file) and applying it to the image. The
-    /// model counts the large buffers of each stage; measured peaks of
-    /// whole runs (1080p and 4K, bloom, corona, diffraction, capped
-    /// kernels) lie 0–25 % above it, so a quarter and the program's own
-    /// baseline are added to stay on the safe side.
+    /// model counts the large buffers of each stage, a kernel's composition
+    /// as if every effect's light reached the whole extent (it is cut to
+    /// the shorter reach once built); an eighth and the program's own
+    /// baseline are added to stay on the safe side, and measured peaks of
+    /// whole runs lie below it (`bench/memory.sh`).
     pub fn estimate(&self, effects: &[Effect]) -> Estimate {
         const COMPLEX: u64 = 8;
         const BASELINE: u64 = 16 << 20;
@@ -76,23 +102,32 @@ impl Workload {
         let kernel = layer * self.kernel_planes as u64;
 
         // Building: the chain so far and the next effect's layers; to
-        // compose them, the zero-padded transform of one, the row spectra
-        // of the other and the result; a diffraction pattern is held in f64
-        // before it becomes f32.
-        let (cx, cy) = padded_size(self.kernel.0, self.kernel.1, self.kernel.0, self.kernel.1);
-        let compose = (cx as u64 / 2 + 1) * (cy as u64 + 2 * kh) * COMPLEX;
+        // compose them, the plane that reaches less far cut to its reach,
+        // the zero-padded transform of that, the row spectra of the other
+        // and the result; a diffraction pattern is held in f64 before it
+        // becomes f32.
+        let reach = |index: usize| self.reaches.get(index).copied().unwrap_or(u32::MAX);
         let mut building = 0u64;
         let mut chain = 0u64;
+        let mut chain_reach = reach(0);
         for (index, effect) in effects.iter().enumerate() {
             let layers = effect.planes() as u64;
             let pattern = effect.building_bytes(layer);
             let composing = if index > 0 {
-                compose + layer * chain.max(layers)
+                let shorter = u64::from(chain_reach.min(reach(index)));
+                let cut = (
+                    (2 * shorter + 1).min(kw) as usize,
+                    (2 * shorter + 1).min(kh) as usize,
+                );
+                let (cx, cy) = padded_size(cut.0, cut.1, self.kernel.0, self.kernel.1);
+                let transform = (cx as u64 / 2 + 1) * (cy as u64 + 2 * cut.1 as u64) * COMPLEX;
+                transform + (cut.0 * cut.1) as u64 * 4 + layer * chain.max(layers)
             } else {
                 0
             };
             building = building.max(layer * chain + pattern + composing);
             chain = chain.max(layers);
+            chain_reach = chain_reach.max(reach(index));
         }
 
         // Then the plan (the kernel and its spectrum at the apply size, and
@@ -103,7 +138,10 @@ impl Workload {
         let half = px as u64 / 2 + 1;
         let spectrum = half * py as u64 * COMPLEX * self.kernel_planes as u64;
         let rows = half * self.height as u64 * COMPLEX * self.planes as u64;
-        let plan = kernel + 2 * spectrum + rows + image;
+        // Split for lamps, a plane keeps the spectrum beyond its near window
+        // in place of the whole one, and the window's rows (at most 257).
+        let window = 257.min(py as u64) * half * COMPLEX * self.kernel_planes as u64;
+        let plan = kernel + spectrum + window + rows + image;
         let stages = [
             ("reading", 2 * image),
             ("building the kernel", building),
@@ -121,14 +159,15 @@ impl Workload {
         // The input image stays in memory throughout.
         let bytes = image + peak;
         Estimate {
-            bytes: bytes + bytes / 4 + BASELINE,
+            bytes: bytes + bytes / 8 + BASELINE,
             stage,
         }
     }
 
     /// What the f64 engine adds to [`Workload::estimate`] when a scene's
     /// range needs it: the spectra in f64, and per plane its f64 planes and
-    /// the column spectra, with the same margin.
+    /// the column spectra, in place of the f32 engine's spectra and row
+    /// spectra, with the same margin.
     pub fn double_extra(&self) -> u64 {
         const COMPLEX: u64 = 16;
         let (px, py) = padded_size(self.kernel.0, self.kernel.1, self.width, self.height);
@@ -137,8 +176,10 @@ impl Workload {
         let spectra = half * py as u64 * COMPLEX * self.kernel_planes as u64;
         let plane =
             3 * pixels * 8 + half * py as u64 * COMPLEX + self.height as u64 * px as u64 * 24;
-        let bytes = spectra + plane;
-        bytes + bytes / 4
+        let single = half * COMPLEX / 2
+            * (py as u64 * self.kernel_planes as u64 + self.height as u64 * self.planes as u64);
+        let bytes = (spectra + plane).saturating_sub(single);
+        bytes + bytes / 8
     }
 
     /// The largest kernel, halving the extent from `start` (width, height),
@@ -183,6 +224,7 @@ mod tests {
             alpha: false,
             kernel: (1999, 1199),
             kernel_planes: 1,
+            reaches: [u32::MAX; REACHES],
         };
         let half = Workload {
             kernel: (999, 599),
@@ -195,5 +237,35 @@ mod tests {
             .unwrap();
         assert_eq!((fit.kernel, fit.bytes), ((999, 599), limit));
         assert!(workload.largest_fitting(&[], workload.kernel, 1).is_none());
+    }
+
+    #[test]
+    fn a_coronas_reach_cuts_the_composition_it_takes_part_in() {
+        let mut config = Config::default();
+        config.apply(
+            crate::presets::find("paper-fig5-both")
+                .unwrap()
+                .config()
+                .unwrap(),
+        );
+        let workload = Workload::of_config(&config, 3840, 2160, 3, false, None).unwrap();
+        // The bloom reaches the whole kernel, the corona's rays fade within
+        // a few hundred pixels of the centre.
+        assert_eq!(workload.reaches[0], u32::MAX);
+        assert!(
+            workload.reaches[1] > 15 && workload.reaches[1] < 2000,
+            "{:?}",
+            workload.reaches
+        );
+        let uncut = Workload {
+            reaches: [u32::MAX; REACHES],
+            ..workload
+        };
+        let (cut, whole) = (
+            workload.estimate(&config.effects),
+            uncut.estimate(&config.effects),
+        );
+        assert_eq!(whole.stage, "building the kernel");
+        assert!(cut.bytes < whole.bytes, "{cut:?} {whole:?}");
     }
 }

@@ -115,7 +115,13 @@ impl FromStr for Length {
             ("mm", Unit::Mm),
         ]
         .iter()
-        .find_map(|(suffix, unit)| trimmed.strip_suffix(suffix).map(|n| (n.trim_end(), *unit)))
+        .find_map(|(suffix, unit)| {
+            // "15PX" and "60UM" mean what they say; µ has no upper case.
+            let at = trimmed.len().checked_sub(suffix.len())?;
+            let (number, end) = (trimmed.get(..at)?, trimmed.get(at..)?);
+            end.eq_ignore_ascii_case(suffix)
+                .then(|| (number.trim_end(), *unit))
+        })
         .ok_or_else(|| refuse("no unit"))?;
         let value: f64 = number.parse().map_err(|_| refuse("not a number"))?;
         if !value.is_finite() || value <= 0.0 {
@@ -160,6 +166,9 @@ mod tests {
         assert_eq!("60µm".parse::<Length>().unwrap(), Length::um(60.0));
         assert_eq!(" 60 um ".parse::<Length>().unwrap(), Length::um(60.0));
         assert_eq!("0.06mm".parse::<Length>().unwrap(), Length::mm(0.06));
+        assert_eq!("15PX".parse::<Length>().unwrap(), Length::px(15.0));
+        assert_eq!("60UM".parse::<Length>().unwrap(), Length::um(60.0));
+        assert_eq!("0.06Mm".parse::<Length>().unwrap(), Length::mm(0.06));
     }
 
     #[test]

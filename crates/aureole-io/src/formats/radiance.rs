@@ -38,6 +38,21 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
     let meta = decoder.metadata();
     let positive = |v: f32| v.is_finite() && v > 0.0;
     let exposure = meta.exposure.filter(|e| positive(*e)).unwrap_or(1.0);
+    // A factor of 0 or less would make every pixel infinite or negative:
+    // the writer meant none, and the user hears so.
+    if let Some(bad) = meta.exposure.filter(|e| !positive(*e)) {
+        decoded.notes.push(format!(
+            "the header's EXPOSURE={bad} is not a factor above 0: ignored, pixels read as stored"
+        ));
+    }
+    if let Some((r, g, b)) = meta
+        .color_correction
+        .filter(|(r, g, b)| [r, g, b].iter().any(|v| !positive(**v)))
+    {
+        decoded.notes.push(format!(
+            "the header's COLORCORR={r} {g} {b} holds a factor that is not above 0: ignored, pixels read as stored"
+        ));
+    }
     let correction = meta
         .color_correction
         .map(|(r, g, b)| [r, g, b])

@@ -210,6 +210,13 @@ impl Model for Corona {
             Box::new(self.shape(context.pitch_mm, context.seed, context.index_of_kind)?),
         ))
     }
+
+    /// Beyond its dark radius the kernel holds exactly 0.
+    fn reach_px(&self, context: &Context) -> Option<f64> {
+        self.shape(context.pitch_mm, context.seed, context.index_of_kind)
+            .ok()
+            .map(|shape| shape.dark_radius)
+    }
 }
 
 impl Corona {

@@ -90,6 +90,13 @@ pub(crate) trait Model:
         plane_bytes * self.planes() as u64 + plane_bytes / 2
     }
 
+    /// How far from the centre, in pixels, its PSF can hold light; `None`
+    /// when it may reach the whole kernel. Composing the chain cuts the
+    /// transforms to the shorter reach, which the memory estimate follows.
+    fn reach_px(&self, _context: &Context) -> Option<f64> {
+        None
+    }
+
     /// Its lengths given in pixels, times `factor` (for an image resampled
     /// by it); lengths on the sensor follow the pitch by themselves.
     fn scale_pixels(&mut self, _factor: f64) {}
@@ -154,6 +161,12 @@ macro_rules! effects {
             pub(crate) fn building_bytes(&self, plane_bytes: u64) -> u64 {
                 match self {
                     $(Effect::$variant(model) => model.building_bytes(plane_bytes),)*
+                }
+            }
+
+            pub(crate) fn reach_px(&self, context: &Context) -> Option<f64> {
+                match self {
+                    $(Effect::$variant(model) => model.reach_px(context),)*
                 }
             }
 

@@ -433,6 +433,7 @@ impl Session {
                     alpha,
                     kernel: (kernel.width(), kernel.height()),
                     kernel_planes: kernel.planes().len(),
+                    reaches: [u32::MAX; crate::memory::REACHES],
                 };
                 Ok((workload, &[]))
             }

@@ -303,8 +303,11 @@ impl Model for Aperture {
 
     /// A diffraction pattern is held in f64, at four times an f32 plane's
     /// bytes per plane, before it becomes f32.
+    /// The pattern in f64 beside its f32 planes: measured, `psf` of a 4K
+    /// lens kernel peaks at 3 planes' bytes in one wavelength and 7 over the
+    /// spectrum.
     fn building_bytes(&self, plane_bytes: u64) -> u64 {
-        4 * plane_bytes * self.planes() as u64
+        plane_bytes * (2 * self.planes() as u64 + 1)
     }
 }
 
