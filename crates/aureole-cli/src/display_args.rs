@@ -4,8 +4,10 @@ use aureole_io::display::{Depth, DisplayOptions, Exposure, ToneCurve};
 
 #[derive(clap::Args)]
 pub struct DisplayArgs {
-    /// Exposure of a picture: `auto` (metered on the log-average luminance)
-    /// or EV at ISO 100, e.g. 10 for f/8 at 1/15 s (white = 1.2·2^EV cd/m²).
+    /// Exposure of a picture: `auto` (a percentile meter: the lit scene's
+    /// median at 12 % of white, unless more than 1 % of what is not a light
+    /// source would clip; lamps may clip, as in a photograph) or EV at ISO
+    /// 100, e.g. 10 for f/8 at 1/15 s (white = 1.2·2^EV cd/m²).
     #[arg(long, value_name = "EV|auto", default_value = "auto", value_parser = parse_exposure, allow_negative_numbers = true)]
     pub exposure: ExposureArg,
 

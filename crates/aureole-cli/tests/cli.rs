@@ -460,6 +460,15 @@ fn help_explains_options_with_their_units() {
     ] {
         assert!(help.contains(phrase), "{phrase} missing from:\n{help}");
     }
+    // The auto exposure is described as it meters (display::meter), not as
+    // the log-average meter it replaced.
+    let apply = aureole().args(["apply", "--help"]).assert().success();
+    let apply = String::from_utf8(apply.get_output().stdout.clone()).unwrap();
+    assert!(
+        apply.contains("percentile meter") && apply.contains("12 % of white"),
+        "{apply}"
+    );
+    assert!(!apply.contains("log-average"), "{apply}");
 }
 
 #[test]
@@ -538,5 +547,84 @@ fn aperture_configs_are_checked() {
             expected,
             Some(&out),
         );
+    }
+}
+
+/// The guide's candle recipe on the image it names changes the picture
+/// (docs/guide.md): with the file's scale, thousands of pixels visibly.
+#[test]
+fn the_candle_recipe_changes_candleglass_visibly() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let input = root.join("../shared/data/CandleGlass.exr");
+    if !input.is_file() {
+        eprintln!("skipped: {} is absent", input.display());
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let identity = dir.path().join("identity.toml");
+    std::fs::write(
+        &identity,
+        "[[effect]]\ntype = \"bloom\"\nradius = \"1px\"\nbeta = 2\nepsilon = 0\n",
+    )
+    .unwrap();
+    let picture = |config: &Path, name: &str| {
+        let out = dir.path().join(name);
+        aureole()
+            .args(["apply", "-q", "--input-scale", "50", "--config"])
+            .arg(config)
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .success();
+        image::open(&out).unwrap().to_rgb8()
+    };
+    let recipe = picture(&root.join("configs/candle-interior.toml"), "candle.png");
+    let plain = picture(&identity, "plain.png");
+    let changed = recipe
+        .pixels()
+        .zip(plain.pixels())
+        .filter(|(a, b)| a.0.iter().zip(b.0).any(|(x, y)| x.abs_diff(y) >= 4))
+        .count();
+    assert!(changed > 5000, "{changed} pixels changed visibly");
+}
+
+/// A clone has no `../shared`: every page that names it says where its
+/// images come from (the README's *Sample images*), and configs name none.
+#[test]
+fn docs_say_where_the_sample_images_come_from() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let section = readme
+        .split("### Sample images")
+        .nth(1)
+        .and_then(|rest| rest.split("\n## ").next())
+        .expect("README.md has a Sample images section");
+    assert!(
+        section.contains("git clone https://github.com/AcademySoftwareFoundation/openexr-images")
+    );
+    let outside = readme.replace(section, "");
+    assert!(
+        !outside.contains("../shared"),
+        "README names ../shared outside Sample images"
+    );
+    for page in ["docs/guide.md", "docs/physics.md"] {
+        let text = std::fs::read_to_string(root.join(page)).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            if line.contains("../shared") {
+                let near = &lines[i.saturating_sub(8)..(i + 9).min(lines.len())];
+                assert!(
+                    near.iter().any(|l| l.contains("Sample images")),
+                    "{page}:{}: names ../shared without saying where it comes from",
+                    i + 1
+                );
+            }
+        }
+    }
+    for entry in std::fs::read_dir(root.join("configs")).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(!text.contains("../shared"), "{}", path.display());
     }
 }

@@ -154,6 +154,21 @@ pub(crate) fn for_each<T: Send>(
     control.check()
 }
 
+/// As [`for_each`], for items whose cost varies along the index (a
+/// diffraction pattern's rows, dearer near its centre): they are taken in
+/// an interleaved order, every batch a sample of the whole range, so that
+/// the progress reported follows the work done and not only the count.
+pub(crate) fn for_each_interleaved<T: Send>(
+    items: &mut [T],
+    control: &mut Control,
+    work: impl Fn(usize, &mut T) + Sync,
+) -> Result<()> {
+    let stride = BATCHES.min(items.len()).max(1);
+    let mut order: Vec<(usize, &mut T)> = items.iter_mut().enumerate().collect();
+    order.sort_by_key(|(i, _)| (i % stride, *i));
+    for_each(&mut order, control, |_, (i, item)| work(*i, item))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -184,5 +199,17 @@ mod tests {
         });
         assert!(matches!(result, Err(Error::Cancelled)));
         assert!(done.into_inner() < 100);
+    }
+
+    #[test]
+    fn interleaved_items_are_each_visited_once_by_their_own_index() {
+        let cancel = Cancel::new();
+        let mut heard = Vec::new();
+        let mut report = |f: f64| heard.push(f);
+        let mut control = Control::new(&cancel, &mut report);
+        let mut items: Vec<usize> = vec![0; 1000];
+        for_each_interleaved(&mut items, &mut control, |i, item| *item += i + 1).unwrap();
+        assert!(items.iter().enumerate().all(|(i, &v)| v == i + 1));
+        assert_eq!(heard.last(), Some(&1.0));
     }
 }

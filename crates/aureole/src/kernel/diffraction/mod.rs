@@ -14,7 +14,7 @@ mod near;
 mod orders;
 
 use super::Extent;
-use crate::control::{for_each, Control};
+use crate::control::{for_each_interleaved, Control};
 use crate::error::Result;
 use crate::optics::aperture::spectrum::Light;
 use crate::optics::aperture::Optics;
@@ -131,7 +131,8 @@ fn pattern_with(
     // down to the centre are computed, the rest are their mirror images.
     let computed = (cy + 1).min(height);
     let mut rasterising = control.part(0.0, if filtered { 0.8 } else { 1.0 });
-    for_each(
+    // The near field's rows, about the centre, cost the most.
+    for_each_interleaved(
         &mut plane_rows(&mut result, width, 0..computed),
         &mut rasterising,
         |j, row| fill(j, row, 0..width),
