@@ -922,9 +922,9 @@ fn clients_cancel_only_their_own_renders() {
 #[test]
 fn exports_beyond_the_memory_budget_wait_their_turn() {
     let dir = tempfile::tempdir().unwrap();
-    // Room for one 1280x720 export of this camera at a time, not two.
-    // (each needs about 183 MiB: `apply --max-memory` says how much).
-    let addr = server_within(dir.path(), 300 << 20);
+    // Room for one 1280x720 export of this camera at a time, not two
+    // (each needs about 164 MiB: `apply --max-memory` says how much).
+    let addr = server_within(dir.path(), 250 << 20);
     let body = |output: &str| {
         render_body("demo", preset("paper-fig5-both"), 1, "")
             .replace(r#", "width": 1"#, &format!(r#", "output": "{output}""#))

@@ -1,4 +1,6 @@
-//! What the studio's tests share: a real server on a port of its own.
+//! What the studio's tests share: a real server on a port of its own. Each
+//! test binary uses a part of it, hence the allowance below.
+#![allow(dead_code)]
 
 use std::net::SocketAddr;
 use std::path::Path;

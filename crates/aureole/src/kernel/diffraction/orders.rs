@@ -44,7 +44,14 @@ pub(super) fn through_filter(
     let share = 1.0 / planes.len().max(1) as f64;
     let mut filtered = Vec::with_capacity(planes.len());
     for (c, plane) in planes.iter().enumerate() {
-        let orders = orders_of(optics, spectrum, c, extent, pitch_mm, weights_total[c]);
+        let orders = Orders {
+            optics,
+            spectrum,
+            c,
+            extent,
+            pitch_mm,
+            total: weights_total[c],
+        };
         let comb = comb(&orders, extent);
         let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
         let mut moved = spread_orders(&comb, &windows[c], extent, &mut part.part(0.0, 0.9))?;
@@ -198,43 +205,52 @@ struct Order {
 
 /// The filter's non-zero orders for plane `c`: each order m at x = ν_m λ f,
 /// with its share |c_m|² of the light, for every wavelength of the plane
-/// (so orders disperse into spectra).
-fn orders_of(
-    optics: &Optics,
-    spectrum: &Spectrum,
+/// (so orders disperse into spectra). A star filter has millions of them
+/// (pairs of families, in every wavelength: 55 million for four families
+/// at 200 µm): they are produced as they are used, never stored, and only
+/// the few bright enough to need their cores corrected are kept.
+struct Orders<'a> {
+    optics: &'a Optics,
+    spectrum: &'a Spectrum,
     c: usize,
-    extent: &Extent,
+    extent: &'a Extent,
     pitch_mm: f64,
-    weights_total: f64,
-) -> Vec<Order> {
-    let (cx, cy) = ((extent.width / 2) as f64, (extent.height / 2) as f64);
-    let mut orders = Vec::new();
-    for (line, (lambda_nm, weights)) in spectrum.iter().enumerate() {
-        if weights[c] == 0.0 {
-            continue;
-        }
-        let to_px = lambda_nm * 1e-6 * optics.focal_mm / pitch_mm;
-        for (nu, share) in optics
-            .orders
-            .iter()
-            .filter(|(nu, _)| nu[0] != 0.0 || nu[1] != 0.0)
-        {
-            orders.push(Order {
-                x: cx + nu[0] * to_px,
-                y: cy - nu[1] * to_px,
-                weight: share * weights[c] / weights_total,
-                line,
-            });
+    total: f64,
+}
+
+impl Orders<'_> {
+    fn each(&self, mut visit: impl FnMut(Order)) {
+        let (cx, cy) = (
+            (self.extent.width / 2) as f64,
+            (self.extent.height / 2) as f64,
+        );
+        for (line, (lambda_nm, weights)) in self.spectrum.iter().enumerate() {
+            if weights[self.c] == 0.0 {
+                continue;
+            }
+            let to_px = lambda_nm * 1e-6 * self.optics.focal_mm / self.pitch_mm;
+            for (nu, share) in self
+                .optics
+                .orders
+                .iter()
+                .filter(|(nu, _)| nu[0] != 0.0 || nu[1] != 0.0)
+            {
+                visit(Order {
+                    x: cx + nu[0] * to_px,
+                    y: cy - nu[1] * to_px,
+                    weight: share * weights[self.c] / self.total,
+                    line,
+                });
+            }
         }
     }
-    orders
 }
 
 /// The orders spread bilinearly over the pixels about them.
-fn comb(orders: &[Order], extent: &Extent) -> Vec<f64> {
+fn comb(orders: &Orders, extent: &Extent) -> Vec<f64> {
     let (width, height) = (extent.width, extent.height);
     let mut comb = vec![0.0; width * height];
-    for order in orders {
+    orders.each(|order| {
         let (x0, y0) = (order.x.floor(), order.y.floor());
         let (fx, fy) = (order.x - x0, order.y - y0);
         for (dx, dy, w) in [
@@ -248,7 +264,7 @@ fn comb(orders: &[Order], extent: &Extent) -> Vec<f64> {
                 comb[y as usize * width + x as usize] += order.weight * w;
             }
         }
-    }
+    });
     comb
 }
 
@@ -345,7 +361,7 @@ impl Cores {
     fn correct(
         &self,
         c: usize,
-        orders: &[Order],
+        orders: &Orders,
         extent: &Extent,
         out: &mut [f64],
         control: &mut Control,
@@ -357,32 +373,34 @@ impl Cores {
         let weakest = weakest_corrected(orders);
         // Each corrected order's pixel, the four places about it with
         // their weights, and its share, sorted by row.
-        let mut placed: Vec<Placed> = orders
-            .iter()
-            .filter(|o| o.weight >= weakest)
-            .map(|order| {
-                let (x0, y0) = (order.x.floor(), order.y.floor());
-                let (px, py) = ((order.x - x0) * scale, (order.y - y0) * scale);
-                let a = (px.floor() as usize).min(PHASES - 1);
-                let b = (py.floor() as usize).min(PHASES - 1);
-                let (ta, tb) = (px - a as f64, py - b as f64);
-                let blocks = &self.blocks[c][order.line];
-                let at = |a: usize, b: usize| blocks[b * (PHASES + 1) + a].as_slice();
-                let mix = [
-                    (at(a, b), (1.0 - ta) * (1.0 - tb)),
-                    (at(a + 1, b), ta * (1.0 - tb)),
-                    (at(a, b + 1), (1.0 - ta) * tb),
-                    (at(a + 1, b + 1), ta * tb),
-                ];
-                Placed {
-                    x0: x0 as i64,
-                    y0: y0 as i64,
-                    mix,
-                    weight: order.weight,
-                }
-            })
-            .filter(|p| p.y0 + reach + 1 >= 0 && p.y0 - reach < h)
-            .collect();
+        let mut placed: Vec<Placed> = Vec::new();
+        orders.each(|order| {
+            if order.weight < weakest {
+                return;
+            }
+            let (x0, y0) = (order.x.floor(), order.y.floor());
+            let (px, py) = ((order.x - x0) * scale, (order.y - y0) * scale);
+            let a = (px.floor() as usize).min(PHASES - 1);
+            let b = (py.floor() as usize).min(PHASES - 1);
+            let (ta, tb) = (px - a as f64, py - b as f64);
+            let blocks = &self.blocks[c][order.line];
+            let at = |a: usize, b: usize| blocks[b * (PHASES + 1) + a].as_slice();
+            let mix = [
+                (at(a, b), (1.0 - ta) * (1.0 - tb)),
+                (at(a + 1, b), ta * (1.0 - tb)),
+                (at(a, b + 1), (1.0 - ta) * tb),
+                (at(a + 1, b + 1), ta * tb),
+            ];
+            let placed_order = Placed {
+                x0: x0 as i64,
+                y0: y0 as i64,
+                mix,
+                weight: order.weight,
+            };
+            if placed_order.y0 + reach + 1 >= 0 && placed_order.y0 - reach < h {
+                placed.push(placed_order);
+            }
+        });
         placed.sort_by_key(|p| (p.y0, p.x0));
         // Each output row gathers the orders whose blocks cover it, so rows
         // run in parallel and the sums come out in the same order every
@@ -419,12 +437,10 @@ struct Placed<'a> {
 /// below it keep their bilinear place, and what they hold together, at
 /// most [`UNCORRECTED`] of the light, lands within a pixel or two of where
 /// it belongs. Found by the shares' binary exponents, in one pass.
-fn weakest_corrected(orders: &[Order]) -> f64 {
+fn weakest_corrected(orders: &Orders) -> f64 {
     let mut light = vec![0.0; 1100];
     let exponent = |w: f64| (-w.log2().floor()).clamp(0.0, 1099.0) as usize;
-    for order in orders {
-        light[exponent(order.weight)] += order.weight;
-    }
+    orders.each(|order| light[exponent(order.weight)] += order.weight);
     let mut held = 0.0;
     for (e, l) in light.iter().enumerate().rev() {
         held += l;
