@@ -959,3 +959,60 @@ fn exports_beyond_the_memory_budget_wait_their_turn() {
         assert!(dir.path().join(output).is_file(), "{output}");
     }
 }
+
+#[test]
+fn an_export_puts_both_eyes_of_a_stereo_plate_through_the_camera() {
+    use exr::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (48, 32);
+    let mut plate = vec![0.02f32; w * h];
+    plate[(h / 2) * w + w / 2] = 5e4;
+    // One part, the left eye unprefixed and the right eye as `right.`, as
+    // OpenEXR's multi-view convention writes a single-part stereo file.
+    let channels = ["R", "G", "B", "right.R", "right.G", "right.B"]
+        .iter()
+        .map(|n| AnyChannel::new(*n, FlatSamples::F32(plate.clone())))
+        .collect();
+    let mut attributes = LayerAttributes::named("rgba");
+    attributes.multi_view_names = Some(vec!["left".into(), "right".into()]);
+    let layer = Layer::new(
+        (w, h),
+        attributes,
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels),
+    );
+    Image::from_layer(layer)
+        .write()
+        .to_file(dir.path().join("stereo.exr"))
+        .unwrap();
+    let addr = server(dir.path());
+    let body = render_body("stereo.exr", preset("paper-fig5-both"), 1, "")
+        .replace(r#", "width": 1"#, r#", "output": "out.exr""#);
+    export_done(addr, &body);
+
+    let out = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(dir.path().join("out.exr"))
+        .unwrap();
+    let channel = |name: &str| -> Vec<f32> {
+        out.layer_data[0]
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .unwrap()
+            .sample_data
+            .values_as_f32()
+            .collect()
+    };
+    for (left, right) in [("R", "right.R"), ("G", "right.G"), ("B", "right.B")] {
+        // The eyes were alike and went through one camera: alike still,
+        // and the lamp's light spread.
+        assert_eq!(channel(left), channel(right), "{left} and {right}");
+        assert_ne!(channel(left), plate, "{left} went through the camera");
+    }
+}
