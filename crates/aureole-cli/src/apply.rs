@@ -4,9 +4,10 @@ use std::path::PathBuf;
 use std::sync::mpsc;
 use std::time::Instant;
 
-use aureole::{Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, Method, Session};
+use aureole::{Applied, ApplyOptions, Arithmetic, FrameOptions, Method, Session};
 use aureole_io::compression::Compression;
-use aureole_io::formats::{Original, Samples};
+use aureole_io::formats::Samples;
+use aureole_io::job::Input;
 use aureole_io::kernel::read_kernel_file;
 use aureole_io::limits::{default_memory_limit, Limits};
 use aureole_io::read::Choice;
@@ -309,8 +310,7 @@ struct Run<'a> {
 /// A frame read, waiting for the camera.
 struct Read<'a> {
     job: &'a batch::Job,
-    frame: Frame,
-    original: Original,
+    input: Input,
     /// Seconds it took to read.
     reading: f64,
 }
@@ -397,12 +397,10 @@ impl Run<'_> {
         let limits = Limits {
             max_bytes: self.limit,
         };
-        let (frame, original) =
-            input::read(&job.input, &options, (limits, &self.choice), self.quiet)?;
+        let input = input::read(&job.input, &options, (limits, &self.choice), self.quiet)?;
         Ok(Read {
             job,
-            frame,
-            original,
+            input,
             reading: start.elapsed().as_secs_f64(),
         })
     }
@@ -414,7 +412,7 @@ impl Run<'_> {
     ) -> Result<Convolved<'j>, Failure> {
         let args = self.args;
         let job = read.job;
-        let width = read.frame.image().width;
+        let width = read.input.frame.image().width;
         if let (Some(built), Some(kernel)) = (self.kernel_width, &args.kernel) {
             if built != width {
                 return Err(Failure::Usage(anyhow::anyhow!(
@@ -437,7 +435,7 @@ impl Run<'_> {
         };
         if options.method == Method::Splat && !self.quiet {
             let costs = session
-                .costs(&read.frame, &options)
+                .costs(&read.input.frame, &options)
                 .map_err(|e| input::about(&job.input, e))?;
             if costs.splat > 60.0 {
                 self.progress.println(&format!(
@@ -451,28 +449,13 @@ impl Run<'_> {
         }
         let progress = &self.progress;
         let start = Instant::now();
-        let applied = session
-            .apply(&read.frame, &options, &mut |stage, done| {
+        // A stereo plate's every view goes through the camera.
+        let applied = read
+            .input
+            .apply(session, &options, &mut |stage, done| {
                 progress.update(stage, done)
             })
             .map_err(|e| input::about(&job.input, e))?;
-        // A stereo plate's other eye through the same camera, as one frame.
-        let frame_options = FrameOptions {
-            input_scale: args.input_scale,
-            sanitize: args.sanitize,
-        };
-        for (_, image) in read.original.views_mut() {
-            let about = |e| input::about(&job.input, e);
-            let empty = aureole::Image::filled(0, 0, image.layout, 0.0);
-            let frame =
-                Frame::new(std::mem::replace(image, empty), &frame_options).map_err(about)?;
-            *image = session
-                .apply(&frame, &options, &mut |stage, done| {
-                    progress.update(stage, done)
-                })
-                .map_err(about)?
-                .image;
-        }
         let kernel = session
             .plan()
             .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));
@@ -507,11 +490,10 @@ impl Run<'_> {
         };
         let shown = output::write(
             &job.output,
-            image,
-            read.frame.scale(),
-            (linear, read.original),
+            linear,
             &args.display,
             &self.progress,
+            |options| read.input.write(&job.output, image, options),
         )?;
         if !quiet {
             let ratio = if applied.energy_in != 0.0 {

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use aureole::{ApplyOptions, Frame, FrameOptions, Session};
 use aureole_io::limits::default_memory_limit;
-use aureole_io::write::{write_linear, LinearOptions};
+use aureole_io::write::{write_image, write_linear, LinearOptions};
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
@@ -59,11 +59,10 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));
     let shown = output::write(
         &args.output,
-        &applied.image,
-        1.0,
-        (LinearOptions::default(), Default::default()),
+        LinearOptions::default(),
         &args.display,
         &progress,
+        |options| write_image(&args.output, &applied.image, 1.0, options),
     )?;
     progress.finish();
     if !quiet {

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use aureole::{Frame, FrameOptions, ScaleSource};
-use aureole_io::formats::Original;
+use aureole_io::job::Input;
 use aureole_io::limits::Limits;
 use aureole_io::read::{read_image_with, Choice, Loaded};
 
@@ -19,19 +19,29 @@ pub fn read(
     options: &FrameOptions,
     (limits, choice): (Limits, &Choice),
     quiet: bool,
-) -> Result<(Frame, Original), Failure> {
-    let mut loaded = read_image_with(path, limits, choice)?;
-    let original = std::mem::take(&mut loaded.original);
-    let frame = read_loaded(path, loaded, options, quiet)?;
+) -> Result<Input, Failure> {
+    let loaded = read_image_with(path, limits, choice)?;
+    let input = aureole_io::job::input(path, loaded, options).map_err(|e| match e {
+        aureole_io::Error::Content { error, .. } => about(path, error),
+        other => Failure::from(other),
+    })?;
+    say(
+        path,
+        &input.notes,
+        input.display_referred,
+        input.format,
+        &input.frame,
+        quiet,
+    );
     if !quiet {
         eprintln!(
             "aureole: note: {}: luminance scale {} cd/m² per unit ({})",
             path.display(),
-            frame.scale(),
-            scale_source(frame.scale_source())
+            input.frame.scale(),
+            scale_source(input.frame.scale_source())
         );
     }
-    Ok((frame, original))
+    Ok(input)
 }
 
 /// A file read from `path` as a frame, with its notes and warnings.
@@ -41,22 +51,37 @@ pub fn read_loaded(
     options: &FrameOptions,
     quiet: bool,
 ) -> Result<Frame, Failure> {
+    let (notes, display_referred, format) = (loaded.notes, loaded.display_referred, loaded.format);
+    let frame = Frame::new(loaded.image, options).map_err(|e| about(path, e))?;
+    say(path, &notes, display_referred, format, &frame, quiet);
+    Ok(frame)
+}
+
+/// What the user should know of a file read as `frame`: the reader's
+/// notes, a display image's relative luminance, samples passed or zeroed.
+fn say(
+    path: &Path,
+    notes: &[String],
+    display_referred: bool,
+    format: &str,
+    frame: &Frame,
+    quiet: bool,
+) {
     let note = |text: &str| {
         if !quiet {
             eprintln!("aureole: note: {}: {text}", path.display());
         }
     };
-    for text in &loaded.notes {
+    for text in notes {
         note(text);
     }
-    if loaded.display_referred {
+    if display_referred {
         eprintln!(
             "aureole: warning: {}: an 8/16-bit {} is a display image: decoded from sRGB to linear, its luminance is only relative (set --input-scale for cd/m²)",
             path.display(),
-            loaded.format
+            format
         );
     }
-    let frame = Frame::new(loaded.image, options).map_err(|e| about(path, e))?;
     if frame.negatives() > 0 {
         note(&format!(
             "{} negative samples passed through as they are (--sanitize makes them 0)",
@@ -70,7 +95,6 @@ pub fn read_loaded(
             frame.replaced()
         );
     }
-    Ok(frame)
 }
 
 /// Where the scale came from, in the command line's words.

@@ -81,9 +81,10 @@ impl From<aureole_io::Error> for Failure {
         use aureole_io::Error as E;
         match error {
             E::Io { .. } | E::Encode { .. } | E::Decode { .. } => Failure::Run(error.into()),
-            E::Content { .. } | E::OutputFormat { .. } | E::OverwritesInput { .. } => {
-                Failure::Usage(error.into())
-            }
+            E::Content { .. }
+            | E::OutputFormat { .. }
+            | E::OverwritesInput { .. }
+            | E::Output { .. } => Failure::Usage(error.into()),
         }
     }
 }

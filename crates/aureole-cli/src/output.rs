@@ -4,13 +4,9 @@
 use std::path::Path;
 use std::time::Duration;
 
-use anyhow::anyhow;
-use aureole::Image;
 use aureole_io::atomic::folder_of;
-use aureole_io::formats::{Note, Original};
-use aureole_io::write::{
-    output_format, refuse_overwrite, write_image_into, LinearOptions, WriteOptions, Written,
-};
+use aureole_io::formats::Note;
+use aureole_io::write::{LinearOptions, WriteOptions, Written};
 
 use crate::display_args::DisplayArgs;
 use crate::progress::Progress;
@@ -18,47 +14,10 @@ use crate::Failure;
 
 /// Refuses, before any work, an output whose extension we do not write,
 /// that would overwrite the input, that is not a plain file, or whose
-/// folder is missing or cannot be written.
+/// folder is missing or cannot be written ([`aureole_io::job::check_output`];
+/// its probe file is removed before an interruption may exit).
 pub fn check(output: &Path, input: Option<&Path>) -> Result<(), Failure> {
-    output_format(output)?;
-    if let Some(input) = input {
-        refuse_overwrite(output, input)?;
-    }
-    let folder = folder_of(output);
-    if !folder.is_dir() {
-        return Err(Failure::Usage(anyhow!(
-            "{}: the output folder {} does not exist; create it first",
-            output.display(),
-            folder.display()
-        )));
-    }
-    // The result replaces a file by renaming over it, which would replace
-    // a device or a named pipe by a file.
-    if let Ok(meta) = std::fs::metadata(output) {
-        if !meta.is_file() {
-            return Err(Failure::Usage(anyhow!(
-                "{}: exists and is not a plain file (a folder, device or pipe); write to a file",
-                output.display()
-            )));
-        }
-    }
-    // A folder we cannot write in should fail now, not after the work. The
-    // probe is removed before an interruption may exit.
-    crate::interrupt::exclusive(|| {
-        tempfile::Builder::new()
-            .prefix(".aureole-probe-")
-            .tempfile_in(folder)
-            .map(drop)
-    })
-    .map_err(|e| {
-        // An output path that cannot be used is the user's to change: 2.
-        Failure::Usage(anyhow!(
-            "{}: cannot write in the folder {}: {}",
-            output.display(),
-            folder.display(),
-            std::io::Error::from(e.kind())
-        ))
-    })?;
+    crate::interrupt::exclusive(|| aureole_io::job::check_output(output, input))?;
     Ok(())
 }
 
@@ -86,23 +45,22 @@ pub fn tidy<'a>(outputs: impl IntoIterator<Item = &'a Path>, quiet: bool) {
     }
 }
 
-/// Writes `image` (`scale` cd/m² per unit) to `path`, an EXR into the
-/// `original` it was read from; returns a description of the display
+/// Writes a result to `path` through `write` (given the options: an EXR
+/// into a copy of its input, say); returns a description of the display
 /// exposure when it made a picture. Notes go out through `progress`.
 pub fn write(
     path: &Path,
-    image: &Image,
-    scale: f64,
-    (linear, original): (LinearOptions, Original),
+    linear: LinearOptions,
     display: &DisplayArgs,
     progress: &Progress,
+    write: impl FnOnce(&WriteOptions) -> aureole_io::Result<Written>,
 ) -> Result<Option<String>, Failure> {
     let options = WriteOptions {
         linear,
         display: display.options(),
         depth: display.depth(),
     };
-    match crate::interrupt::writing(|| write_image_into(path, image, scale, &options, original))? {
+    match crate::interrupt::writing(|| write(&options))? {
         Written::Picture { white, ev100 } => {
             Ok(Some(format!("white {white:.4} cd/m² (EV100 {ev100:.1})")))
         }

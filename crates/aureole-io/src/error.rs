@@ -56,6 +56,16 @@ pub enum Error {
         path: PathBuf,
     },
 
+    /// An output path that cannot be used: its folder is missing or
+    /// cannot be written, or it names something other than a file.
+    #[error("{path}: {reason}")]
+    Output {
+        /// The output path.
+        path: PathBuf,
+        /// Why, and what to do.
+        reason: String,
+    },
+
     /// What a file holds is refused by the library (a kernel file whose
     /// weights are negative, say).
     #[error("{path}: {error}")]

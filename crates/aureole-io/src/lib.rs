@@ -41,6 +41,7 @@ pub mod error;
 pub mod formats;
 #[doc(hidden)]
 pub mod fuzzing;
+pub mod job;
 pub mod kernel;
 pub mod limits;
 #[cfg(feature = "plot")]

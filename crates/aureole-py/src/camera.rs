@@ -13,8 +13,8 @@ use pyo3::prelude::*;
 use aureole_io::display::{DisplayOptions, Exposure, ToneCurve};
 use aureole_io::formats::Samples;
 use aureole_io::limits::{default_memory_limit, Limits};
-use aureole_io::read::{read_image_with, Choice};
-use aureole_io::write::{write_image_into, LinearOptions, WriteOptions, Written};
+use aureole_io::read::Choice;
+use aureole_io::write::{LinearOptions, WriteOptions, Written};
 use pyo3::types::{PyDict, PyDictMethods};
 
 use crate::arrays::{float32, to_array, to_image};
@@ -318,8 +318,8 @@ impl Camera {
         part: Option<String>,
         progress: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        aureole_io::write::refuse_overwrite(&output, &input).map_err(file_error)?;
-        aureole_io::write::output_format(&output).map_err(file_error)?;
+        // The guards every front end keeps, before any work.
+        aureole_io::job::check_output(&output, Some(&input)).map_err(file_error)?;
         let options = ApplyOptions {
             threshold,
             knee,
@@ -342,44 +342,22 @@ impl Camera {
         let limits = Limits {
             max_bytes: default_memory_limit(),
         };
-        let mut loaded = py
-            .detach(|| read_image_with(&input, limits, &choice))
+        let frame_options = FrameOptions {
+            input_scale,
+            sanitize: false,
+        };
+        let mut file = py
+            .detach(|| aureole_io::job::read(&input, &choice, limits, &frame_options))
             .map_err(file_error)?;
-        let mut original = std::mem::take(&mut loaded.original);
-        let mut notes = loaded.notes;
-        let frame = Frame::new(
-            loaded.image,
-            &FrameOptions {
-                input_scale,
-                sanitize: false,
-            },
-        )
-        .map_err(|e| value_error_about(&input, e))?;
-        let scale = frame.scale();
-        let size = (frame.image().width, frame.image().height);
+        let mut notes = std::mem::take(&mut file.notes);
+        let scale = file.frame.scale();
+        let size = (file.frame.image().width, file.frame.image().height);
         let (applied, written) = self.with_session(py, size, progress, |session, report| {
-            let applied = session.apply(&frame, &options, &mut *report);
-            // A stereo plate's other eyes through the same camera.
-            let mut views = Ok(());
-            let others = original.views_mut().filter(|_| applied.is_ok());
-            for (_, image) in others {
-                let empty = aureole::Image::filled(0, 0, image.layout, 0.0);
-                let frame_options = FrameOptions {
-                    input_scale,
-                    sanitize: false,
-                };
-                views = Frame::new(std::mem::replace(image, empty), &frame_options)
-                    .and_then(|frame| session.apply(&frame, &options, &mut *report))
-                    .map(|done| *image = done.image);
-                if views.is_err() {
-                    break;
-                }
-            }
-            views
-                .and(applied)
+            // A stereo plate's every view goes through the camera.
+            file.apply(session, &options, report)
                 .map_err(|e| value_error_about(&input, e))
                 .and_then(|applied| {
-                    write_image_into(&output, &applied.image, scale, &write_options, original)
+                    file.write(&output, &applied.image, &write_options)
                         .map_err(file_error)
                         .map(|written| (applied, written))
                 })

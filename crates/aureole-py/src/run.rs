@@ -109,7 +109,9 @@ pub fn file_error(error: aureole_io::Error) -> PyErr {
     use aureole_io::Error as E;
     let message = one_line(&error.to_string());
     match error {
-        E::Io { .. } | E::Decode { .. } | E::Encode { .. } => PyOSError::new_err(message),
+        E::Io { .. } | E::Decode { .. } | E::Encode { .. } | E::Output { .. } => {
+            PyOSError::new_err(message)
+        }
         E::Content {
             error: aureole::Error::Cancelled,
             ..

@@ -174,6 +174,23 @@ def test_unreadable_files_raise_os_error_naming_the_file(tmp_path):
         aureole.write(tmp_path / "a.xyz", lamp())
 
 
+def test_apply_file_checks_its_output_before_any_work_as_the_cli_does(tmp_path):
+    source = tmp_path / "in.exr"
+    aureole.write(source, lamp())
+    camera = aureole.Camera.preset("paper-fig4-bloom")
+    # The guards of aureole_io::job, the same as `aureole apply`'s.
+    with pytest.raises(OSError, match="the output folder .* does not exist"):
+        camera.apply_file(source, tmp_path / "missing" / "out.exr")
+    (tmp_path / "folder.exr").mkdir()
+    with pytest.raises(OSError, match="is not a plain file"):
+        camera.apply_file(source, tmp_path / "folder.exr")
+    with pytest.raises(ValueError, match="unknown output extension"):
+        camera.apply_file(source, tmp_path / "out.xyz")
+    with pytest.raises(ValueError, match="overwrite the input"):
+        camera.apply_file(source, source)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.exr", "in.exr"]
+
+
 def test_render_draws_what_the_cli_draws():
     image = lamp()
     picture = aureole.render(image, exposure=3, tonemap="reinhard")

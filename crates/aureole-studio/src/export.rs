@@ -7,10 +7,11 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
-use aureole::{ApplyOptions, Cancel, Frame, FrameOptions, Method, Session};
+use aureole::{ApplyOptions, Cancel, FrameOptions, Method, Session};
 use aureole_io::display::DisplayOptions;
+use aureole_io::job::Input;
 use aureole_io::limits::Limits;
-use aureole_io::write::{output_format, write_image_into, WriteOptions};
+use aureole_io::write::{output_format, WriteOptions};
 use serde::Serialize;
 
 use crate::budget::Budget;
@@ -113,10 +114,10 @@ impl Exports {
             name => Some(self.roots.resolve(name)?),
         };
         let output = self.output_path(&request.output)?;
-        if let Some(input) = &input {
-            aureole_io::write::refuse_overwrite(&output, input)
-                .map_err(|e| StudioError::BadRequest(e.to_string()))?;
-        }
+        // What every front end checks before the work: the format, not the
+        // input itself, a plain file in a folder that can be written.
+        aureole_io::job::check_output(&output, input.as_deref())
+            .map_err(|e| StudioError::BadRequest(e.to_string()))?;
         if !request.overwrite && output.symlink_metadata().is_ok() {
             return Err(StudioError::Conflict(exists(&request.output)));
         }
@@ -236,23 +237,19 @@ fn run(
         overwrite,
         max_extent,
     } = target;
-    let (image, mut original) = match input {
-        None => (
+    let limits = Limits {
+        max_bytes: memory_limit,
+    };
+    let mut input = match input {
+        None => Input::from_image(
             aureole_io::demo::night_street(1280, 720),
-            Default::default(),
-        ),
+            &FrameOptions::default(),
+        )?,
         Some(path) => {
-            let loaded = aureole_io::read::read_image(
-                path,
-                Limits {
-                    max_bytes: memory_limit,
-                },
-            )?;
-            (loaded.image, loaded.original)
+            aureole_io::job::read(path, &Default::default(), limits, &FrameOptions::default())?
         }
     };
-    let frame = Frame::new(image, &FrameOptions::default())?;
-    let bytes = needs(&config, &frame, max_extent)?;
+    let bytes = needs(&config, &input.frame, max_extent)?;
     let _lease = budget.lease(bytes, &job.cancel, None, || {
         locked(&job.progress).stage = "waiting for memory".into();
     })?;
@@ -271,13 +268,8 @@ fn run(
         progress.stage = stage.describe().to_string();
         progress.fraction = fraction;
     };
-    let applied = session.apply(&frame, &options, &mut report)?;
-    // A stereo plate's other eyes through the same camera.
-    for (_, image) in original.views_mut() {
-        let empty = aureole::Image::filled(0, 0, image.layout, 0.0);
-        let frame = Frame::new(std::mem::replace(image, empty), &FrameOptions::default())?;
-        *image = session.apply(&frame, &options, &mut report)?.image;
-    }
+    // A stereo plate's every view goes through the camera.
+    let applied = input.apply(&mut session, &options, &mut report)?;
     job.cancel.check()?;
     locked(&job.progress).stage = "writing".into();
     // Another program may have made the file while the camera ran.
@@ -289,6 +281,6 @@ fn run(
         display,
         depth: None,
     };
-    write_image_into(output, &applied.image, frame.scale(), &write, original)?;
+    input.write(output, &applied.image, &write)?;
     Ok(())
 }
