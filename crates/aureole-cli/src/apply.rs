@@ -228,11 +228,12 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     };
     if let Some(job) = todo.first() {
         let limits = Limits { max_bytes: limit };
-        if let Some(shape) = aureole_io::read::probe(&job.input, limits, &choice)? {
-            session
-                .check_shape(shape.width, shape.height, shape.planes, shape.alpha)
-                .map_err(|e| input::about(&job.input, e))?;
-        }
+        aureole_io::job::check_header(&job.input, &choice, limits, &session).map_err(
+            |e| match e {
+                aureole_io::Error::Content { error, .. } => input::about(&job.input, error),
+                other => Failure::from(other),
+            },
+        )?;
     }
     let skipped = jobs.len() - todo.len();
     if let [job] = jobs.as_slice() {

@@ -55,6 +55,23 @@ pub fn check_output(output: &Path, input: Option<&Path>) -> Result<()> {
         })
 }
 
+/// Refuses, from its header and before it is decoded, a file whose frame
+/// `session` could not take: one that needs more memory than its limit,
+/// or a kernel beyond the largest allowed (`Error::Content` with the
+/// library's reason); a header that does not say passes, and reading the
+/// file then says what is wrong with it.
+pub fn check_header(path: &Path, choice: &Choice, limits: Limits, session: &Session) -> Result<()> {
+    if let Some(shape) = crate::read::probe(path, limits, choice)? {
+        session
+            .check_shape(shape.width, shape.height, shape.planes, shape.alpha)
+            .map_err(|error| Error::Content {
+                path: path.to_path_buf(),
+                error,
+            })?;
+    }
+    Ok(())
+}
+
 /// A file read for the camera: its frame, the rest of the file (other
 /// layers, parts, views, attributes) and what the user should know.
 pub struct Input {

@@ -346,8 +346,14 @@ impl Camera {
             input_scale,
             sanitize: false,
         };
+        // A frame the camera could not take is refused from its header,
+        // before it is decoded, as the command line does.
+        let checker = Session::new(self.config.clone()).with_memory_limit(limits.max_bytes);
         let mut file = py
-            .detach(|| aureole_io::job::read(&input, &choice, limits, &frame_options))
+            .detach(|| {
+                aureole_io::job::check_header(&input, &choice, limits, &checker)?;
+                aureole_io::job::read(&input, &choice, limits, &frame_options)
+            })
             .map_err(file_error)?;
         let mut notes = std::mem::take(&mut file.notes);
         let scale = file.frame.scale();

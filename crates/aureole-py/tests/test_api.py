@@ -191,6 +191,21 @@ def test_apply_file_checks_its_output_before_any_work_as_the_cli_does(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.exr", "in.exr"]
 
 
+def test_apply_file_refuses_from_the_header_a_frame_the_camera_cannot_take(tmp_path):
+    # A 16x16 EXR whose header says 12000x12000: only the header is read.
+    import struct
+    small = tmp_path / "small.exr"
+    aureole.write(small, np.full((16, 16, 3), 0.1, np.float32))
+    data = bytearray(small.read_bytes())
+    for name in (b"dataWindow\0box2i\0", b"displayWindow\0box2i\0"):
+        struct.pack_into("<4i", data, data.index(name) + len(name) + 4, 0, 0, 11999, 11999)
+    huge = tmp_path / "huge.exr"
+    huge.write_bytes(bytes(data))
+    with pytest.raises(ValueError, match="kernel size 23999x23999 is not allowed"):
+        aureole.Camera.preset("paper-fig4-bloom").apply_file(huge, tmp_path / "out.exr")
+    assert not (tmp_path / "out.exr").exists()
+
+
 def test_render_draws_what_the_cli_draws():
     image = lamp()
     picture = aureole.render(image, exposure=3, tonemap="reinhard")

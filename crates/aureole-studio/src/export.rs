@@ -240,23 +240,26 @@ fn run(
     let limits = Limits {
         max_bytes: memory_limit,
     };
+    let mut session = Session::new(config.clone())
+        .with_memory_limit(memory_limit)
+        .with_max_extent(max_extent);
+    session.set_cancel_token(job.cancel.clone());
     let mut input = match input {
         None => Input::from_image(
             aureole_io::demo::night_street(1280, 720),
             &FrameOptions::default(),
         )?,
         Some(path) => {
-            aureole_io::job::read(path, &Default::default(), limits, &FrameOptions::default())?
+            // A frame the camera could not take is refused from its header.
+            let choice = Default::default();
+            aureole_io::job::check_header(path, &choice, limits, &session)?;
+            aureole_io::job::read(path, &choice, limits, &FrameOptions::default())?
         }
     };
     let bytes = needs(&config, &input.frame, max_extent)?;
     let _lease = budget.lease(bytes, &job.cancel, None, || {
         locked(&job.progress).stage = "waiting for memory".into();
     })?;
-    let mut session = Session::new(config)
-        .with_memory_limit(memory_limit)
-        .with_max_extent(max_extent);
-    session.set_cancel_token(job.cancel.clone());
     let options = ApplyOptions {
         threshold: request.render.threshold,
         knee: request.render.knee,

@@ -1016,3 +1016,43 @@ fn an_export_puts_both_eyes_of_a_stereo_plate_through_the_camera() {
         assert_ne!(channel(left), plate, "{left} went through the camera");
     }
 }
+
+#[test]
+fn an_export_refuses_from_the_header_a_frame_the_camera_cannot_take() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 16x16 EXR whose header says 12000x12000: only the header is read.
+    let small = dir.path().join("small.exr");
+    aureole_io::write::write_linear(
+        &small,
+        &aureole_io::demo::night_street(16, 16),
+        Default::default(),
+    )
+    .unwrap();
+    let mut data = std::fs::read(&small).unwrap();
+    for name in [&b"dataWindow\0box2i\0"[..], b"displayWindow\0box2i\0"] {
+        let at = data.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;
+        for (k, v) in [0i32, 0, 11999, 11999].iter().enumerate() {
+            data[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
+        }
+    }
+    std::fs::write(dir.path().join("huge.exr"), data).unwrap();
+    let addr = server(dir.path());
+    let body = render_body("huge.exr", preset("paper-fig4-bloom"), 1, "")
+        .replace(r#", "width": 1"#, r#", "output": "out.exr""#);
+    let started = http(addr, "POST", "/api/export", &body);
+    assert_eq!(started.status, 200);
+    let job = started.json()["job"].as_u64().unwrap();
+    let progress = loop {
+        let progress = http(addr, "GET", &format!("/api/export/{job}"), "").json();
+        if progress["done"].as_bool() == Some(true) {
+            break progress;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let error = progress["error"].as_str().unwrap_or_default();
+    assert!(
+        error.contains("kernel size 23999x23999 is not allowed"),
+        "{progress}"
+    );
+    assert!(!dir.path().join("out.exr").exists());
+}
