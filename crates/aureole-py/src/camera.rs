@@ -130,14 +130,7 @@ fn value_error_about(path: &std::path::Path, error: aureole::Error) -> PyErr {
 }
 
 fn method(name: &str) -> PyResult<Method> {
-    match name {
-        "auto" => Ok(Method::Auto),
-        "fft" => Ok(Method::Fft),
-        "splat" => Ok(Method::Splat),
-        other => Err(PyValueError::new_err(format!(
-            "method {other:?} is not allowed: auto, fft or splat"
-        ))),
-    }
+    name.parse().map_err(value_error)
 }
 
 #[pymethods]

@@ -35,6 +35,25 @@ pub enum Method {
     Splat,
 }
 
+impl std::str::FromStr for Method {
+    type Err = crate::Error;
+
+    /// `auto`, `fft` or `splat`, as every front end names them.
+    fn from_str(name: &str) -> crate::Result<Method> {
+        match name {
+            "auto" => Ok(Method::Auto),
+            "fft" => Ok(Method::Fft),
+            "splat" => Ok(Method::Splat),
+            other => Err(crate::Error::Parameter {
+                effect: "apply".into(),
+                name: "method",
+                value: format!("{other:?}"),
+                allowed: "auto, fft or splat",
+            }),
+        }
+    }
+}
+
 /// The result of applying a plan.
 #[derive(Debug, Clone)]
 pub struct Applied {
@@ -67,4 +86,21 @@ pub enum Arithmetic {
     Lamps(usize),
     /// f64: the scene's range is beyond f32 even with its lamps apart.
     Double,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn methods_are_read_by_their_names_and_others_refused_listing_them() {
+        assert_eq!("auto".parse::<Method>().unwrap(), Method::Auto);
+        assert_eq!("fft".parse::<Method>().unwrap(), Method::Fft);
+        assert_eq!("splat".parse::<Method>().unwrap(), Method::Splat);
+        let refused = "magic".parse::<Method>().unwrap_err().to_string();
+        assert_eq!(
+            refused,
+            "apply: method = \"magic\" is not allowed: auto, fft or splat"
+        );
+    }
 }
