@@ -5,9 +5,6 @@ use std::path::{Path, PathBuf};
 
 use crate::error::StudioError;
 
-/// The extensions the image list offers: the formats aureole reads.
-const IMAGE_EXTENSIONS: &[&str] = &["exr", "hdr", "pfm", "png", "jpg", "jpeg", "tif", "tiff"];
-
 /// How deep the image list looks under a root, and how many it lists.
 const LIST_DEPTH: usize = 4;
 const LIST_MAX: usize = 2000;
@@ -121,11 +118,8 @@ fn walk(dir: &Path, depth: usize, found: &mut Vec<PathBuf>) {
         if kind.is_dir() && depth > 0 {
             walk(&path, depth - 1, found);
         } else if kind.is_file() {
-            let extension = path
-                .extension()
-                .map(|e| e.to_string_lossy().to_lowercase())
-                .unwrap_or_default();
-            if IMAGE_EXTENSIONS.contains(&extension.as_str()) {
+            // The image list offers the formats aureole reads, by name.
+            if aureole_io::formats::by_extension(&path).is_some() {
                 found.push(path);
             }
         }
