@@ -353,7 +353,7 @@ impl Renderer {
                 };
                 let total = image.total_luminance();
                 (
-                    spread_overlay(image, preview.scale(), threshold),
+                    spread_overlay(image, preview.scale(), threshold, request.knee),
                     total,
                     total,
                 )
@@ -626,21 +626,19 @@ fn kernel_picture(kernel: &aureole::Kernel, width: usize, height: usize) -> Imag
     image
 }
 
-/// `image` dimmed to a quarter, with the pixels above `threshold` cd/m²
-/// (those the camera spreads) in magenta at their own luminance.
-fn spread_overlay(image: &Image, scale: f64, threshold: f64) -> Image {
+/// `image` dimmed to a quarter, with the pixels the camera spreads (above
+/// `threshold` cd/m², through the soft `knee` as the core spreads them) in
+/// magenta at their own luminance, by the fraction of their light spread.
+fn spread_overlay(image: &Image, scale: f64, threshold: f64, knee: f64) -> Image {
     let luminance = image.luminance();
     let mut shown = Image::filled(image.width, image.height, aureole::Layout::Rgb, 0.0);
     shown.white_luminance = image.white_luminance;
     for (i, &y) in luminance.iter().enumerate() {
-        let spread = f64::from(y) * scale > threshold;
+        let spread = aureole::pipeline::spread_fraction(f64::from(y) * scale, threshold, knee);
         for c in 0..3 {
-            let own = image.planes[c.min(image.planes.len() - 1)][i];
-            shown.planes[c][i] = match (spread, c) {
-                (true, 1) => 0.2 * y,
-                (true, _) => y,
-                (false, _) => 0.25 * own,
-            };
+            let own = 0.25 * image.planes[c.min(image.planes.len() - 1)][i];
+            let magenta = if c == 1 { 0.2 * y } else { y };
+            shown.planes[c][i] = spread * magenta + (1.0 - spread) * own;
         }
     }
     shown

@@ -1056,3 +1056,50 @@ fn an_export_refuses_from_the_header_a_frame_the_camera_cannot_take() {
     );
     assert!(!dir.path().join("out.exr").exists());
 }
+
+#[test]
+fn the_spread_view_follows_the_knee_as_the_camera_spreads() {
+    let dir = tempfile::tempdir().unwrap();
+    // Grey pixels of 150 and 600 cd/m² on a dark plate; threshold 100. The
+    // view shows a pixel's own light dimmed to a quarter, and the part the
+    // camera spreads in magenta (G = R/5) at its luminance.
+    let (w, h) = (32, 16);
+    let mut image = aureole::Image::filled(w, h, aureole::Layout::Rgb, 0.01);
+    for (x, level) in [(8, 150.0), (24, 600.0)] {
+        for plane in &mut image.planes {
+            plane[8 * w + x] = level;
+        }
+    }
+    aureole_io::write::write_linear(&dir.path().join("lamps.exr"), &image, Default::default())
+        .unwrap();
+    let addr = server(dir.path());
+    let shown = |knee: f64| {
+        let extra =
+            format!(r#", "view": "spread", "format": "linear", "threshold": 100, "knee": {knee}"#);
+        let body = render_body("lamps.exr", preset("paper-fig4-bloom"), w, &extra);
+        let reply = http(addr, "POST", "/api/render", &body);
+        assert_eq!(
+            reply.status,
+            200,
+            "{}",
+            String::from_utf8_lossy(&reply.body)
+        );
+        let floats = reply.floats();
+        // Green over red at each lamp: 0.2 where it is wholly spread (magenta),
+        // 1 where none of it is (grey).
+        [8, 24].map(|x| {
+            let at = 3 * (8 * w + x);
+            floats[at + 1] / floats[at]
+        })
+    };
+    // Without a knee both lamps are spread whole.
+    let hard = shown(0.0);
+    assert!(hard.iter().all(|g| (g - 0.2).abs() < 1e-3), "{hard:?}");
+    // A knee of 4 (100 to 500 cd/m²) spreads a small part of the 150 cd/m²
+    // lamp (the smoothstep at 1/8: 4.3 %), all of the 600 cd/m² one.
+    let soft = shown(4.0);
+    let f = 0.125f32 * 0.125 * (3.0 - 2.0 * 0.125);
+    let (red, green) = (f * 150.0 + (1.0 - f) * 37.5, f * 30.0 + (1.0 - f) * 37.5);
+    assert!((soft[0] - green / red).abs() < 1e-3, "{soft:?}");
+    assert!((soft[1] - 0.2).abs() < 1e-3, "{soft:?}");
+}
