@@ -228,12 +228,8 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     };
     if let Some(job) = todo.first() {
         let limits = Limits { max_bytes: limit };
-        aureole_io::job::check_header(&job.input, &choice, limits, &session).map_err(
-            |e| match e {
-                aureole_io::Error::Content { error, .. } => input::about(&job.input, error),
-                other => Failure::from(other),
-            },
-        )?;
+        aureole_io::job::check_header(&job.input, &choice, limits, &session)
+            .map_err(|e| input::failure(&job.input, e))?;
     }
     let skipped = jobs.len() - todo.len();
     if let [job] = jobs.as_slice() {

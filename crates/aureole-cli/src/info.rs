@@ -43,28 +43,10 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         layer: args.layer.clone(),
         part: args.part.clone(),
     };
-    // A file apply cannot spread (deep, no single colour layer) is still
-    // described, from its headers; a damaged one is refused when decoded.
-    if let Err(refused) = aureole_io::read::probe(&args.input, limits, &choice) {
-        let Some(lines) = aureole_io::read::exr_structure(&args.input) else {
-            return Err(refused.into());
-        };
-        let reason = match &refused {
-            aureole_io::Error::Decode { message, .. } => message.clone(),
-            other => other.to_string(),
-        };
-        let mut text = format!(
-            "{}: OpenEXR; apply cannot spread it: {reason}\n",
-            args.input.display()
-        );
-        for line in lines {
-            text += &line;
-            text.push('\n');
-        }
-        let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
-        return Ok(());
-    }
-    let mut loaded = aureole_io::read::read_image_with(&args.input, limits, &choice)?;
+    let mut loaded = match aureole_io::read::read_image_with(&args.input, limits, &choice) {
+        Ok(loaded) => loaded,
+        Err(error) => return describe_refused(args, limits, &choice, error),
+    };
     let format = loaded.format;
     let structure = loaded.original.describe();
     // info describes NaN and infinite samples (counted as 0) instead of
@@ -76,7 +58,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
             non_finite += 1;
         }
     }
-    let frame = input::read_loaded(&args.input, loaded, &options, quiet)?;
+    let frame = input::read_loaded(&args.input, loaded, &options, quiet)?.frame;
     let image = frame.image();
     let mut luminance: Vec<f64> = image
         .luminance()
@@ -147,6 +129,38 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     text += &counts.join("\n");
     text.push('\n');
     // A closed pipe (`aureole info … | head`) is not an error worth a message.
+    let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
+    Ok(())
+}
+
+/// A file that could not be read: if its headers say why apply cannot
+/// spread it (deep data, no single colour layer), its parts, views, layers
+/// and channels are described from them with the reason; a damaged file,
+/// whose headers do not refuse it, is refused with `error`.
+fn describe_refused(
+    args: &Args,
+    limits: Limits,
+    choice: &aureole_io::read::Choice,
+    error: aureole_io::Error,
+) -> Result<(), Failure> {
+    let Err(refused) = aureole_io::read::probe(&args.input, limits, choice) else {
+        return Err(error.into());
+    };
+    let Some(lines) = aureole_io::read::exr_structure(&args.input) else {
+        return Err(refused.into());
+    };
+    let reason = match &refused {
+        aureole_io::Error::Decode { message, .. } => message.clone(),
+        other => other.to_string(),
+    };
+    let mut text = format!(
+        "{}: OpenEXR; apply cannot spread it: {reason}\n",
+        args.input.display()
+    );
+    for line in lines {
+        text += &line;
+        text.push('\n');
+    }
     let _ = std::io::Write::write_all(&mut std::io::stdout().lock(), text.as_bytes());
     Ok(())
 }

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use aureole::{Frame, FrameOptions, ScaleSource};
+use aureole::{FrameOptions, ScaleSource};
 use aureole_io::job::Input;
 use aureole_io::limits::Limits;
 use aureole_io::read::{read_image_with, Choice, Loaded};
@@ -20,19 +20,7 @@ pub fn read(
     (limits, choice): (Limits, &Choice),
     quiet: bool,
 ) -> Result<Input, Failure> {
-    let loaded = read_image_with(path, limits, choice)?;
-    let input = aureole_io::job::input(path, loaded, options).map_err(|e| match e {
-        aureole_io::Error::Content { error, .. } => about(path, error),
-        other => Failure::from(other),
-    })?;
-    say(
-        path,
-        &input.notes,
-        input.display_referred,
-        input.format,
-        &input.frame,
-        quiet,
-    );
+    let input = read_loaded(path, read_image_with(path, limits, choice)?, options, quiet)?;
     if !quiet {
         eprintln!(
             "aureole: note: {}: luminance scale {} cd/m² per unit ({})",
@@ -44,44 +32,32 @@ pub fn read(
     Ok(input)
 }
 
-/// A file read from `path` as a frame, with its notes and warnings.
+/// A file read from `path` as a frame, with its notes and warnings: what
+/// the user should know of it (the reader's notes, a display image's
+/// relative luminance, samples passed or zeroed).
 pub fn read_loaded(
     path: &Path,
     loaded: Loaded,
     options: &FrameOptions,
     quiet: bool,
-) -> Result<Frame, Failure> {
-    let (notes, display_referred, format) = (loaded.notes, loaded.display_referred, loaded.format);
-    let frame = Frame::new(loaded.image, options).map_err(|e| about(path, e))?;
-    say(path, &notes, display_referred, format, &frame, quiet);
-    Ok(frame)
-}
-
-/// What the user should know of a file read as `frame`: the reader's
-/// notes, a display image's relative luminance, samples passed or zeroed.
-fn say(
-    path: &Path,
-    notes: &[String],
-    display_referred: bool,
-    format: &str,
-    frame: &Frame,
-    quiet: bool,
-) {
+) -> Result<Input, Failure> {
+    let input = aureole_io::job::input(path, loaded, options).map_err(|e| failure(path, e))?;
     let note = |text: &str| {
         if !quiet {
             eprintln!("aureole: note: {}: {text}", path.display());
         }
     };
-    for text in notes {
+    for text in &input.notes {
         note(text);
     }
-    if display_referred {
+    if input.display_referred {
         eprintln!(
             "aureole: warning: {}: an 8/16-bit {} is a display image: decoded from sRGB to linear, its luminance is only relative (set --input-scale for cd/m²)",
             path.display(),
-            format
+            input.format
         );
     }
+    let frame = &input.frame;
     if frame.negatives() > 0 {
         note(&format!(
             "{} negative samples passed through as they are (--sanitize makes them 0)",
@@ -95,6 +71,7 @@ fn say(
             frame.replaced()
         );
     }
+    Ok(input)
 }
 
 /// Where the scale came from, in the command line's words.
@@ -116,5 +93,14 @@ pub fn about(path: &Path, error: aureole::Error) -> Failure {
             anyhow::anyhow!(crate::words::library(&error)).context(path.display().to_string()),
         ),
         _ => Failure::from(error),
+    }
+}
+
+/// An error of the one job on the file at `path`: the library's refusal of
+/// what it holds as [`about`] says it, the file's own as the files' errors.
+pub fn failure(path: &Path, error: aureole_io::Error) -> Failure {
+    match error {
+        aureole_io::Error::Content { error, .. } => about(path, error),
+        other => Failure::from(other),
     }
 }

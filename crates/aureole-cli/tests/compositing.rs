@@ -1,8 +1,10 @@
 //! Results that drop back into a compositing script: plates that line up,
 //! layers and parts chosen and kept, attributes and channel types as they
-//! were. Inputs are written with the `exr` crate, as a renderer would.
+//! were, every view of a stereo plate through the same camera. Inputs are
+//! written with the `exr` crate, as a renderer would, or come from
+//! OpenEXR's sample set.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
 use exr::prelude::*;
@@ -51,6 +53,15 @@ fn write(path: &Path, layers: Vec<Layer<AnyChannels<FlatSamples>>>, display: (us
     );
     image.attributes.pixel_aspect = 2.0;
     image.write().to_file(path).unwrap();
+}
+
+/// One unnamed part of `channels` filling its display window.
+fn write_plain(path: &Path, size: (usize, usize), channels: Vec<AnyChannel<FlatSamples>>) {
+    write(
+        path,
+        vec![layer(size, channels, LayerAttributes::default())],
+        size,
+    );
 }
 
 fn layer(
@@ -169,11 +180,7 @@ fn blender(path: &Path) {
         "ViewLayer.Depth.Z",
         FlatSamples::F32(vec![3.0; w * h]),
     ));
-    write(
-        path,
-        vec![layer((w, h), channels, LayerAttributes::default())],
-        (w, h),
-    );
+    write_plain(path, (w, h), channels);
 }
 
 #[test]
@@ -266,11 +273,7 @@ fn a_file_whose_only_layer_is_prefixed_is_read() {
         .iter()
         .map(|n| AnyChannel::new(*n, FlatSamples::F32(values.clone())))
         .collect();
-    write(
-        &input,
-        vec![layer((32, 24), channels, LayerAttributes::default())],
-        (32, 24),
-    );
+    write_plain(&input, (32, 24), channels);
     aureole()
         .args(["apply", "--threshold", "100", "--max-kernel", "17", "-q"])
         .arg(&input)
@@ -308,11 +311,7 @@ fn vector_and_data_layers_are_never_light() {
             .map(|n| AnyChannel::new(*n, FlatSamples::F32(vec![3e5; 32 * 24]))),
         )
         .collect();
-    write(
-        &input,
-        vec![layer((32, 24), channels, LayerAttributes::default())],
-        (32, 24),
-    );
+    write_plain(&input, (32, 24), channels);
     aureole()
         .args(["apply", "--threshold", "100", "--max-kernel", "17"])
         .arg(&input)
@@ -367,11 +366,7 @@ fn vector_and_data_layers_are_never_light() {
     .iter()
     .map(|n| AnyChannel::new(*n, FlatSamples::F32(vec![1.0; 32 * 24])))
     .collect();
-    write(
-        &blender,
-        vec![layer((32, 24), channels, LayerAttributes::default())],
-        (32, 24),
-    );
+    write_plain(&blender, (32, 24), channels);
     aureole()
         .args(["apply", "--layer", "ViewLayer.Normal"])
         .arg(&blender)
@@ -410,11 +405,7 @@ fn vector_and_data_layers_are_never_light() {
     .iter()
     .map(|n| AnyChannel::new(*n, half(&values)))
     .collect();
-    write(
-        &passes,
-        vec![layer((32, 24), channels, LayerAttributes::default())],
-        (32, 24),
-    );
+    write_plain(&passes, (32, 24), channels);
     aureole()
         .arg("info")
         .arg(&passes)
@@ -511,11 +502,7 @@ fn luminance_chroma_is_decoded_to_rgb() {
         AnyChannel::new("RY", FlatSamples::F32(vec![(r - y) / y; n])),
         AnyChannel::new("BY", FlatSamples::F32(vec![(b - y) / y; n])),
     ];
-    write(
-        &input,
-        vec![layer((16, 8), channels, LayerAttributes::default())],
-        (16, 8),
-    );
+    write_plain(&input, (16, 8), channels);
     aureole()
         .args(["apply", "--threshold", "100", "--max-kernel", "5"])
         .arg(&input)
@@ -537,4 +524,144 @@ fn luminance_chroma_is_decoded_to_rgb() {
         .list
         .iter()
         .all(|c| c.name.to_string() != "RY"));
+}
+
+/// A file of OpenEXR's sample set (stereo and multi-view plates), or
+/// `None`, said, where the set is absent.
+fn sample(name: &str) -> Option<PathBuf> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/openexr-images")
+        .join(name);
+    if path.is_file() {
+        Some(path)
+    } else {
+        eprintln!("skipped: {} is absent", path.display());
+        None
+    }
+}
+
+/// Every channel of every part, by part and name.
+fn channels(image: &FlatImage) -> Vec<((usize, String), Vec<f32>)> {
+    image
+        .layer_data
+        .iter()
+        .enumerate()
+        .flat_map(|(part, layer)| {
+            layer.channel_data.list.iter().map(move |c| {
+                let values = c.sample_data.values_as_f32().collect();
+                ((part, c.name.to_string()), values)
+            })
+        })
+        .collect()
+}
+
+fn apply(input: &Path, output: &Path, more: &[&str]) -> assert_cmd::assert::Assert {
+    aureole()
+        .args(["apply", "--threshold", "0.3", "--max-kernel", "33"])
+        .args(more)
+        .arg(input)
+        .arg("-o")
+        .arg(output)
+        .assert()
+        .success()
+}
+
+#[test]
+fn every_view_of_a_stereo_plate_goes_through_the_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    // Views: by part (`view` attributes) and by channel prefix (`multiView`);
+    // each eye's R, G, B, as (part, prefix).
+    for (name, eyes) in [
+        ("Beachball/multipart.0001.exr", &[(0, ""), (4, "")][..]),
+        (
+            "Beachball/singlepart.0001.exr",
+            &[(0, ""), (0, "left.")][..],
+        ),
+        (
+            "MultiView/Adjuster.exr",
+            &[(0, ""), (0, "left."), (0, "right.")][..],
+        ),
+    ] {
+        let Some(input) = sample(name) else { return };
+        let output = dir.path().join("out.exr");
+        apply(&input, &output, &[]).stderr(predicate::str::contains(
+            "every view goes through the camera",
+        ));
+        let (before, after) = (channels(&read_all(&input)), channels(&read_all(&output)));
+        let names = |c: &[((usize, String), Vec<f32>)]| -> Vec<(usize, String)> {
+            c.iter().map(|(n, _)| n.clone()).collect()
+        };
+        assert_eq!(names(&before), names(&after), "{name}: the same channels");
+        for (((part, channel), a), (_, b)) in before.iter().zip(&after) {
+            let eye = eyes.iter().any(|(p, prefix)| {
+                p == part
+                    && ["R", "G", "B"]
+                        .iter()
+                        .any(|c| *channel == format!("{prefix}{c}"))
+            });
+            if eye {
+                assert_ne!(a, b, "{name}: {part} {channel} went through the camera");
+                // Light is moved, not made: the sums agree within half's
+                // steps and B44's (Adjuster.exr is lossy, B44A).
+                let sum = |v: &[f32]| v.iter().map(|&v| f64::from(v)).sum::<f64>();
+                let (sa, sb) = (sum(a), sum(b));
+                assert!(
+                    (sa - sb).abs() <= 5e-3 * sa.abs().max(1.0),
+                    "{name} {part} {channel}: {sa} {sb}"
+                );
+            } else {
+                assert_eq!(a, b, "{name}: {part} {channel} goes back untouched");
+            }
+        }
+    }
+}
+
+#[test]
+fn each_eye_comes_out_as_it_would_alone() {
+    let Some(input) = sample("MultiView/Adjuster.exr") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (all, left) = (dir.path().join("all.exr"), dir.path().join("left.exr"));
+    apply(&input, &all, &["-q"]);
+    // The left eye chosen first: the same bytes for it as in the whole run.
+    apply(&input, &left, &["-q", "--layer", "left"]);
+    let (a, b) = (channels(&read_all(&all)), channels(&read_all(&left)));
+    assert_eq!(a, b, "every channel of every view alike");
+    // info lists every view's layer, those taken out to spread too.
+    aureole().arg("info").arg(&input).assert().success().stdout(
+        predicate::str::contains("views center, left, right, spreading (unprefixed)")
+            .and(predicate::str::contains(
+                "layer left: B half, G half, R half",
+            ))
+            .and(predicate::str::contains(
+                "layer right: B half, G half, R half",
+            )),
+    );
+}
+
+#[test]
+fn info_describes_a_deep_stereo_file_that_apply_refuses() {
+    let Some(input) = sample("v2/Stereo/Trunks.exr") else {
+        return;
+    };
+    aureole().arg("info").arg(&input).assert().success().stdout(
+        predicate::str::contains("apply cannot spread it: part 0 holds deep data")
+            .and(predicate::str::contains(
+                "part 1 \"rgba.right\": deep, data window (0, 266)–(1882, 1079), zips, view right",
+            ))
+            .and(predicate::str::contains(
+                "A half, B half, G half, R half, Z float",
+            )),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("out.exr");
+    aureole()
+        .arg("apply")
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("deep data"));
 }

@@ -375,6 +375,19 @@ fn an_unwritable_folder_leaves_no_file() {
     assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
 }
 
+/// The Radiance file at `path` with `lines` added to its header, as a
+/// renderer that exposed or corrected its pixels writes them.
+fn with_header_lines(path: &Path, lines: &[u8]) -> Vec<u8> {
+    let bytes = std::fs::read(path).unwrap();
+    let format = b"FORMAT=32-bit_rle_rgbe\n";
+    let at = bytes
+        .windows(format.len())
+        .position(|w| w == format)
+        .unwrap()
+        + format.len();
+    [&bytes[..at], lines, &bytes[at..]].concat()
+}
+
 #[test]
 fn radiance_exposure_colour_correction_and_primaries_are_honoured_and_kept() {
     use aureole_io::write::write_linear_into;
@@ -387,18 +400,10 @@ fn radiance_exposure_colour_correction_and_primaries_are_honoured_and_kept() {
     write_linear(&plain, &image, LinearOptions::default()).unwrap();
     // A renderer's file whose pixels were doubled after rendering, its red
     // halved, on other primaries.
-    let bytes = std::fs::read(&plain).unwrap();
-    let format = b"FORMAT=32-bit_rle_rgbe\n";
-    let at = bytes
-        .windows(format.len())
-        .position(|w| w == format)
-        .unwrap()
-        + format.len();
-    let mut edited = bytes[..at].to_vec();
-    edited.extend_from_slice(
+    let edited = with_header_lines(
+        &plain,
         b"EXPOSURE=2\nCOLORCORR=0.5 1 1\nPRIMARIES=0.68 0.32 0.265 0.69 0.15 0.06 0.3127 0.329\n",
     );
-    edited.extend_from_slice(&bytes[at..]);
     let exposed = dir.path().join("exposed.hdr");
     std::fs::write(&exposed, &edited).unwrap();
 
@@ -450,21 +455,12 @@ fn a_radiance_exposure_of_zero_or_less_is_ignored_with_a_note() {
     let plain = dir.path().join("plain.hdr");
     let image = aureole::Image::filled(8, 4, Layout::Rgb, 2.0);
     write_linear(&plain, &image, LinearOptions::default()).unwrap();
-    let bytes = std::fs::read(&plain).unwrap();
-    let format = b"FORMAT=32-bit_rle_rgbe\n";
-    let at = bytes
-        .windows(format.len())
-        .position(|w| w == format)
-        .unwrap()
-        + format.len();
     for (line, said) in [
         (&b"EXPOSURE=0\n"[..], "EXPOSURE=0 is not a factor above 0"),
         (b"EXPOSURE=-2\n", "EXPOSURE=-2 is not a factor above 0"),
         (b"COLORCORR=1 0 1\n", "COLORCORR=1 0 1 holds a factor"),
     ] {
-        let mut edited = bytes[..at].to_vec();
-        edited.extend_from_slice(line);
-        edited.extend_from_slice(&bytes[at..]);
+        let edited = with_header_lines(&plain, line);
         let path = dir.path().join("bad.hdr");
         std::fs::write(&path, &edited).unwrap();
         let loaded = read_image(&path, Limits::NONE).unwrap();

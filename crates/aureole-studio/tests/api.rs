@@ -103,6 +103,13 @@ fn unchunk(mut data: &[u8]) -> Vec<u8> {
 
 /// Starts the export `body` asks for and waits until it is written.
 fn export_done(addr: SocketAddr, body: &str) {
+    let progress = export_finished(addr, body);
+    assert!(progress["error"].is_null(), "{progress}");
+}
+
+/// Starts the export `body` asks for and waits until it ends, written or
+/// not; its last progress.
+fn export_finished(addr: SocketAddr, body: &str) -> serde_json::Value {
     let started = http(addr, "POST", "/api/export", body);
     assert_eq!(
         started.status,
@@ -111,14 +118,21 @@ fn export_done(addr: SocketAddr, body: &str) {
         String::from_utf8_lossy(&started.body)
     );
     let job = started.json()["job"].as_u64().unwrap();
-    let progress = loop {
+    loop {
         let progress = http(addr, "GET", &format!("/api/export/{job}"), "").json();
         if progress["done"].as_bool() == Some(true) {
-            break progress;
+            return progress;
         }
-        std::thread::sleep(std::time::Duration::from_millis(50));
-    };
-    assert!(progress["error"].is_null(), "{progress}");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+/// An export of `image` through `config` to `output`, and `extra` fields.
+fn export_body(image: &str, config: &str, output: &str, extra: &str) -> String {
+    render_body(image, config, 1, extra).replace(
+        r#", "width": 1"#,
+        &format!(r#", "output": {}"#, serde_json::to_string(output).unwrap()),
+    )
 }
 
 fn render_body(image: &str, config: &str, width: usize, extra: &str) -> String {
@@ -514,12 +528,7 @@ fn a_full_resolution_render_is_written_under_the_roots_with_its_progress() {
     .unwrap();
     std::fs::hard_link(&input, dir.path().join("same.exr")).unwrap();
     let addr = server(dir.path());
-    let body = |output: &str| {
-        render_body("street.exr", preset("paper-fig5-both"), 1, "").replace(
-            r#", "width": 1"#,
-            &format!(r#", "output": {}"#, serde_json::to_string(output).unwrap()),
-        )
-    };
+    let body = |output: &str| export_body("street.exr", preset("paper-fig5-both"), output, "");
     export_done(addr, &body("camera.exr"));
     let written = aureole_io::read::read_image(
         &dir.path().join("camera.exr"),
@@ -667,8 +676,7 @@ fn only_the_studios_own_page_and_scripts_with_its_token_are_served() {
     let dir = tempfile::tempdir().unwrap();
     let addr = server(dir.path());
     let port = addr.port();
-    let export = render_body("demo", preset("paper-fig5-both"), 1, "")
-        .replace(r#", "width": 1"#, r#", "output": "stolen.exr""#);
+    let export = export_body("demo", preset("paper-fig5-both"), "stolen.exr", "");
     let host = format!("Host: {addr}\r\n");
     let json = "Content-Type: application/json\r\n";
     let bearer = format!("Authorization: Bearer {TOKEN}\r\n");
@@ -805,12 +813,7 @@ fn exports_replace_a_file_only_when_asked_and_take_a_kernel_cap() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("taken.exr"), b"the user's own file").unwrap();
     let addr = server(dir.path());
-    let body = |extra: &str| {
-        render_body("demo", preset("paper-fig5-both"), 1, "").replace(
-            r#", "width": 1"#,
-            &format!(r#", "output": "taken.exr"{extra}"#),
-        )
-    };
+    let body = |extra: &str| export_body("demo", preset("paper-fig5-both"), "taken.exr", extra);
     let reply = http(addr, "POST", "/api/export", &body(""));
     assert_eq!(reply.status, 409);
     assert!(reply.error().contains("exists"), "{}", reply.error());
@@ -925,10 +928,7 @@ fn exports_beyond_the_memory_budget_wait_their_turn() {
     // Room for one 1280x720 export of this camera at a time, not two
     // (each needs about 164 MiB: `apply --max-memory` says how much).
     let addr = server_within(dir.path(), 250 << 20);
-    let body = |output: &str| {
-        render_body("demo", preset("paper-fig5-both"), 1, "")
-            .replace(r#", "width": 1"#, &format!(r#", "output": "{output}""#))
-    };
+    let body = |output: &str| export_body("demo", preset("paper-fig5-both"), output, "");
     let jobs: Vec<u64> = ["one.exr", "two.exr", "three.exr"]
         .iter()
         .map(|o| {
@@ -986,9 +986,10 @@ fn an_export_puts_both_eyes_of_a_stereo_plate_through_the_camera() {
         .to_file(dir.path().join("stereo.exr"))
         .unwrap();
     let addr = server(dir.path());
-    let body = render_body("stereo.exr", preset("paper-fig5-both"), 1, "")
-        .replace(r#", "width": 1"#, r#", "output": "out.exr""#);
-    export_done(addr, &body);
+    export_done(
+        addr,
+        &export_body("stereo.exr", preset("paper-fig5-both"), "out.exr", ""),
+    );
 
     let out = read()
         .no_deep_data()
@@ -1037,18 +1038,10 @@ fn an_export_refuses_from_the_header_a_frame_the_camera_cannot_take() {
     }
     std::fs::write(dir.path().join("huge.exr"), data).unwrap();
     let addr = server(dir.path());
-    let body = render_body("huge.exr", preset("paper-fig4-bloom"), 1, "")
-        .replace(r#", "width": 1"#, r#", "output": "out.exr""#);
-    let started = http(addr, "POST", "/api/export", &body);
-    assert_eq!(started.status, 200);
-    let job = started.json()["job"].as_u64().unwrap();
-    let progress = loop {
-        let progress = http(addr, "GET", &format!("/api/export/{job}"), "").json();
-        if progress["done"].as_bool() == Some(true) {
-            break progress;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    };
+    let progress = export_finished(
+        addr,
+        &export_body("huge.exr", preset("paper-fig4-bloom"), "out.exr", ""),
+    );
     let error = progress["error"].as_str().unwrap_or_default();
     assert!(
         error.contains("kernel size 23999x23999 is not allowed"),

@@ -102,65 +102,128 @@ impl Kept {
         }
     }
 
-    /// Parts, layers and channels, a line each, for a person.
+    /// Parts, views, layers and channels, a line each, for a person.
     pub(crate) fn describe(&self) -> Vec<String> {
-        let mut lines = Vec::new();
-        let display = self.image.attributes.display_window;
-        lines.push(format!(
-            "display window ({}, {})–({}, {}), pixel aspect {}",
-            display.position.0,
-            display.position.1,
-            display.position.0 + display.size.0 as i32 - 1,
-            display.position.1 + display.size.1 as i32 - 1,
-            self.image.attributes.pixel_aspect
-        ));
+        let mut lines = vec![window_line(&self.image.attributes)];
         for (i, layer) in self.image.layer_data.iter().enumerate() {
-            let name = layer
-                .attributes
-                .layer_name
-                .as_ref()
-                .map(|n| format!(" {:?}", n.to_string()))
-                .unwrap_or_default();
-            let at = layer.attributes.layer_position;
-            let compression = Compression::from_exr(layer.encoding.compression).map_or_else(
-                || format!("{:?}", layer.encoding.compression),
-                |c| c.to_string(),
-            );
+            let kind = match layer.encoding.blocks {
+                x::Blocks::ScanLines => "scanlines",
+                x::Blocks::Tiles(_) => "tiles",
+            };
             let chosen = if i == self.part {
                 format!(", spreading {}", layer_name(&self.prefix))
             } else {
                 String::new()
             };
-            lines.push(format!(
-                "part {i}{name}: data window ({}, {})–({}, {}), {}{chosen}",
-                at.0,
-                at.1,
-                at.0 + layer.size.0 as i32 - 1,
-                at.1 + layer.size.1 as i32 - 1,
-                compression
-            ));
-            let mut names: Vec<(String, SampleType)> = layer
+            let mut channels: Vec<(String, String)> = layer
                 .channel_data
                 .list
                 .iter()
-                .map(|c| (c.name.to_string(), sample_type(&c.sample_data)))
+                .map(|c| {
+                    (
+                        c.name.to_string(),
+                        type_name(sample_type(&c.sample_data)).into(),
+                    )
+                })
                 .collect();
-            if i == self.part {
-                names.extend(self.taken.iter().map(|t| (t.name.clone(), t.kind)));
+            // The channels taken out to spread (the chosen layer's, the other
+            // views') are listed where they were.
+            let views = self.views.iter().map(|v| (v.part, &v.taken));
+            for (_, taken) in std::iter::once((self.part, &self.taken))
+                .chain(views)
+                .filter(|(part, _)| *part == i)
+            {
+                channels.extend(
+                    taken
+                        .iter()
+                        .map(|t| (t.name.clone(), type_name(t.kind).into())),
+                );
             }
-            for (prefix, channels) in by_prefix(names.iter().map(|(n, t)| (n.as_str(), *t))) {
-                let mut channels = channels;
-                channels.sort_by_key(|c| c.0);
-                let list: Vec<String> = channels
-                    .iter()
-                    .map(|(c, t)| format!("{c} {}", type_name(*t)))
-                    .collect();
-                lines.push(format!(
-                    "  layer {}: {}",
-                    layer_name(&prefix),
-                    list.join(", ")
-                ));
-            }
+            let part = Described {
+                index: i,
+                attributes: &layer.attributes,
+                size: layer.size,
+                kind,
+                compression: layer.encoding.compression,
+                chosen: &chosen,
+            };
+            lines.extend(part.lines(channels));
+        }
+        lines
+    }
+}
+
+/// The display window's line of a file's description.
+fn window_line(attributes: &x::ImageAttributes) -> String {
+    let display = attributes.display_window;
+    format!(
+        "display window ({}, {})–({}, {}), pixel aspect {}",
+        display.position.0,
+        display.position.1,
+        display.position.0 + display.size.0 as i32 - 1,
+        display.position.1 + display.size.1 as i32 - 1,
+        attributes.pixel_aspect
+    )
+}
+
+/// A part as `info` describes it, from its header or its decoded layer.
+struct Described<'a> {
+    index: usize,
+    attributes: &'a x::LayerAttributes,
+    size: x::Vec2<usize>,
+    /// `scanlines`, `tiles` or `deep`.
+    kind: &'a str,
+    compression: x::Compression,
+    /// What is said of it last (the layer spread).
+    chosen: &'a str,
+}
+
+impl Described<'_> {
+    /// Its line, then a line per layer: `channels` are (name, sample type
+    /// and sampling in words).
+    fn lines(&self, channels: Vec<(String, String)>) -> Vec<String> {
+        let own = self.attributes;
+        let name = own
+            .layer_name
+            .as_ref()
+            .map(|n| format!(" {:?}", n.to_string()))
+            .unwrap_or_default();
+        let view = own
+            .view_name
+            .as_ref()
+            .map(|v| format!(", view {v}"))
+            .unwrap_or_default();
+        let views = own
+            .multi_view_names
+            .as_ref()
+            .map(|v| {
+                let names: Vec<String> = v.iter().map(ToString::to_string).collect();
+                format!(", views {}", names.join(", "))
+            })
+            .unwrap_or_default();
+        let at = own.layer_position;
+        let compression = Compression::from_exr(self.compression)
+            .map_or_else(|| format!("{:?}", self.compression), |c| c.to_string());
+        let mut lines = vec![format!(
+            "part {}{name}: {}, data window ({}, {})–({}, {}), {compression}{view}{views}{}",
+            self.index,
+            self.kind,
+            at.0,
+            at.1,
+            at.0 + self.size.0 as i32 - 1,
+            at.1 + self.size.1 as i32 - 1,
+            self.chosen
+        )];
+        for (prefix, mut list) in by_prefix(channels.iter().map(|(n, t)| (n.as_str(), t))) {
+            list.sort_by_key(|c| c.0);
+            let short: Vec<&str> = list.iter().map(|(n, _)| *n).collect();
+            let what = if is_vector(&short) { " (vectors)" } else { "" };
+            let list: Vec<String> = list.iter().map(|(c, t)| format!("{c} {t}")).collect();
+            lines.push(format!(
+                "  layer {}{what}: {}",
+                layer_name(&prefix),
+                list.join(", ")
+            ));
         }
         lines
     }
@@ -682,73 +745,33 @@ pub(crate) fn probe(
 /// headers alone (deep parts included); `None` when they cannot be read.
 pub(crate) fn structure(path: &Path) -> Option<Vec<String>> {
     let meta = x::MetaData::read_from_file(path, false).ok()?;
-    let first = meta.headers.first()?;
-    let display = first.shared_attributes.display_window;
-    let mut lines = vec![format!(
-        "display window ({}, {})–({}, {}), pixel aspect {}",
-        display.position.0,
-        display.position.1,
-        display.position.0 + display.size.0 as i32 - 1,
-        display.position.1 + display.size.1 as i32 - 1,
-        first.shared_attributes.pixel_aspect
-    )];
+    let mut lines = vec![window_line(&meta.headers.first()?.shared_attributes)];
     for (i, header) in meta.headers.iter().enumerate() {
-        let own = &header.own_attributes;
-        let name = own
-            .layer_name
-            .as_ref()
-            .map(|n| format!(" {:?}", n.to_string()))
-            .unwrap_or_default();
-        let view = own
-            .view_name
-            .as_ref()
-            .map(|v| format!(", view {v}"))
-            .unwrap_or_default();
-        let views = own
-            .multi_view_names
-            .as_ref()
-            .map(|v| {
-                let names: Vec<String> = v.iter().map(ToString::to_string).collect();
-                format!(", views {}", names.join(", "))
-            })
-            .unwrap_or_default();
         let kind = match (header.deep, header.blocks) {
             (true, _) => "deep",
             (false, BlockDescription::ScanLines) => "scanlines",
             (false, BlockDescription::Tiles(_)) => "tiles",
         };
-        let at = own.layer_position;
-        let compression = Compression::from_exr(header.compression)
-            .map_or_else(|| format!("{:?}", header.compression), |c| c.to_string());
-        lines.push(format!(
-            "part {i}{name}: {kind}, data window ({}, {})–({}, {}), {compression}{view}{views}",
-            at.0,
-            at.1,
-            at.0 + header.layer_size.0 as i32 - 1,
-            at.1 + header.layer_size.1 as i32 - 1,
-        ));
         let channels = header.channels.list.iter().map(|c| {
             let sampling = if c.sampling == x::Vec2(1, 1) {
                 String::new()
             } else {
                 format!(" (sampled {}x{})", c.sampling.0, c.sampling.1)
             };
-            (c.name.to_string(), (c.sample_type, sampling))
+            (
+                c.name.to_string(),
+                format!("{}{sampling}", type_name(c.sample_type)),
+            )
         });
-        let channels: Vec<(String, (SampleType, String))> = channels.collect();
-        for (prefix, list) in by_prefix(channels.iter().map(|(n, t)| (n.as_str(), t))) {
-            let short: Vec<&str> = list.iter().map(|(n, _)| *n).collect();
-            let what = if is_vector(&short) { " (vectors)" } else { "" };
-            let list: Vec<String> = list
-                .iter()
-                .map(|(c, (t, sampling))| format!("{c} {}{sampling}", type_name(*t)))
-                .collect();
-            lines.push(format!(
-                "  layer {}{what}: {}",
-                layer_name(&prefix),
-                list.join(", ")
-            ));
-        }
+        let part = Described {
+            index: i,
+            attributes: &header.own_attributes,
+            size: header.layer_size,
+            kind,
+            compression: header.compression,
+            chosen: "",
+        };
+        lines.extend(part.lines(channels.collect()));
     }
     Some(lines)
 }
