@@ -1,6 +1,7 @@
 //! Display options: how a linear result becomes a picture.
 
 use aureole_io::display::{Depth, DisplayOptions, Exposure, ToneCurve};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 
 #[derive(clap::Args)]
 pub struct DisplayArgs {
@@ -8,52 +9,28 @@ pub struct DisplayArgs {
     /// median at 12 % of white, unless more than 1 % of what is not a light
     /// source would clip; lamps may clip, as in a photograph) or EV at ISO
     /// 100, e.g. 10 for f/8 at 1/15 s (white = 1.2·2^EV cd/m²).
-    #[arg(long, value_name = "EV|auto", default_value = "auto", value_parser = parse_exposure, allow_negative_numbers = true)]
-    pub exposure: ExposureArg,
+    #[arg(
+        long,
+        value_name = "EV|auto",
+        default_value = "auto",
+        allow_negative_numbers = true
+    )]
+    pub exposure: Exposure,
 
     /// The luminance in cd/m² shown as white (instead of --exposure).
     #[arg(long, value_name = "CD_PER_M2", conflicts_with = "exposure", value_parser = parse_positive)]
     pub white: Option<f64>,
 
     /// Tone curve from exposed light to the display: clip, reinhard or filmic.
-    #[arg(long, value_name = "CURVE", default_value = "filmic")]
-    pub tonemap: Curve,
+    #[arg(long, value_name = "CURVE", default_value = "filmic",
+          value_parser = PossibleValuesParser::new(ToneCurve::NAMES.map(|(name, _)| name))
+              .try_map(|name| name.parse::<ToneCurve>()))]
+    pub tonemap: ToneCurve,
 
     /// Bits per sample of a picture: 8 or 16 (PNG and TIFF; default 8 for
     /// PNG and JPEG, 16 for TIFF).
     #[arg(long, value_name = "8|16", value_parser = ["8", "16"])]
     pub bits: Option<String>,
-}
-
-#[derive(Clone, Copy)]
-pub enum ExposureArg {
-    Auto,
-    Ev(f64),
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum Curve {
-    Clip,
-    Reinhard,
-    Filmic,
-}
-
-fn parse_exposure(text: &str) -> Result<ExposureArg, String> {
-    if text.eq_ignore_ascii_case("auto") {
-        return Ok(ExposureArg::Auto);
-    }
-    let range = Exposure::EV100;
-    text.parse::<f64>()
-        .ok()
-        .filter(|v| Exposure::ev100(*v).is_some())
-        .map(ExposureArg::Ev)
-        .ok_or_else(|| {
-            format!(
-                "{text:?} is not `auto` or an EV from {} to {}",
-                range.start(),
-                range.end()
-            )
-        })
 }
 
 pub fn parse_positive(text: &str) -> Result<f64, String> {
@@ -66,17 +43,10 @@ pub fn parse_positive(text: &str) -> Result<f64, String> {
 
 impl DisplayArgs {
     pub fn options(&self) -> DisplayOptions {
-        let exposure = match (self.white, self.exposure) {
-            (Some(white), _) => Exposure::White(white),
-            (None, ExposureArg::Auto) => Exposure::Auto,
-            (None, ExposureArg::Ev(ev)) => Exposure::Ev(ev),
-        };
-        let tone = match self.tonemap {
-            Curve::Clip => ToneCurve::Clip,
-            Curve::Reinhard => ToneCurve::Reinhard,
-            Curve::Filmic => ToneCurve::Filmic,
-        };
-        DisplayOptions { exposure, tone }
+        DisplayOptions {
+            exposure: self.white.map_or(self.exposure, Exposure::White),
+            tone: self.tonemap,
+        }
     }
 
     /// The sample depth asked for; by default the format's own.

@@ -58,17 +58,50 @@ pub enum ToneCurve {
 }
 
 impl ToneCurve {
+    /// Every curve, by the name each front end accepts.
+    pub const NAMES: [(&'static str, ToneCurve); 3] = [
+        ("filmic", ToneCurve::Filmic),
+        ("reinhard", ToneCurve::Reinhard),
+        ("clip", ToneCurve::Clip),
+    ];
+
+    /// The name the curve is given by.
+    pub fn name(self) -> &'static str {
+        ToneCurve::NAMES
+            .iter()
+            .find(|(_, curve)| *curve == self)
+            .map_or("filmic", |(name, _)| name)
+    }
+}
+
+impl std::str::FromStr for ToneCurve {
+    type Err = String;
+
     /// The curve a name (`filmic`, `reinhard`, `clip`) names, or the
     /// one-line refusal listing them.
-    pub fn parse(name: &str) -> Result<ToneCurve, String> {
-        match name {
-            "filmic" => Ok(ToneCurve::Filmic),
-            "reinhard" => Ok(ToneCurve::Reinhard),
-            "clip" => Ok(ToneCurve::Clip),
-            other => Err(format!(
-                "tonemap {other:?} is not allowed: filmic, reinhard or clip"
-            )),
+    fn from_str(name: &str) -> Result<ToneCurve, String> {
+        ToneCurve::NAMES
+            .iter()
+            .find(|(known, _)| known.eq_ignore_ascii_case(name.trim()))
+            .map(|(_, curve)| *curve)
+            .ok_or_else(|| format!("tonemap {name:?} is not allowed: filmic, reinhard or clip"))
+    }
+}
+
+impl std::str::FromStr for Exposure {
+    type Err = String;
+
+    /// `auto` or an EV100 within [`Exposure::EV100`], or the one-line
+    /// refusal.
+    fn from_str(text: &str) -> Result<Exposure, String> {
+        let text = text.trim();
+        if text.eq_ignore_ascii_case("auto") {
+            return Ok(Exposure::Auto);
         }
+        text.parse::<f64>()
+            .ok()
+            .and_then(Exposure::ev100)
+            .ok_or_else(|| Exposure::refusal(format!("{text:?}")))
     }
 }
 
@@ -320,6 +353,26 @@ mod tests {
         }
         assert_eq!(tone(ToneCurve::Clip, 1.0), 1.0);
         assert!((tone(ToneCurve::Reinhard, 2.0) - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn names_read_as_every_front_end_reads_them() {
+        for (name, curve) in ToneCurve::NAMES {
+            assert_eq!(name.parse(), Ok(curve));
+            assert_eq!(name.to_uppercase().parse(), Ok(curve));
+            assert_eq!(curve.name(), name);
+        }
+        let refused = "sepia".parse::<ToneCurve>().unwrap_err();
+        assert_eq!(
+            refused,
+            "tonemap \"sepia\" is not allowed: filmic, reinhard or clip"
+        );
+        assert_eq!("auto".parse(), Ok(Exposure::Auto));
+        assert_eq!(" -3.5 ".parse(), Ok(Exposure::Ev(-3.5)));
+        for refused in ["41", "NaN", "inf", "bright", ""] {
+            let message = refused.parse::<Exposure>().unwrap_err();
+            assert!(message.contains("from -40 to 40"), "{message}");
+        }
     }
 
     #[test]

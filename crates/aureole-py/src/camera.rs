@@ -30,28 +30,26 @@ const KEPT_SESSIONS: usize = 4;
 #[pyclass(frozen, module = "aureole")]
 pub struct Camera {
     config: Config,
-    toml: toml::Table,
+    /// What the presets and files composed into it set, for its TOML and
+    /// for composing it further.
+    file: ConfigFile,
     /// Idle sessions, each holding the plan of the last image size it
     /// applied; a call takes one (or makes one) and puts it back.
     sessions: Mutex<Vec<Session>>,
 }
 
 impl Camera {
-    fn new(config: Config, toml: toml::Table) -> Camera {
+    fn new(file: ConfigFile) -> Camera {
         Camera {
-            config,
-            toml,
+            config: Config::compose([file.clone()]),
+            file,
             sessions: Mutex::new(Vec::new()),
         }
     }
 
     fn parse(text: &str, source_name: &str) -> PyResult<Camera> {
         let file = ConfigFile::parse(text, source_name).map_err(value_error)?;
-        let table: toml::Table = toml::from_str(text)
-            .map_err(|e| PyValueError::new_err(one_line(&format!("{source_name}: {e}"))))?;
-        let mut config = Config::default();
-        config.apply(file);
-        Ok(Camera::new(config, table))
+        Ok(Camera::new(file))
     }
 
     /// A session for `size`: an idle one that holds its plan first.
@@ -102,25 +100,6 @@ fn report(latest: &Latest, stage: Stage, fraction: f64) {
     *latest.lock().unwrap_or_else(|p| p.into_inner()) = Some((stage.describe(), fraction));
 }
 
-/// Settings of the later table replace the earlier's, `[camera]` merges
-/// key by key and `[[effect]]` tables are appended: how [`Config::apply`]
-/// composes, in TOML.
-fn merge(into: &mut toml::Table, table: &toml::Table) {
-    for (key, value) in table {
-        match (key.as_str(), into.get_mut(key), value) {
-            ("effect", Some(toml::Value::Array(ours)), toml::Value::Array(theirs)) => {
-                ours.extend(theirs.iter().cloned());
-            }
-            ("camera", Some(toml::Value::Table(ours)), toml::Value::Table(theirs)) => {
-                ours.extend(theirs.iter().map(|(k, v)| (k.clone(), v.clone())));
-            }
-            _ => {
-                into.insert(key.clone(), value.clone());
-            }
-        }
-    }
-}
-
 /// A library error about the file `path`, as the command line words it.
 fn value_error_about(path: &std::path::Path, error: aureole::Error) -> PyErr {
     match error {
@@ -167,21 +146,17 @@ impl Camera {
     /// effects follow one another (light passes through each).
     #[staticmethod]
     #[pyo3(signature = (*cameras))]
-    fn compose(cameras: Vec<PyRef<'_, Camera>>) -> PyResult<Camera> {
-        let mut table = toml::Table::new();
-        for camera in &cameras {
-            merge(&mut table, &camera.toml);
-        }
-        table.remove("description");
-        let text = toml::to_string(&table)
-            .map_err(|e| PyValueError::new_err(one_line(&format!("composing: {e}"))))?;
-        Camera::parse(&text, "composed camera")
+    fn compose(cameras: Vec<PyRef<'_, Camera>>) -> Camera {
+        let file = cameras.iter().fold(ConfigFile::default(), |file, camera| {
+            file.then(camera.file.clone())
+        });
+        Camera::new(file)
     }
 
     /// The camera as TOML: `aureole apply --config` with it gives the same
     /// picture.
-    fn toml(&self) -> PyResult<String> {
-        toml::to_string(&self.toml).map_err(|e| PyValueError::new_err(one_line(&e.to_string())))
+    fn toml(&self) -> String {
+        self.file.to_toml()
     }
 
     /// The camera's threshold, cd/m² (pixels at or below it are not
@@ -381,7 +356,7 @@ impl Camera {
         py: Python<'py>,
     ) -> PyResult<(Bound<'py, PyAny>, (String, &'static str))> {
         let rebuild = py.get_type::<Camera>().getattr("from_toml")?;
-        Ok((rebuild, (self.toml()?, "pickled camera")))
+        Ok((rebuild, (self.toml(), "pickled camera")))
     }
 
     fn __repr__(&self) -> String {

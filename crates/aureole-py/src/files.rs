@@ -65,15 +65,18 @@ pub(crate) fn compression(name: Option<&str>) -> PyResult<Option<Compression>> {
 }
 
 fn tone(name: &str) -> PyResult<ToneCurve> {
-    ToneCurve::parse(name).map_err(PyValueError::new_err)
+    name.parse().map_err(PyValueError::new_err)
 }
 
 fn exposure(value: &Bound<'_, PyAny>) -> PyResult<Exposure> {
-    let chosen = match value.extract::<String>() {
-        Ok(text) => (text == "auto").then_some(Exposure::Auto),
-        Err(_) => value.extract::<f64>().ok().and_then(Exposure::ev100),
-    };
-    chosen.ok_or_else(|| PyValueError::new_err(Exposure::refusal(value)))
+    match value.extract::<String>() {
+        Ok(text) => text.parse().map_err(PyValueError::new_err),
+        Err(_) => value
+            .extract::<f64>()
+            .ok()
+            .and_then(Exposure::ev100)
+            .ok_or_else(|| PyValueError::new_err(Exposure::refusal(value))),
+    }
 }
 
 /// Writes `image` (a float32 array as `read` gives) to `path`, atomically,

@@ -539,14 +539,19 @@ pub(crate) fn display_options(request: &RenderRequest) -> Result<DisplayOptions,
             )))
         }
         (None, None) => Exposure::Auto,
-        (None, Some(serde_json::Value::String(s))) if s == "auto" => Exposure::Auto,
+        (None, Some(serde_json::Value::String(text))) => {
+            text.parse().map_err(StudioError::BadRequest)?
+        }
         (None, Some(serde_json::Value::Number(n))) => n
             .as_f64()
             .and_then(Exposure::ev100)
             .ok_or_else(|| StudioError::BadRequest(Exposure::refusal(n)))?,
         (None, Some(other)) => return Err(StudioError::BadRequest(Exposure::refusal(other))),
     };
-    let tone = ToneCurve::parse(request.tonemap.as_deref().unwrap_or("filmic"))
+    let tone = request
+        .tonemap
+        .as_deref()
+        .map_or(Ok(ToneCurve::Filmic), str::parse)
         .map_err(StudioError::BadRequest)?;
     Ok(DisplayOptions { exposure, tone })
 }

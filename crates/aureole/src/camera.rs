@@ -1,20 +1,23 @@
 //! The camera: what turns lengths on the sensor and angles in the scene into
 //! pixels.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
 /// The camera that recorded (or renders) the image. Every field is optional
 /// in a config file; each is needed only by what uses it.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Camera {
     /// Width of the sensor (or film) in mm; the image width spans it.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub sensor_width_mm: Option<f64>,
     /// Focal length in mm: turns distances on the sensor into angles.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub focal_length_mm: Option<f64>,
     /// f-number N (focal length / pupil diameter), for diffraction.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub f_number: Option<f64>,
 }
 

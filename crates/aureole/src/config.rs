@@ -151,6 +151,64 @@ impl ConfigFile {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         ConfigFile::parse(&text, &path.display().to_string())
     }
+
+    /// `later` on top of this file, as the command line composes files:
+    /// settings and camera fields `later` sets replace ours, its effects
+    /// follow ours; a description is the composition's no longer.
+    pub fn then(mut self, later: ConfigFile) -> ConfigFile {
+        self.description = None;
+        self.seed = later.seed.or(self.seed);
+        self.threshold = later.threshold.or(self.threshold);
+        self.camera = match (self.camera, later.camera) {
+            (Some(mut ours), Some(theirs)) => {
+                ours.merge(&theirs);
+                Some(ours)
+            }
+            (ours, theirs) => theirs.or(ours),
+        };
+        self.effects.extend(later.effects);
+        self
+    }
+
+    /// The file as TOML text that [`ConfigFile::parse`] reads back as the
+    /// same settings: what is set, and each effect's parameters that differ
+    /// from their defaults.
+    pub fn to_toml(&self) -> String {
+        let mut table = toml::Table::new();
+        let mut set = |key: &str, value: Option<toml::Value>| {
+            if let Some(value) = value {
+                table.insert(key.to_string(), value);
+            }
+        };
+        set(
+            "description",
+            self.description.clone().map(toml::Value::String),
+        );
+        // A seed above i64::MAX cannot be written in TOML, nor read from it.
+        set(
+            "seed",
+            self.seed
+                .and_then(|seed| i64::try_from(seed).ok())
+                .map(toml::Value::Integer),
+        );
+        set("threshold", self.threshold.map(toml::Value::Float));
+        set(
+            "camera",
+            self.camera
+                .and_then(|camera| toml::Table::try_from(camera).ok())
+                .map(toml::Value::Table),
+        );
+        if !self.effects.is_empty() {
+            let effects = self.effects.iter().map(Effect::to_table);
+            set(
+                "effect",
+                Some(toml::Value::Array(
+                    effects.map(toml::Value::Table).collect(),
+                )),
+            );
+        }
+        table.to_string()
+    }
 }
 
 /// `text` with control characters (a newline in a quoted value, say)
@@ -301,6 +359,15 @@ impl Config {
             effect.scale_pixels(factor);
         }
         scaled
+    }
+
+    /// The files composed in order on the defaults ([`Config::apply`]).
+    pub fn compose(files: impl IntoIterator<Item = ConfigFile>) -> Config {
+        let mut config = Config::default();
+        for file in files {
+            config.apply(file);
+        }
+        config
     }
 
     /// Adds a file on top: its settings replace ours, its effects follow ours.

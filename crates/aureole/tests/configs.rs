@@ -42,3 +42,63 @@ fn every_recipe_builds_a_kernel_that_sums_to_one() {
         }
     }
 }
+
+/// Every preset and recipe, by name, with its parsed file.
+fn every_camera() -> Vec<(String, ConfigFile)> {
+    let presets = aureole::presets::PRESETS
+        .iter()
+        .map(|p| (format!("preset {}", p.name), p.config().unwrap()));
+    let recipes = configs().into_iter().map(|path| {
+        let file = ConfigFile::load(&path).unwrap();
+        (path.display().to_string(), file)
+    });
+    presets.chain(recipes).collect()
+}
+
+#[test]
+fn every_camera_reads_back_from_its_toml() {
+    for (name, file) in every_camera() {
+        let text = file.to_toml();
+        let again = ConfigFile::parse(&text, &name).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        assert_eq!(again, file, "{name}:\n{text}");
+    }
+}
+
+#[test]
+fn defaults_are_left_out_of_the_toml() {
+    let file = ConfigFile::parse(
+        "[[effect]]\ntype = \"corona\"\nepsilon = 0.01\nrays = 6\nlength = \"20px\"\nwidth = \"3px\"\n\
+         [[effect]]\ntype = \"aperture\"\nblades = 7\nspectral = true\nroundness = 0.0\n",
+        "chain.toml",
+    )
+    .unwrap();
+    let text = file.to_toml();
+    assert!(
+        !text.contains("width") && !text.contains("fadeout"),
+        "{text}"
+    );
+    assert!(
+        !text.contains("roundness") && !text.contains("spectral"),
+        "{text}"
+    );
+    assert!(
+        text.contains("length = \"20px\"") && text.contains("blades = 7"),
+        "{text}"
+    );
+}
+
+#[test]
+fn composed_files_read_back_as_the_composed_camera() {
+    let cameras = every_camera();
+    for pair in cameras.windows(2) {
+        let [(_, first), (_, second)] = pair else {
+            unreachable!()
+        };
+        let composed = first.clone().then(second.clone());
+        let direct = Config::compose([first.clone(), second.clone()]);
+        assert_eq!(Config::compose([composed.clone()]), direct);
+        let again = ConfigFile::parse(&composed.to_toml(), "composed").unwrap();
+        assert_eq!(Config::compose([again]), direct);
+        assert_eq!(composed.description, None);
+    }
+}

@@ -4,7 +4,7 @@
 //! f_b(r) = (β − 1) / (π R²) · (1 + (r/R)²)^(−β), the Moffat profile, whose
 //! integral over the plane is 1 for β > 1.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
@@ -15,7 +15,7 @@ use crate::error::Result;
 use crate::units::Length;
 
 /// Bloom parameters, as in an `[[effect]]` table with `type = "bloom"`.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Bloom {
     /// ε: fraction of the light that is scattered, 0…1.

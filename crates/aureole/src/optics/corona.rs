@@ -10,7 +10,7 @@ use std::f64::consts::{FRAC_1_SQRT_2, FRAC_PI_2, TAU};
 
 use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
@@ -38,7 +38,7 @@ const DARK: f64 = 1e-12;
 const JITTER_FLOOR: f64 = 0.05;
 
 /// Corona parameters, as in an `[[effect]]` table with `type = "corona"`.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Corona {
     /// ε: fraction of the light that goes into the rays, 0…1.

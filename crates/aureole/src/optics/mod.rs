@@ -191,6 +191,27 @@ macro_rules! effects {
                 )*
                 Err(toml::de::Error::unknown_variant(&kind, EFFECT_TYPES))
             }
+
+            /// The `[[effect]]` table that reads back as this effect: its
+            /// `type`, then the parameters that differ from their defaults.
+            pub fn to_table(&self) -> toml::Table {
+                let mut table = toml::Table::new();
+                table.insert("type".to_string(), toml::Value::String(self.kind().to_string()));
+                let parameters = match self {
+                    $(Effect::$variant(model) => toml::Table::try_from(model),)*
+                };
+                table.extend(parameters.into_iter().flatten());
+                let keys: Vec<String> = table.keys().filter(|k| *k != "type").cloned().collect();
+                for key in keys {
+                    let Some(value) = table.remove(&key) else { continue };
+                    // A key is left out when the effect reads the same
+                    // without it: a default.
+                    if Effect::from_table(table.clone()).ok().as_ref() != Some(self) {
+                        table.insert(key, value);
+                    }
+                }
+                table
+            }
         }
 
         $(

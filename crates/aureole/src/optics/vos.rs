@@ -5,7 +5,7 @@
 //! covers a solid angle ∝ cos³θ, so the kernel's spread part is
 //! θ⁻ⁿ cos³θ, normalised in discrete space (a = 1 − ε).
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::schema::{Default, Kind, Parameter, EPSILON};
 
@@ -15,7 +15,7 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 
 /// Vos glare parameters, as in an `[[effect]]` table with `type = "vos"`.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Vos {
     /// ε: fraction of the light that is scattered, 0…1.

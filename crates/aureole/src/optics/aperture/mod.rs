@@ -11,7 +11,7 @@ pub mod spectrum;
 
 use std::f64::consts::{PI, TAU};
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::schema::{Default, Kind, Parameter};
 
@@ -32,7 +32,7 @@ const ARC_SEGMENTS: usize = 16;
 /// A camera stop and optional filter, as in an `[[effect]]` table with
 /// `type = "aperture"`. The f-number, focal length and sensor width come
 /// from `[camera]`.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Aperture {
     /// Straight blades of the stop (3 to 64); 0 for a circular stop.
@@ -66,7 +66,7 @@ pub struct Aperture {
 }
 
 /// One family of parallel opaque lines on a filter in front of the lens.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Filter {
     /// Direction of the lines, degrees from +x; the rays they make are
