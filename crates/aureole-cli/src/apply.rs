@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use aureole::{Applied, ApplyOptions, Arithmetic, FrameOptions, Method, Session};
 use aureole_io::compression::Compression;
-use aureole_io::formats::Samples;
+use aureole_io::formats::{self, Samples};
 use aureole_io::job::Input;
 use aureole_io::kernel::read_kernel_file;
 use aureole_io::limits::{default_memory_limit, Limits};
@@ -15,28 +15,34 @@ use aureole_io::write::LinearOptions;
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
-use crate::display_args::{parse_positive, DisplayArgs};
+use crate::display_args::DisplayArgs;
+use crate::input::SourceArgs;
 use crate::progress::Progress;
+use crate::values::{parse_memory, parse_non_negative, parse_size};
 use crate::{batch, input, output, Failure};
 
 #[derive(clap::Args)]
-#[command(
-    after_help = "The output's extension chooses what is written: .exr, .hdr and .pfm stay \
-linear, in the input's own units (so the result composites back over the original); .png, .jpg \
-and .tif are pictures for a display (exposure, tone curve, sRGB). Without --preset or --config \
-the default camera (preset paper-fig5-both) is used."
-)]
+#[command(after_help = format!(
+    "The output's extension chooses what is written: {}. Linear files keep the input's own \
+units (so the result composites back over the original); pictures for a display go through the \
+exposure, the tone curve and sRGB. Without --preset or --config the default camera (preset {}) \
+is used.",
+    formats::image_outputs(),
+    aureole::presets::DEFAULT_PRESET
+))]
 pub struct Args {
-    /// The HDR images: OpenEXR, Radiance .hdr, PFM, or PNG, JPEG, TIFF.
-    /// Several may be given, or with --frames one pattern such as
-    /// shot.%04d.exr.
-    #[arg(required = true, value_name = "INPUT")]
+    #[arg(required = true, value_name = "INPUT", help = format!(
+        "The HDR images: {}. Several may be given, or with --frames one pattern such as \
+shot.%04d.exr",
+        formats::readable()
+    ))]
     inputs: Vec<PathBuf>,
 
-    /// Where to write the result (.exr, .hdr, .pfm, .png, .jpg, .tif). With
-    /// several inputs: a folder (each output takes its input's name) or,
-    /// with --frames, a pattern such as out/shot.%04d.exr.
-    #[arg(short, long, value_name = "OUTPUT")]
+    #[arg(short, long, value_name = "OUTPUT", help = format!(
+        "Where to write the result: {}. With several inputs: a folder (each output takes its \
+input's name) or, with --frames, a pattern such as out/shot.%04d.exr",
+        formats::image_outputs()
+    ))]
     output: PathBuf,
 
     /// The frame numbers that a %d (or %04d …) in the input stands for:
@@ -82,10 +88,8 @@ pub struct Args {
     #[arg(long, value_name = "KNEE", default_value = "0", value_parser = parse_non_negative)]
     knee: f64,
 
-    /// cd/m² per file unit. Default: the EXR whiteLuminance attribute if the
-    /// file has one, else 1 (the file holds cd/m²).
-    #[arg(long, value_name = "X", value_parser = parse_positive)]
-    input_scale: Option<f64>,
+    #[command(flatten)]
+    source: SourceArgs,
 
     /// Replace NaN, infinite and negative samples by 0 (with a warning)
     /// instead of refusing the file (NaN, infinite) or passing them
@@ -113,66 +117,19 @@ pub struct Args {
     #[arg(long)]
     float: bool,
 
-    /// The layer of a multi-layer EXR to spread, by its name (the channel
-    /// prefix: ViewLayer.Combined for ViewLayer.Combined.R …). Default:
-    /// the unprefixed R, G, B, else the only colour layer, else Blender's
-    /// Combined. The other layers go back into an EXR output unchanged.
-    #[arg(long, value_name = "NAME")]
-    layer: Option<String>,
-
-    /// The part of a multi-part EXR to read the layer from, by index (from
-    /// 0) or name.
-    #[arg(long, value_name = "PART")]
-    part: Option<String>,
-
-    /// EXR output compression: none, rle, zips, zip, piz, pxr24, b44,
-    /// b44a, dwaa or dwab (the last four lossy). Default: the input's, when
-    /// it is an EXR; else zip.
-    #[arg(long, value_name = "NAME", value_parser = Compression::parse)]
+    #[arg(long, value_name = "NAME", help = format!(
+        "EXR output compression: {}. Default: the input's, when it is an EXR; else zip",
+        Compression::names()
+    ))]
     compression: Option<Compression>,
 
     /// Cap the kernel's extent in pixels (W or WxH); by default light from
     /// any pixel reaches the whole frame: (2W-1)x(2H-1).
-    #[arg(long, value_name = "W[xH]", value_parser = crate::psf::parse_size)]
+    #[arg(long, value_name = "W[xH]", value_parser = parse_size)]
     max_kernel: Option<(usize, usize)>,
 
     #[command(flatten)]
     display: DisplayArgs,
-}
-
-fn parse_non_negative(text: &str) -> Result<f64, String> {
-    text.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite() && *v >= 0.0)
-        .ok_or_else(|| format!("{text:?} is not a finite number of at least 0"))
-}
-
-/// Parses a memory size: a number with an optional unit, K, M, G or T
-/// (powers of 1024, with or without `iB`/`B`), e.g. `512M`, `1.5G`, `2GiB`.
-pub fn parse_memory(text: &str) -> Result<u64, String> {
-    let refuse = |allowed: &str| format!("--max-memory {text:?} is not allowed: {allowed}");
-    let trimmed = text.trim();
-    let split = trimmed
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .unwrap_or(trimmed.len());
-    let (number, unit) = trimmed.split_at(split);
-    let value: f64 = number
-        .parse()
-        .map_err(|_| refuse("a number of bytes with an optional unit K, M, G or T, e.g. 4G"))?;
-    let shift = match unit.trim().to_ascii_uppercase().as_str() {
-        "" | "B" => 0,
-        "K" | "KB" | "KIB" => 10,
-        "M" | "MB" | "MIB" => 20,
-        "G" | "GB" | "GIB" => 30,
-        "T" | "TB" | "TIB" => 40,
-        _ => return Err(refuse("a unit among K, M, G, T (powers of 1024), e.g. 4G")),
-    };
-    let bytes = value * (1u64 << shift) as f64;
-    if !(bytes >= 1.0 && bytes < u64::MAX as f64) {
-        return Err(refuse("at least 1 byte, e.g. 512M or 4G"));
-    }
-    Ok(bytes as u64)
 }
 
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
@@ -222,10 +179,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         .with_frames_in_flight(in_flight);
     // A frame too large for the memory or the kernel is refused from its
     // header, before it is decoded.
-    let choice = Choice {
-        layer: args.layer.clone(),
-        part: args.part.clone(),
-    };
+    let choice = args.source.choice();
     if let Some(job) = todo.first() {
         let limits = Limits { max_bytes: limit };
         aureole_io::job::check_header(&job.input, &choice, limits, &session)
@@ -388,7 +342,7 @@ impl Run<'_> {
     fn read<'j>(&self, job: &'j batch::Job) -> Result<Read<'j>, Failure> {
         let start = Instant::now();
         let options = FrameOptions {
-            input_scale: self.args.input_scale,
+            input_scale: self.args.source.input_scale,
             sanitize: self.args.sanitize,
         };
         let limits = Limits {
@@ -543,21 +497,5 @@ fn duration(seconds: f64) -> String {
         format!("{:.0} minutes", seconds / 60.0)
     } else {
         format!("{:.0} hours", seconds / 3600.0)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sizes_parse_in_binary_units() {
-        assert_eq!(parse_memory("512M").unwrap(), 512 << 20);
-        assert_eq!(parse_memory("1.5G").unwrap(), 3 << 29);
-        assert_eq!(parse_memory("2GiB").unwrap(), 2 << 30);
-        assert_eq!(parse_memory("1000").unwrap(), 1000);
-        for bad in ["", "G", "-1G", "4X", "0"] {
-            assert!(parse_memory(bad).is_err(), "{bad}");
-        }
     }
 }

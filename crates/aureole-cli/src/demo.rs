@@ -15,8 +15,10 @@ use crate::{output, Failure};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Where to write the result: a picture (.png, .jpg, .tif) or linear (.exr, .hdr, .pfm).
-    #[arg(short, long, value_name = "OUT.png")]
+    #[arg(short, long, value_name = "OUT.png", help = format!(
+        "Where to write the result: {}",
+        aureole_io::formats::image_outputs()
+    ))]
     output: PathBuf,
 
     /// Also write the linear input scene (cd/m²), to try your own settings on.
@@ -24,7 +26,7 @@ pub struct Args {
     hdr: Option<PathBuf>,
 
     /// Size of the scene in pixels.
-    #[arg(long, value_name = "WxH", default_value = "1280x720", value_parser = crate::psf::parse_size)]
+    #[arg(long, value_name = "WxH", default_value = "1280x720", value_parser = crate::values::parse_size)]
     size: (usize, usize),
 
     #[command(flatten)]

@@ -1,5 +1,6 @@
 //! Display options: how a linear result becomes a picture.
 
+use crate::values::parse_positive;
 use aureole_io::display::{Depth, DisplayOptions, Exposure, ToneCurve};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 
@@ -31,14 +32,6 @@ pub struct DisplayArgs {
     /// PNG and JPEG, 16 for TIFF).
     #[arg(long, value_name = "8|16", value_parser = ["8", "16"])]
     pub bits: Option<String>,
-}
-
-pub fn parse_positive(text: &str) -> Result<f64, String> {
-    text.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .ok_or_else(|| format!("{text:?} is not a finite number above 0"))
 }
 
 impl DisplayArgs {

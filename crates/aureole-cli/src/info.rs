@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use aureole::FrameOptions;
 use aureole_io::limits::{default_memory_limit, Limits};
 
-use crate::display_args::parse_positive;
+use crate::input::SourceArgs;
 use crate::{input, Failure};
 
 #[derive(clap::Args)]
@@ -18,31 +18,19 @@ pub struct Args {
     #[arg(long, value_name = "CD_PER_M2")]
     threshold: Option<f64>,
 
-    /// cd/m² per file unit (default: whiteLuminance, else 1).
-    #[arg(long, value_name = "X", value_parser = parse_positive)]
-    input_scale: Option<f64>,
-
-    /// The layer of a multi-layer EXR to describe (as `apply --layer`).
-    #[arg(long, value_name = "NAME")]
-    layer: Option<String>,
-
-    /// The part of a multi-part EXR (as `apply --part`).
-    #[arg(long, value_name = "PART")]
-    part: Option<String>,
+    #[command(flatten)]
+    source: SourceArgs,
 }
 
 pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     let options = FrameOptions {
-        input_scale: args.input_scale,
+        input_scale: args.source.input_scale,
         sanitize: false,
     };
     let limits = Limits {
         max_bytes: default_memory_limit(),
     };
-    let choice = aureole_io::read::Choice {
-        layer: args.layer.clone(),
-        part: args.part.clone(),
-    };
+    let choice = args.source.choice();
     let mut loaded = match aureole_io::read::read_image_with(&args.input, limits, &choice) {
         Ok(loaded) => loaded,
         Err(error) => return describe_refused(args, limits, &choice, error),

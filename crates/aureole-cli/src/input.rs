@@ -9,7 +9,40 @@ use aureole_io::job::Input;
 use aureole_io::limits::Limits;
 use aureole_io::read::{read_image_with, Choice, Loaded};
 
+use crate::values::parse_positive;
 use crate::Failure;
+
+/// Which light of a file to read, and its scale: the flags `apply` and
+/// `info` share.
+#[derive(clap::Args)]
+pub struct SourceArgs {
+    /// cd/m² per file unit. Default: the EXR whiteLuminance attribute if the
+    /// file has one, else 1 (the file holds cd/m²).
+    #[arg(long, value_name = "X", value_parser = parse_positive)]
+    pub input_scale: Option<f64>,
+
+    /// The layer of a multi-layer EXR, by its name (the channel prefix:
+    /// ViewLayer.Combined for ViewLayer.Combined.R …). Default: the
+    /// unprefixed R, G, B, else the only colour layer, else Blender's
+    /// Combined. The other layers go back into an EXR output unchanged.
+    #[arg(long, value_name = "NAME")]
+    pub layer: Option<String>,
+
+    /// The part of a multi-part EXR to read the layer from, by index (from
+    /// 0) or name.
+    #[arg(long, value_name = "PART")]
+    pub part: Option<String>,
+}
+
+impl SourceArgs {
+    /// The layer and part chosen.
+    pub fn choice(&self) -> Choice {
+        Choice {
+            layer: self.layer.clone(),
+            part: self.part.clone(),
+        }
+    }
+}
 
 /// Reads `path` (the layer `choice` names) as a frame, saying what the
 /// user should know about it and the luminance scale it takes; with the

@@ -15,6 +15,7 @@ mod presets;
 mod progress;
 mod psf;
 mod studio;
+mod values;
 mod words;
 
 use std::process::ExitCode;

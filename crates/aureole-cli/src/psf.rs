@@ -10,6 +10,7 @@ use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
 use crate::progress::Progress;
+use crate::values::{parse_positive, parse_size};
 use crate::Failure;
 
 #[derive(clap::Args)]
@@ -34,9 +35,10 @@ pub struct Args {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     image_width: Option<u32>,
 
-    /// Output file: .pfm (float32, `Pf` or `PF`), .exr (float32) or .png (a
-    /// log-scaled picture spanning 6 decades).
-    #[arg(short, long, value_name = "OUT")]
+    #[arg(short, long, value_name = "OUT", help = format!(
+        "Output file: {}; a picture spans 6 decades",
+        aureole_io::formats::kernel_outputs()
+    ))]
     output: PathBuf,
 
     /// Also draw the radial profile and the angular profile into this PNG.
@@ -45,30 +47,8 @@ pub struct Args {
 
     /// Radius in pixels of the angular profile (default: a quarter of the
     /// kernel's smaller half-size).
-    #[arg(long, value_name = "PX", requires = "profile", value_parser = parse_radius, allow_negative_numbers = true)]
+    #[arg(long, value_name = "PX", requires = "profile", value_parser = parse_positive, allow_negative_numbers = true)]
     profile_radius: Option<f64>,
-}
-
-fn parse_radius(text: &str) -> Result<f64, String> {
-    text.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|r| r.is_finite() && *r > 0.0)
-        .ok_or_else(|| format!("{text:?} is not a radius in pixels above 0"))
-}
-
-pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
-    let number = |s: &str| {
-        s.trim()
-            .parse::<usize>()
-            .ok()
-            .filter(|&n| n > 0)
-            .ok_or_else(|| format!("{s:?} is not a whole number of pixels above 0 (write W or WxH, e.g. 257 or 511x255)"))
-    };
-    match text.split_once(['x', 'X']) {
-        Some((w, h)) => Ok((number(w)?, number(h)?)),
-        None => number(text).map(|n| (n, n)),
-    }
 }
 
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {

@@ -472,6 +472,37 @@ fn help_explains_options_with_their_units() {
 }
 
 #[test]
+fn help_lists_what_the_tables_hold() {
+    let help = |command: &str| {
+        let out = aureole().args([command, "--help"]).assert().success();
+        String::from_utf8(out.get_output().stdout.clone()).unwrap()
+    };
+    let (apply, psf, demo) = (help("apply"), help("psf"), help("demo"));
+    for format in aureole_io::formats::FORMATS {
+        assert!(apply.contains(format.name), "{}:\n{apply}", format.name);
+        let extension = format!(".{}", format.extensions[0]);
+        assert!(apply.contains(&extension), "{extension}:\n{apply}");
+        assert!(demo.contains(&extension), "{extension}:\n{demo}");
+        let holds_kernels = format.kernels != aureole_io::formats::KernelStorage::Unsupported;
+        assert_eq!(
+            psf.contains(&extension),
+            holds_kernels,
+            "{extension}:\n{psf}"
+        );
+    }
+    for compression in aureole_io::compression::Compression::ALL {
+        assert!(
+            apply.contains(compression.name()),
+            "{compression}:\n{apply}"
+        );
+    }
+    for (curve, _) in aureole_io::display::ToneCurve::NAMES {
+        assert!(apply.contains(curve), "{curve}:\n{apply}");
+    }
+    assert!(apply.contains(aureole::presets::DEFAULT_PRESET), "{apply}");
+}
+
+#[test]
 fn aperture_presets_write_coloured_kernels() {
     let dir = tempfile::tempdir().unwrap();
     let (pfm_path, exr_path, png) = (

@@ -59,8 +59,8 @@ impl Compression {
         }
     }
 
-    /// Whether it keeps every sample exactly (B44 and PXR24 are exact for
-    /// half samples only).
+    /// Whether it keeps every sample exactly (PXR24 keeps half samples
+    /// exactly, float ones to 24 bits).
     pub fn lossless(self) -> bool {
         matches!(
             self,
@@ -72,19 +72,28 @@ impl Compression {
         )
     }
 
-    /// The compression named `name` (any case), or a message listing them.
-    pub fn parse(name: &str) -> Result<Compression, String> {
-        let wanted = name.trim().to_ascii_lowercase();
-        Compression::ALL
-            .into_iter()
-            .find(|c| c.name() == wanted)
-            .ok_or_else(|| {
-                let names: Vec<&str> = Compression::ALL.iter().map(|c| c.name()).collect();
-                format!(
-                    "{name:?} is not an EXR compression: use one of {}",
-                    names.join(", ")
-                )
-            })
+    /// Whether it keeps half samples exactly.
+    pub fn exact_for_half(self) -> bool {
+        self.lossless() || self == Compression::Pxr24
+    }
+
+    /// Every name, grouped by what each keeps: `none, …, piz; exact for
+    /// half samples only: pxr24; lossy: b44, …`.
+    pub fn names() -> String {
+        let of = |chosen: &dyn Fn(Compression) -> bool| {
+            let names: Vec<&str> = Compression::ALL
+                .into_iter()
+                .filter(|c| chosen(*c))
+                .map(Compression::name)
+                .collect();
+            names.join(", ")
+        };
+        format!(
+            "{}; exact for half samples only: {}; lossy: {}",
+            of(&|c| c.lossless()),
+            of(&|c| !c.lossless() && c.exact_for_half()),
+            of(&|c| !c.lossless() && !c.exact_for_half()),
+        )
     }
 
     pub(crate) fn to_exr(self) -> exr::compression::Compression {
@@ -112,6 +121,25 @@ impl Compression {
             .find(|c| match (c.to_exr(), compression) {
                 (X::DWAA(_), X::DWAA(_)) | (X::DWAB(_), X::DWAB(_)) => true,
                 (ours, theirs) => ours == theirs,
+            })
+    }
+}
+
+impl std::str::FromStr for Compression {
+    type Err = String;
+
+    /// The compression named `name` (any case), or a message listing them.
+    fn from_str(name: &str) -> Result<Compression, String> {
+        let wanted = name.trim().to_ascii_lowercase();
+        Compression::ALL
+            .into_iter()
+            .find(|c| c.name() == wanted)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Compression::ALL.iter().map(|c| c.name()).collect();
+                format!(
+                    "{name:?} is not an EXR compression: use one of {}",
+                    names.join(", ")
+                )
             })
     }
 }

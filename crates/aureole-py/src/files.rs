@@ -60,7 +60,7 @@ pub fn read<'py>(
 
 /// The OpenEXR compression `name` names, if any.
 pub(crate) fn compression(name: Option<&str>) -> PyResult<Option<Compression>> {
-    name.map(|n| Compression::parse(n).map_err(PyValueError::new_err))
+    name.map(|n| n.parse().map_err(PyValueError::new_err))
         .transpose()
 }
 
