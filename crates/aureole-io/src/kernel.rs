@@ -6,6 +6,7 @@ use std::path::Path;
 
 use aureole::Kernel;
 
+use crate::display::Picture;
 use crate::error::{Error, Result};
 use crate::formats::{by_extension, extension, kernel_outputs, Encoder, KernelStorage};
 use crate::formats::{picture, LinearPlanes};
@@ -120,4 +121,31 @@ pub fn log_picture(kernel: &Kernel) -> Vec<u8> {
         levels.extend([level(r), level(g), level(b)]);
     }
     levels
+}
+
+/// The central `width`×`height` of the kernel's [`log_picture`], black
+/// where the kernel does not reach.
+pub fn log_picture_window(kernel: &Kernel, width: usize, height: usize) -> Picture {
+    let levels = log_picture(kernel);
+    let (kw, kh) = (kernel.width(), kernel.height());
+    let (cx, cy) = kernel.centre();
+    let mut rgb = vec![0.0; width * height * 3];
+    for y in 0..height {
+        let ky = (cy + y).checked_sub(height / 2).filter(|&v| v < kh);
+        for x in 0..width {
+            let kx = (cx + x).checked_sub(width / 2).filter(|&v| v < kw);
+            if let (Some(kx), Some(ky)) = (kx, ky) {
+                for c in 0..3 {
+                    rgb[(y * width + x) * 3 + c] =
+                        f32::from(levels[(ky * kw + kx) * 3 + c]) / 255.0;
+                }
+            }
+        }
+    }
+    Picture {
+        width,
+        height,
+        rgb,
+        white: 0.0,
+    }
 }

@@ -398,17 +398,19 @@ function placeSplit() {
   $("handle").style.left = `${state.split * canvas.clientWidth}px`;
 }
 
-function updateCommand() {
-  const image = $("image").value === "demo" ? "street.exr" : $("image").value;
-  const parts = ["aureole apply", JSON.stringify(image), "--config camera.toml"];
-  if ($("threshold").value !== "") parts.push(`--threshold ${$("threshold").value}`);
-  if (Number($("knee").value)) parts.push(`--knee ${$("knee").value}`);
-  if (!$("auto").checked) parts.push(`--exposure ${$("ev").value}`);
-  if ($("tonemap").value !== "filmic") parts.push(`--tonemap ${$("tonemap").value}`);
-  if (state.view === "glare") parts.push("--glare-only");
-  parts.push("-o out.png");
-  $("command").textContent =
-    ($("image").value === "demo" ? "aureole demo --hdr street.exr -o street.png\n" : "") + parts.join(" ");
+// The server words the command line, from the same fields as an export.
+async function updateCommand() {
+  const body = request(state.view === "glare" ? "glare" : "result");
+  delete body.width;
+  body.output = $("output").value;
+  try {
+    const response = await fetch("/api/command", {
+      method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body),
+    });
+    if (response.ok) $("command").textContent = (await response.json()).text;
+  } catch (error) {
+    // A command line that cannot be had leaves the last one shown.
+  }
 }
 
 async function start() {
@@ -462,6 +464,7 @@ async function start() {
   });
   $("output").value = defaultOutput();
   $("image").addEventListener("change", () => { $("output").value = defaultOutput(); });
+  $("output").addEventListener("input", updateCommand);
   $("export").addEventListener("click", exportFull);
   $("copy-toml").addEventListener("click", () => navigator.clipboard.writeText($("config").value));
   $("download-toml").addEventListener("click", () => {

@@ -20,6 +20,8 @@
 //!   does; `client` names the tab, whose newer render replaces its older.
 //! - `POST /api/export`: the same fields and `output` (and `overwrite`):
 //!   a job, followed at `GET /api/export/{id}` and cancelled by `DELETE`.
+//! - `POST /api/command` with an export's fields: `{"argv", "text"}`, the
+//!   command lines that write what that export writes.
 //!
 //! A refusal is a 4xx with `{"error": "one line"}`; a render that finds the
 //! memory budget taken by exports for too long, a 503.
@@ -30,6 +32,7 @@
 pub mod access;
 pub mod budget;
 pub mod camera;
+pub mod command;
 pub mod error;
 pub mod export;
 pub mod render;
@@ -106,6 +109,7 @@ pub fn router(studio: Studio) -> Router {
         .route("/api/config/write", post(write_config))
         .route("/api/render", post(render_picture))
         .route("/api/export", post(start_export))
+        .route("/api/command", post(command_lines))
         .route(
             "/api/export/{id}",
             get(export_progress).delete(cancel_export),
@@ -147,6 +151,11 @@ async fn start_export(
     let request = export::ExportRequest::from_json(&body)?;
     let id = studio.exports.start(request)?;
     Ok(Json(serde_json::json!({ "job": id })))
+}
+
+async fn command_lines(body: Bytes) -> Result<Json<command::Commands>, StudioError> {
+    let request = export::ExportRequest::from_json(&body)?;
+    command::for_export(&request).map(Json)
 }
 
 async fn export_progress(

@@ -8,9 +8,11 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime};
 
 use aureole::config::ConfigFile;
+use aureole::kernel::profile;
 use aureole::memory::Workload;
 use aureole::{ApplyOptions, Cancel, Config, Frame, FrameOptions, Image, Method, Session};
-use aureole_io::display::{meter, render, DisplayOptions, Exposure, ToneCurve};
+use aureole_io::display::{meter, render, DisplayOptions, Exposure, Picture, ToneCurve};
+use aureole_io::kernel::log_picture_window;
 use aureole_io::limits::Limits;
 use serde::Deserialize;
 
@@ -339,7 +341,7 @@ impl Renderer {
         let (width, height) = (image.width, image.height);
         let factor = width as f64 / full.image().width as f64;
 
-        let mut profiles = None;
+        let (mut profiles, mut kernel_view) = (None, None);
         let (shown, energy_in, energy_out) = match request.view {
             View::Original => (
                 image.clone(),
@@ -393,22 +395,20 @@ impl Renderer {
                     method: Method::Auto,
                 };
                 let applied = camera.session.apply(&preview, &options, &mut |_, _| {})?;
-                let picture = if view == View::Kernel {
+                if view == View::Kernel {
                     let plan = camera
                         .session
                         .plan()
                         .ok_or_else(|| StudioError::Internal("the kernel was not built".into()))?;
                     profiles = Some(kernel_profiles(plan.kernel(), width.min(height) / 2));
-                    kernel_picture(plan.kernel(), width, height)
-                } else {
-                    applied.image
-                };
-                (picture, applied.energy_in, applied.energy_out)
+                    kernel_view = Some(log_picture_window(plan.kernel(), width, height));
+                }
+                (applied.image, applied.energy_in, applied.energy_out)
             }
         };
         cancel.check()?;
-        let (bytes, content_type, auto_white, white) = if request.view == View::Kernel {
-            (encode_png(&shown)?, "image/png", [0.0; 3], 0.0)
+        let (bytes, content_type, auto_white, white) = if let Some(picture) = &kernel_view {
+            (png(picture)?, "image/png", [0.0; 3], 0.0)
         } else {
             // Metered once per curve: the page switches curves without asking.
             let curves = [ToneCurve::Filmic, ToneCurve::Reinhard, ToneCurve::Clip];
@@ -436,7 +436,7 @@ impl Renderer {
                 let codes = picture.eight_bit();
                 match request.format {
                     Format::Rgb8 => (codes, "application/x-rgb8"),
-                    _ => (png(picture.width, picture.height, &codes)?, "image/png"),
+                    _ => (png(&picture)?, "image/png"),
                 }
             };
             (bytes, content_type, auto_white, white)
@@ -556,79 +556,37 @@ pub(crate) fn display_options(request: &RenderRequest) -> Result<DisplayOptions,
     Ok(DisplayOptions { exposure, tone })
 }
 
-/// The kernel's radial profile out to `reach` px (at most 64 samples) and
-/// its angular profile on the ring from reach/8 to reach/2.
+/// The kernel's profiles as `aureole psf --profile` draws them
+/// ([`aureole::kernel::profile`]), over its planes' mean: the radial one
+/// out to `reach` px (at most 64 samples), the angular one in 2° steps on
+/// the circle of reach/4, relative to its median.
 fn kernel_profiles(kernel: &aureole::Kernel, reach: usize) -> (Vec<f64>, Vec<f64>) {
-    let (kw, kh) = (kernel.width(), kernel.height());
-    let (cx, cy) = kernel.centre();
-    let planes = kernel.planes();
-    let weight = |x: usize, y: usize| -> f64 {
-        planes.iter().map(|p| f64::from(p[y * kw + x])).sum::<f64>() / planes.len() as f64
+    let planes = kernel.planes().len();
+    let mean = |each: &dyn Fn(usize) -> Vec<f64>| {
+        let mut sum = each(0);
+        for plane in 1..planes {
+            sum.iter_mut().zip(each(plane)).for_each(|(s, v)| *s += v);
+        }
+        sum.iter_mut().for_each(|s| *s /= planes as f64);
+        sum
     };
-    let reach = reach
-        .min(cx)
-        .min(cy)
-        .min(kw - 1 - cx)
-        .min(kh - 1 - cy)
-        .max(2);
+    let rings = mean(&|plane| profile::radial_profile(kernel, plane));
+    let reach = reach.clamp(2, rings.len().saturating_sub(1).max(2));
     let step = (reach as f64 / 64.0).max(1.0);
-    let radial: Vec<f64> = (1..=reach.min(64))
-        .map(|k| {
-            let r = k as f64 * step;
-            let samples = (8.0 * r).ceil().max(8.0) as usize;
-            (0..samples)
-                .map(|j| {
-                    let a = j as f64 / samples as f64 * std::f64::consts::TAU;
-                    let x = (cx as f64 + r * a.cos()).round() as usize;
-                    let y = (cy as f64 - r * a.sin()).round() as usize;
-                    weight(x.min(kw - 1), y.min(kh - 1))
-                })
-                .sum::<f64>()
-                / samples as f64
-        })
+    let radial = (1..=reach.min(64))
+        .filter_map(|k| rings.get((k as f64 * step).round() as usize).copied())
         .collect();
     const BINS: usize = 180;
-    let mut angular = vec![0.0; BINS];
-    let (inner, outer) = ((reach / 8).max(2), (reach / 2).max(3));
-    for y in cy.saturating_sub(outer)..=(cy + outer).min(kh - 1) {
-        for x in cx.saturating_sub(outer)..=(cx + outer).min(kw - 1) {
-            let (dx, dy) = (x as f64 - cx as f64, cy as f64 - y as f64);
-            let r = dx.hypot(dy);
-            if r >= inner as f64 && r <= outer as f64 {
-                let a = dy.atan2(dx).rem_euclid(std::f64::consts::TAU);
-                let bin = ((a / std::f64::consts::TAU * BINS as f64) as usize).min(BINS - 1);
-                // Weighted by r so that each radius counts alike.
-                angular[bin] += weight(x, y) * r;
-            }
-        }
-    }
+    let radius = (reach as f64 / 4.0).max(2.0);
+    let mut angular = mean(&|plane| {
+        let samples = profile::angular_profile(kernel, plane, radius, BINS);
+        samples.into_iter().map(|(_, value)| value).collect()
+    });
     let mut sorted = angular.clone();
     sorted.sort_by(f64::total_cmp);
     let median = sorted[BINS / 2].max(1e-300);
     angular.iter_mut().for_each(|v| *v /= median);
     (radial, angular)
-}
-
-/// The kernel's central `width`×`height` as its log picture, as an RGB
-/// image of levels 0…1.
-fn kernel_picture(kernel: &aureole::Kernel, width: usize, height: usize) -> Image {
-    let levels = aureole_io::kernel::log_picture(kernel);
-    let (kw, kh) = (kernel.width(), kernel.height());
-    let (cx, cy) = kernel.centre();
-    let mut image = Image::filled(width, height, aureole::Layout::Rgb, 0.0);
-    for y in 0..height {
-        let ky = (cy + y).checked_sub(height / 2).filter(|&v| v < kh);
-        for x in 0..width {
-            let kx = (cx + x).checked_sub(width / 2).filter(|&v| v < kw);
-            if let (Some(kx), Some(ky)) = (kx, ky) {
-                for c in 0..3 {
-                    image.planes[c][y * width + x] =
-                        f32::from(levels[(ky * kw + kx) * 3 + c]) / 255.0;
-                }
-            }
-        }
-    }
-    image
 }
 
 /// `image` dimmed to a quarter, with the pixels the camera spreads (above
@@ -663,33 +621,7 @@ fn linear_bytes(image: &Image, scale: f64) -> Vec<u8> {
     bytes
 }
 
-/// An RGB image of display levels (0…1) as a PNG.
-fn encode_png(image: &Image) -> Result<Vec<u8>, StudioError> {
-    let n = image.width * image.height;
-    let mut bytes = Vec::with_capacity(n * 3);
-    for i in 0..n {
-        for c in 0..3 {
-            let plane = &image.planes[c.min(image.planes.len() - 1)];
-            bytes.push((plane[i].clamp(0.0, 1.0) * 255.0).round() as u8);
-        }
-    }
-    png(image.width, image.height, &bytes)
-}
-
-fn png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>, StudioError> {
-    use image::ImageEncoder;
-    let mut out = Vec::new();
-    image::codecs::png::PngEncoder::new_with_quality(
-        &mut out,
-        image::codecs::png::CompressionType::Fast,
-        image::codecs::png::FilterType::Sub,
-    )
-    .write_image(
-        rgb,
-        width as u32,
-        height as u32,
-        image::ExtendedColorType::Rgb8,
-    )
-    .map_err(|e| StudioError::Internal(e.to_string()))?;
-    Ok(out)
+/// A picture as the PNG a page shows.
+fn png(picture: &Picture) -> Result<Vec<u8>, StudioError> {
+    picture.preview_png().map_err(StudioError::Internal)
 }

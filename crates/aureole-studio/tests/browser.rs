@@ -173,6 +173,20 @@ fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
             page.text_of("error")
         );
     }
+    // The command line under the picture is the server's, for this view.
+    let glare = visit(
+        &browser,
+        &format!("{base}view=glare&tonemap=reinhard"),
+        "command",
+    );
+    let command = glare.text_of("command");
+    assert!(
+        command.contains("aureole apply")
+            && command.contains("--config camera.toml")
+            && command.contains("--glare-only")
+            && command.contains("--tonemap reinhard"),
+        "{command}"
+    );
     // The split view puts the original under a handle.
     let split = visit(&browser, &format!("{base}view=split"), "split");
     assert!(

@@ -142,3 +142,22 @@ where
             .map_err(|e| encode_error(e.to_string()))
     })
 }
+
+/// 8-bit RGB codes (row-major, top row first) as a PNG in memory, quickly
+/// compressed: a preview sent to a browser, not a file to keep.
+pub(crate) fn preview_png(
+    (width, height): (usize, usize),
+    codes: &[u8],
+) -> std::result::Result<Vec<u8>, String> {
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    let (w, h) = (u32::try_from(width), u32::try_from(height));
+    let (Ok(w), Ok(h)) = (w, h) else {
+        return Err(format!("a {width}x{height} picture is too large for PNG"));
+    };
+    PngEncoder::new_with_quality(&mut out, CompressionType::Fast, FilterType::Sub)
+        .write_image(codes, w, h, image::ExtendedColorType::Rgb8)
+        .map_err(|e| e.to_string())?;
+    Ok(out)
+}
