@@ -15,6 +15,7 @@ mod simd;
 pub mod single;
 
 pub use grid::{fast_size, padded_size};
+pub use simd::{force_scalar, vectors_in_use};
 
 use crate::control::Control;
 use crate::error::Result;

@@ -7,13 +7,35 @@
 
 #![allow(unsafe_code)]
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
+static SCALAR: AtomicBool = AtomicBool::new(false);
+
+/// Makes the f32 engine's own loops take the scalar twin (`true`) or the
+/// widest vectors the CPU has (`false`, the default), for this process: a
+/// test holds the two to the same bits. RustFFT's transforms choose their
+/// own vectors either way.
+pub fn force_scalar(scalar: bool) {
+    SCALAR.store(scalar, Ordering::Relaxed);
+}
+
+/// Whether the engine's loops run with AVX2 now: the CPU has it and the
+/// scalar twin is not forced.
+pub fn vectors_in_use() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if !SCALAR.load(Ordering::Relaxed) {
+        return std::is_x86_feature_detected!("avx2");
+    }
+    false
+}
+
 /// Runs `work` compiled with the widest vectors this CPU has. `work` must
 /// be `#[inline(always)]` (and what it calls), so that it is compiled into
 /// the caller that has the feature.
 #[inline(always)]
 pub(super) fn widest<R>(work: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
+    if vectors_in_use() {
         // SAFETY: the CPU was just found to have AVX2.
         return unsafe { avx2(work) };
     }

@@ -1,0 +1,57 @@
+//! The f32 engine's loops with AVX2 and their scalar twin give the same
+//! bits (RustFFT keeps and tests its scalar twin the same way): the same
+//! IEEE operations in the same order, whatever the vector width. In a test
+//! binary of its own, since the switch holds for the whole process.
+
+use aureole::convolve::{force_scalar, vectors_in_use};
+use aureole::{presets, ApplyOptions, Config, Frame, FrameOptions, Image, Layout, Method, Session};
+
+/// A dim scene of 97×61 px (a size of odd factors, so rows and columns
+/// have ragged ends) with lamps from 50 to 5·10⁵ cd/m² and a coloured one.
+fn scene() -> Image {
+    let (w, h) = (97, 61);
+    let mut image = Image::filled(w, h, Layout::Rgb, 0.05);
+    for (k, level) in [50.0, 5e2, 5e3, 5e4, 5e5].into_iter().enumerate() {
+        let at = (7 + 11 * k) * w + 9 + 17 * k;
+        for plane in &mut image.planes {
+            plane[at] = level;
+        }
+    }
+    image.planes[0][40 * w + 80] = 2e4;
+    image
+}
+
+fn through(preset: &str, image: &Image) -> Vec<Vec<f32>> {
+    let config = Config::compose([presets::find(preset).unwrap().config().unwrap()]);
+    let frame = Frame::new(image.clone(), &FrameOptions::default()).unwrap();
+    let options = ApplyOptions {
+        method: Method::Fft,
+        ..ApplyOptions::default()
+    };
+    let applied = Session::new(config)
+        .apply(&frame, &options, &mut |_, _| {})
+        .unwrap();
+    applied.image.planes
+}
+
+#[test]
+fn the_vector_and_scalar_loops_give_the_same_bits() {
+    if !vectors_in_use() {
+        eprintln!("this CPU has no AVX2: both runs take the scalar loops");
+    }
+    let image = scene();
+    for preset in ["paper-fig5-both", "camera-f8-7blade", "human-eye-vos"] {
+        force_scalar(false);
+        let vector = through(preset, &image);
+        force_scalar(true);
+        assert!(!vectors_in_use());
+        let scalar = through(preset, &image);
+        force_scalar(false);
+        let same = vector
+            .iter()
+            .flatten()
+            .zip(scalar.iter().flatten())
+            .all(|(a, b)| a.to_bits() == b.to_bits());
+        assert!(same, "{preset}: the AVX2 and scalar loops differ");
+    }
+}
