@@ -627,7 +627,7 @@ fn docs_say_where_the_sample_images_come_from() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
     let section = readme
-        .split("### Sample images")
+        .split("## Sample images")
         .nth(1)
         .and_then(|rest| rest.split("\n## ").next())
         .expect("README.md has a Sample images section");
@@ -639,8 +639,16 @@ fn docs_say_where_the_sample_images_come_from() {
         !outside.contains("../shared"),
         "README names ../shared outside Sample images"
     );
-    for page in ["docs/guide.md", "docs/physics.md"] {
-        let text = std::fs::read_to_string(root.join(page)).unwrap();
+    let mut pages: Vec<_> = std::fs::read_dir(root.join("docs"))
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == "md"))
+        .collect();
+    pages.sort();
+    assert!(pages.len() >= 8, "{pages:?}");
+    for path in pages {
+        let page = path.display();
+        let text = std::fs::read_to_string(&path).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         for (i, line) in lines.iter().enumerate() {
             if line.contains("../shared") {

@@ -56,6 +56,11 @@ pub use error::{Error, Result};
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
 
+/// The library page's examples, run as doctests for the same reason.
+#[doc = include_str!("../../../docs/library.md")]
+#[cfg(doctest)]
+pub struct LibraryDoctests;
+
 /// The guide's Rust example, run as a doctest for the same reason.
 #[doc = include_str!("../../../docs/guide.md")]
 #[cfg(doctest)]

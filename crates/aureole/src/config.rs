@@ -1,7 +1,7 @@
 //! Configuration: TOML files and built-in presets, composed in order.
 //!
 //! A file may set `seed`, `threshold`, a `[camera]` table and any number of
-//! `[[effect]]` tables (see the README for the schema). Files compose: scalar
+//! `[[effect]]` tables (docs/configuration.md has the schema). Files compose: scalar
 //! settings and camera fields set by a later file replace earlier ones, and
 //! effects are appended to the optical chain.
 

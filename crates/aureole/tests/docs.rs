@@ -49,3 +49,46 @@ fn the_guide_documents_every_parameter_of_every_effect() {
     let camera: BTreeSet<String> = CAMERA.iter().map(|p| p.name.to_string()).collect();
     assert_eq!(keys_of(&sections, "[camera]"), camera);
 }
+
+/// The README and every page under docs/, by path.
+fn pages() -> Vec<std::path::PathBuf> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut pages = vec![root.join("README.md")];
+    for entry in std::fs::read_dir(root.join("docs")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "md") {
+            pages.push(path);
+        }
+    }
+    pages
+}
+
+#[test]
+fn every_link_between_the_pages_leads_to_a_file() {
+    for page in pages() {
+        let text = std::fs::read_to_string(&page).unwrap();
+        let folder = page.parent().unwrap();
+        for link in text.split("](").skip(1) {
+            let target = link.split([')', ' ']).next().unwrap_or_default();
+            let path = target.split('#').next().unwrap_or_default();
+            if path.is_empty() || path.contains("://") || path.starts_with("mailto:") {
+                continue;
+            }
+            assert!(
+                folder.join(path).exists(),
+                "{}: the link to {target} leads nowhere",
+                page.display()
+            );
+        }
+    }
+}
+
+#[test]
+fn the_readme_is_read_in_five_minutes() {
+    let readme = &pages()[0];
+    let lines = std::fs::read_to_string(readme).unwrap().lines().count();
+    assert!(
+        lines <= 200,
+        "README.md has {lines} lines; the rest belongs in docs/"
+    );
+}

@@ -1,7 +1,7 @@
 //! OpenEXR's ZIP and ZIPS chunks: the [`predictor`](super::predictor)'s
 //! bytes through zlib, by libdeflate both ways (the `exr` crate compresses
 //! with miniz_oxide at level 4: more than twice the CPU time for the same
-//! size, README.md's codec table).
+//! size, docs/performance.md's codec table).
 
 use libdeflater::{CompressionLvl, Compressor, DecompressionError, Decompressor};
 
