@@ -3,6 +3,61 @@
 //! Fitted to runs at 4K with full-frame and 401×401 kernels on two cores
 //! (`cargo run --release -p aureole-tools --bin crossover`).
 
+use super::options::Method;
+use super::threshold::Survey;
+use crate::image::Layout;
+
+/// What each way of spreading an image would take, nanoseconds.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Estimate {
+    /// Adding the kernel at each bright pixel.
+    pub splat: f64,
+    /// Convolving by FFT.
+    pub fft: f64,
+    /// The convolutions either way: one per image plane, or per kernel
+    /// plane for a luminance image.
+    pub convolutions: usize,
+}
+
+impl Estimate {
+    /// The estimate for an image of `size` and `layout` whose bright
+    /// pixels `survey` found, through a kernel of `kernel` pixels (width,
+    /// height) and `kernel_planes` planes on a `padded` FFT grid.
+    pub fn of(
+        survey: &Survey,
+        (size, layout): ((usize, usize), Layout),
+        (kernel, kernel_planes): ((usize, usize), usize),
+        padded: (usize, usize),
+    ) -> Estimate {
+        // An RGB image takes a convolution per plane; a luminance image one
+        // per kernel plane (a coloured kernel weighs its planes into Y).
+        let convolutions = match layout {
+            Layout::Rgb => 3,
+            Layout::Luminance => kernel_planes,
+        };
+        Estimate {
+            splat: splat(
+                kernel.0 * kernel.1,
+                survey.splat_area,
+                survey.splat_rows,
+                size,
+                convolutions,
+            ),
+            fft: fft(padded, size, convolutions),
+            convolutions,
+        }
+    }
+
+    /// The method `asked` for: `Auto` takes the cheaper.
+    pub fn choose(&self, asked: Method) -> Method {
+        match asked {
+            Method::Auto if self.splat < self.fft => Method::Splat,
+            Method::Auto => Method::Fft,
+            chosen => chosen,
+        }
+    }
+}
+
 /// Nanoseconds the FFT route takes for `convolutions` planes of
 /// `width`×`height` pixels on a `padded` grid: the transforms' n·log₂n
 /// count plus the passes over the planes around them.

@@ -5,17 +5,27 @@ use std::sync::{Mutex, OnceLock, PoisonError};
 
 use rayon::prelude::*;
 
+use super::cost::{self, Estimate};
 use super::options::{Applied, ApplyOptions, Arithmetic, Method};
+use super::precision;
 use super::precision::{Route, Scene};
 use super::splat::{copies, splat};
-use super::threshold::Threshold;
-use super::{cost, precision};
+use super::threshold::{Survey, Threshold};
 use crate::config::Config;
 use crate::control::{Cancel, Control};
 use crate::convolve::{engine, Centre, Engine, Precision, Spread, Term};
 use crate::error::{Error, Fit, Result};
 use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
 use crate::kernel::{Extent, Kernel};
+
+/// How a scene is spread by FFT: the fraction of each pixel spread (none
+/// when every pixel is spread whole), the arithmetic, and where the
+/// spread's progress starts.
+struct Fft<'a> {
+    fractions: Option<&'a [f32]>,
+    route: &'a Route,
+    spread_from: f64,
+}
 
 /// Why a plan does not build its f64 engine: it would need more memory
 /// than the limit (a session's estimate).
@@ -213,109 +223,37 @@ impl Plan {
             knee: options.knee,
         };
         let luminance = PixelLuminance::of(image);
-        let pixels = image.width * image.height;
         let size = (image.width, image.height);
         let kernel_size = (self.kernel.width(), self.kernel.height());
         let survey = threshold.survey(&luminance, size, kernel_size, self.kernel.centre());
         let energy_in = image.total_luminance();
-        let convolutions = match image.layout {
-            Layout::Rgb => 3,
-            Layout::Luminance => self.single.kernel_planes(),
-        };
-        let method = match options.method {
-            Method::Auto
-                if cost::splat(
-                    kernel_size.0 * kernel_size.1,
-                    survey.splat_area,
-                    survey.splat_rows,
-                    size,
-                    convolutions,
-                ) < cost::fft(self.single.padded_size(), size, convolutions) =>
-            {
-                Method::Splat
-            }
-            Method::Auto => Method::Fft,
-            chosen => chosen,
-        };
-        let moved = 1.0
-            - f64::from(
-                self.kernel
-                    .centre_weights()
-                    .into_iter()
-                    .fold(1.0f32, f32::min),
-            );
+        let estimate = Estimate::of(
+            &survey,
+            (size, image.layout),
+            (kernel_size, self.single.kernel_planes()),
+            self.single.padded_size(),
+        );
+        let method = estimate.choose(options.method);
         let route = if survey.spread > 0 && method == Method::Fft {
-            let padded = self.single.padded_size();
-            let scene = Scene {
-                luminance: &luminance,
-                threshold: &threshold,
-                pixels,
-                squares: survey.squares,
-                moved,
-                padded,
-            };
-            // Lamps may cost two more FFTs: the route stays below the f64
-            // engine's cost, about four.
-            let budget = 2.0 * cost::fft(padded, size, convolutions);
-            precision::route(
-                &scene,
-                || {
-                    self.near
-                        .get_or_init(|| precision::split_radii(&self.kernel))
-                        .clone()
-                },
-                |radius| cost::lamps_within(budget, radius, convolutions),
-            )
+            self.route(&luminance, &threshold, &survey, &estimate)
         } else {
             Route::Single
         };
         // The engine keeps one split of the kernel: an application with
         // lamps holds it from choosing the split to the end of the spread,
         // so that a concurrent one with another radius cannot swap it.
-        let mut _holding_split = None;
-        // Splitting the kernel (the first frame with lamps) takes about as
-        // long as the spread: half of the progress.
-        let mut spread_from = 0.0;
-        let route = match route {
-            Route::Lamps { radius, lamps } => {
-                _holding_split = Some(self.split.lock().unwrap_or_else(PoisonError::into_inner));
-                if !self.single.has_split(radius) {
-                    spread_from = 0.5;
-                }
-                if self.single.split_near(
-                    &kernel_planes(&self.kernel),
-                    radius,
-                    &mut control.part(0.0, spread_from),
-                )? {
-                    Route::Lamps { radius, lamps }
-                } else {
-                    Route::Double
-                }
-            }
-            other => other,
+        let _holding_split = matches!(route, Route::Lamps { .. })
+            .then(|| self.split.lock().unwrap_or_else(PoisonError::into_inner));
+        let (route, spread_from) = if method == Method::Fft && survey.spread > 0 {
+            self.ready(route, control)?
+        } else {
+            (route, 0.0)
         };
-        // The f32 engine transforms its kernel when first asked: whole here,
-        // or split for lamps above (never both, for the first image).
-        if method == Method::Fft && route == Route::Single && survey.spread > 0 {
-            if !self.single.ready() {
-                spread_from = 0.5;
-            }
-            self.single.prepare(
-                &kernel_planes(&self.kernel),
-                &mut control.part(0.0, spread_from),
-            )?;
-        }
-        let lamps: &[usize] = match &route {
-            Route::Lamps { lamps, .. } => lamps,
-            _ => &[],
-        };
-        let terms: Vec<Vec<Term>> = (0..image.planes.len())
-            .map(|c| terms(image.layout, self.kernel.planes().len(), c))
-            .collect();
         let mut output = image.clone_without_planes();
         output.planes = if survey.spread == 0 {
             copies(&image.planes, recycled)
         } else if method == Method::Splat {
+            let terms = self.terms(image);
             splat(
                 image,
                 &luminance,
@@ -326,27 +264,14 @@ impl Plan {
                 control,
             )?
         } else {
-            // With every pixel fully spread, each plane is its own bright
-            // part and nothing stays: no plane of fractions.
-            let fractions =
-                (survey.full != pixels).then(|| threshold.fractions(&luminance, pixels));
-            let spreads: Vec<Spread> = image
-                .planes
-                .iter()
-                .zip(terms)
-                .map(|(plane, terms)| Spread {
-                    plane,
-                    fractions: fractions.as_deref(),
-                    terms,
-                    lamps,
-                })
-                .collect();
-            let engine = if route == Route::Double {
-                self.double_engine(control)?
-            } else {
-                self.single.as_ref()
+            let fractions = (survey.full != image.width * image.height)
+                .then(|| threshold.fractions(&luminance, image.width * image.height));
+            let fft = Fft {
+                fractions: fractions.as_deref(),
+                route: &route,
+                spread_from,
             };
-            engine.spread(&spreads, recycled, &mut control.part(spread_from, 1.0))?
+            self.convolve(image, fft, recycled, control)?
         };
         control.report(1.0);
         let energy_out = output.total_luminance();
@@ -368,6 +293,117 @@ impl Plan {
                 Route::Double => Arithmetic::Double,
             },
         })
+    }
+
+    /// The arithmetic a scene spread by FFT needs (docs/physics.md §8): f32,
+    /// f32 with its lamps' near light added apart, or f64.
+    fn route(
+        &self,
+        luminance: &PixelLuminance,
+        threshold: &Threshold,
+        survey: &Survey,
+        estimate: &Estimate,
+    ) -> Route {
+        let moved = 1.0
+            - f64::from(
+                self.kernel
+                    .centre_weights()
+                    .into_iter()
+                    .fold(1.0f32, f32::min),
+            );
+        let padded = self.single.padded_size();
+        let scene = Scene {
+            luminance,
+            threshold,
+            pixels: self.width * self.height,
+            squares: survey.squares,
+            moved,
+            padded,
+        };
+        // Lamps may cost two more FFTs: the route stays below the f64
+        // engine's cost, about four.
+        let budget = 2.0 * estimate.fft;
+        precision::route(
+            &scene,
+            || {
+                self.near
+                    .get_or_init(|| precision::split_radii(&self.kernel))
+                    .clone()
+            },
+            |radius| cost::lamps_within(budget, radius, estimate.convolutions),
+        )
+    }
+
+    /// The f32 engine's kernel spectra made for `route`, when not yet made:
+    /// whole, or split for lamps (a split that would not fit sends the
+    /// scene to f64). Returns the route taken and where the spread's
+    /// progress starts: making the spectra (the first frame) takes about
+    /// as long as the spread, half of the progress.
+    fn ready(&self, route: Route, control: &mut Control) -> Result<(Route, f64)> {
+        let planes = kernel_planes(&self.kernel);
+        match route {
+            Route::Lamps { radius, lamps } => {
+                let spread_from = if self.single.has_split(radius) {
+                    0.0
+                } else {
+                    0.5
+                };
+                let split =
+                    self.single
+                        .split_near(&planes, radius, &mut control.part(0.0, spread_from))?;
+                let route = if split {
+                    Route::Lamps { radius, lamps }
+                } else {
+                    Route::Double
+                };
+                Ok((route, spread_from))
+            }
+            Route::Single => {
+                let spread_from = if self.single.ready() { 0.0 } else { 0.5 };
+                self.single
+                    .prepare(&planes, &mut control.part(0.0, spread_from))?;
+                Ok((Route::Single, spread_from))
+            }
+            Route::Double => Ok((Route::Double, 0.0)),
+        }
+    }
+
+    /// `image` spread by FFT through the engine its route names.
+    fn convolve(
+        &self,
+        image: &Image,
+        fft: Fft,
+        recycled: Vec<Vec<f32>>,
+        control: &mut Control,
+    ) -> Result<Vec<Vec<f32>>> {
+        let lamps: &[usize] = match fft.route {
+            Route::Lamps { lamps, .. } => lamps,
+            _ => &[],
+        };
+        let spreads: Vec<Spread> = image
+            .planes
+            .iter()
+            .zip(self.terms(image))
+            .map(|(plane, terms)| Spread {
+                plane,
+                fractions: fft.fractions,
+                terms,
+                lamps,
+            })
+            .collect();
+        let engine = if *fft.route == Route::Double {
+            self.double_engine(control)?
+        } else {
+            self.single.as_ref()
+        };
+        engine.spread(&spreads, recycled, &mut control.part(fft.spread_from, 1.0))
+    }
+
+    /// Each output plane's terms: which kernel planes, weighted how.
+    fn terms(&self, image: &Image) -> Vec<Vec<Term>> {
+        (0..image.planes.len())
+            .map(|c| terms(image.layout, self.kernel.planes().len(), c))
+            .collect()
     }
 
     /// The plan, refusing a scene that needs the f64 engine, which would

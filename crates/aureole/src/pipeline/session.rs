@@ -3,7 +3,7 @@
 //! user gives, and decides everything else the same way for all of them,
 //! so that every front end gives the same bytes.
 
-use super::cost;
+use super::cost::Estimate;
 use super::options::{Applied, ApplyOptions};
 use super::plan::{DoubleRefused, Plan};
 use super::threshold::Threshold;
@@ -12,7 +12,7 @@ use crate::control::{Cancel, Control};
 use crate::convolve::padded_size;
 use crate::error::{Error, Result};
 use crate::image::Image;
-use crate::image::{Layout, PixelLuminance};
+use crate::image::PixelLuminance;
 use crate::kernel::Kernel;
 use crate::memory::Workload;
 use crate::optics::Effect;
@@ -286,21 +286,16 @@ impl Session {
         };
         let luminance = PixelLuminance::of(image);
         let survey = threshold.survey(&luminance, size, kernel, (kernel.0 / 2, kernel.1 / 2));
-        let convolutions = match image.layout {
-            Layout::Rgb => 3,
-            Layout::Luminance => kernel_planes,
-        };
         let padded = padded_size(kernel.0, kernel.1, size.0, size.1);
+        let estimate = Estimate::of(
+            &survey,
+            (size, image.layout),
+            (kernel, kernel_planes),
+            padded,
+        );
         Ok(Costs {
-            splat: 1e-9
-                * cost::splat(
-                    kernel.0 * kernel.1,
-                    survey.splat_area,
-                    survey.splat_rows,
-                    size,
-                    convolutions,
-                ),
-            fft: 1e-9 * cost::fft(padded, size, convolutions),
+            splat: 1e-9 * estimate.splat,
+            fft: 1e-9 * estimate.fft,
             spread_pixels: survey.spread,
         })
     }
