@@ -235,25 +235,25 @@ struct Preview {
     frame: Arc<Frame>,
 }
 
-/// The session of the last camera and preview size, kept so that a change
+/// The session of the last config and preview size, kept so that a change
 /// of threshold or exposure reuses its kernel and spectra.
-struct Camera {
-    key: CameraKey,
+struct KeptSession {
+    key: SessionKey,
     session: Session,
 }
 
-/// A camera's config, preview size and kernel cap.
-type CameraKey = ((String, (usize, usize)), Option<(usize, usize)>);
+/// A session's config, preview size and kernel cap.
+type SessionKey = ((String, (usize, usize)), Option<(usize, usize)>);
 
 /// What renders share: the roots, the memory budget, the last image, its
-/// preview, the last camera, and the running render's cancellation.
+/// preview, the last session, and the running render's cancellation.
 pub struct Renderer {
     roots: Roots,
     /// Shared with the exports; its total is each session's limit too.
     budget: Arc<Budget>,
     loaded: Mutex<Option<Loaded>>,
     preview: Mutex<Option<Preview>>,
-    camera: Mutex<Option<Camera>>,
+    kept: Mutex<Option<KeptSession>>,
     /// Each client's running render.
     running: Mutex<HashMap<String, Cancel>>,
     /// Renders under way, and renders that ended cancelled.
@@ -279,7 +279,7 @@ impl Renderer {
             budget,
             loaded: Mutex::new(None),
             preview: Mutex::new(None),
-            camera: Mutex::new(None),
+            kept: Mutex::new(None),
             running: Mutex::new(HashMap::new()),
             active: std::sync::atomic::AtomicUsize::new(0),
             cancelled: std::sync::atomic::AtomicU64::new(0),
@@ -361,7 +361,7 @@ impl Renderer {
                 )
             }
             view => {
-                let mut camera = locked(&self.camera);
+                let mut kept = locked(&self.kept);
                 let key = (request.config.clone(), (width, height));
                 // The cap, like every length in px, shrinks with the preview.
                 let max_extent = max_full.map(|(w, h)| {
@@ -369,23 +369,23 @@ impl Renderer {
                     (scaled(w), scaled(h))
                 });
                 let key = (key, max_extent);
-                if camera.as_ref().is_none_or(|c| c.key != key) {
+                if kept.as_ref().is_none_or(|c| c.key != key) {
                     let config = parse_config(&request.config)?.with_pixels_scaled(factor);
-                    *camera = Some(Camera {
+                    *kept = Some(KeptSession {
                         key,
                         session: Session::new(config)
                             .with_memory_limit(self.budget.total())
                             .with_max_extent(max_extent),
                     });
                 }
-                let Some(camera) = camera.as_mut() else {
-                    return Err(StudioError::Internal("no camera".into()));
+                let Some(kept) = kept.as_mut() else {
+                    return Err(StudioError::Internal("no session".into()));
                 };
-                camera.session.set_cancel_token(cancel.clone());
-                let config = camera
+                kept.session.set_cancel_token(cancel.clone());
+                let config = kept
                     .session
                     .config()
-                    .ok_or_else(|| StudioError::Internal("no camera".into()))?;
+                    .ok_or_else(|| StudioError::Internal("no session".into()))?;
                 let bytes = needs(config, &preview, max_extent)?;
                 let _lease = self.budget.lease(bytes, &cancel, Some(PATIENCE), || {})?;
                 let options = ApplyOptions {
@@ -394,9 +394,9 @@ impl Renderer {
                     glare_only: view == View::Glare,
                     method: Method::Auto,
                 };
-                let applied = camera.session.apply(&preview, &options, &mut |_, _| {})?;
+                let applied = kept.session.apply(&preview, &options, &mut |_, _| {})?;
                 if view == View::Kernel {
-                    let plan = camera
+                    let plan = kept
                         .session
                         .plan()
                         .ok_or_else(|| StudioError::Internal("the kernel was not built".into()))?;
