@@ -1,7 +1,7 @@
 //! The pipeline against its definition: linear convolution with zero outside
 //! the frame, the threshold split O = I·[Y ≤ T] + K ⊛ (I·[Y > T]), energy.
 
-use aureole::convolve::single::Convolver;
+use aureole::convolve::Convolver;
 use aureole::convolve::{Centre, Engine, Spread, Term};
 use aureole::pipeline::spread_fraction;
 use aureole::{

@@ -5,14 +5,10 @@
 //! ([`super::single`]), so the pipeline uses it only when the range asks
 //! for it (docs/physics.md §8).
 
-use std::sync::Arc;
-
 use rayon::prelude::*;
 use realfft::num_complex::Complex;
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
-use rustfft::{Fft, FftPlanner};
 
-use super::grid::Grid;
+use super::grid::{Grid, Transforms};
 use super::placement::Placement;
 use super::pool::Pool;
 use super::{Centre, Engine, Spread};
@@ -30,10 +26,7 @@ pub struct Convolver {
     /// The weight each kernel plane left out of its spectrum, applied
     /// exactly.
     centres: Vec<f32>,
-    row_fft: Arc<dyn RealToComplex<f64>>,
-    row_ifft: Arc<dyn ComplexToReal<f64>>,
-    column_fft: Arc<dyn Fft<f64>>,
-    column_ifft: Arc<dyn Fft<f64>>,
+    transforms: Transforms<f64>,
     /// The column-major spectrum of the plane being convolved.
     buffers: Pool<Vec<Complex<f64>>>,
 }
@@ -52,8 +45,6 @@ impl Convolver {
         control: &mut Control,
     ) -> Result<Convolver> {
         let (px, py) = Grid::new(size, (width, height), false).padded();
-        let mut real_planner = RealFftPlanner::<f64>::new();
-        let mut planner = FftPlanner::<f64>::new();
         let mut convolver = Convolver {
             width,
             height,
@@ -61,10 +52,7 @@ impl Convolver {
             py,
             spectra: Vec::new(),
             centres: Vec::new(),
-            row_fft: real_planner.plan_fft_forward(px),
-            row_ifft: real_planner.plan_fft_inverse(px),
-            column_fft: planner.plan_fft_forward(py),
-            column_ifft: planner.plan_fft_inverse(py),
+            transforms: Transforms::plan(px, py),
             buffers: Pool::new(),
         };
         let cancel = control.cancel();
@@ -105,10 +93,10 @@ impl Convolver {
         let spectra: Vec<(usize, Vec<Complex<f64>>)> = rows
             .into_par_iter()
             .map(|(index, mut row)| {
-                let mut spectrum = self.row_fft.make_output_vec();
+                let mut spectrum = self.transforms.row_fft.make_output_vec();
                 if !cancel.is_cancelled() {
                     // The lengths are the planned ones, so this cannot fail.
-                    let _ = self.row_fft.process(&mut row, &mut spectrum);
+                    let _ = self.transforms.row_fft.process(&mut row, &mut spectrum);
                 }
                 (index, spectrum)
             })
@@ -125,7 +113,7 @@ impl Convolver {
                 for (index, spectrum) in &spectra {
                     column[*index] = spectrum[u];
                 }
-                self.column_fft.process(column);
+                self.transforms.column_fft.process(column);
             });
     }
 
@@ -157,7 +145,7 @@ impl Convolver {
                 for (v, k) in column.iter_mut().zip(k) {
                     *v *= k * scale;
                 }
-                self.column_ifft.process(column);
+                self.transforms.column_ifft.process(column);
             });
         let columns = &*columns;
         let mut out = vec![0.0; w * h];
@@ -172,8 +160,8 @@ impl Convolver {
             if px % 2 == 0 {
                 spectrum[half - 1].im = 0.0;
             }
-            let mut real = self.row_ifft.make_output_vec();
-            let _ = self.row_ifft.process(&mut spectrum, &mut real);
+            let mut real = self.transforms.row_ifft.make_output_vec();
+            let _ = self.transforms.row_ifft.process(&mut spectrum, &mut real);
             row.copy_from_slice(&real[..w]);
         });
         out

@@ -1,6 +1,35 @@
 //! The padded grid of an FFT convolution: how large the period must be so
 //! that nothing wraps around, rounded up to sizes the FFT is fast at, and
-//! whether the column transforms can be pruned.
+//! whether the column transforms can be pruned; and the transforms
+//! planned for it.
+
+use std::sync::Arc;
+
+use realfft::{ComplexToReal, FftNum, RealFftPlanner, RealToComplex};
+use rustfft::{Fft, FftPlanner};
+
+/// An engine's transforms of its period, in `T`: rows real-to-complex and
+/// back, columns complex both ways.
+pub(super) struct Transforms<T: FftNum> {
+    pub row_fft: Arc<dyn RealToComplex<T>>,
+    pub row_ifft: Arc<dyn ComplexToReal<T>>,
+    pub column_fft: Arc<dyn Fft<T>>,
+    pub column_ifft: Arc<dyn Fft<T>>,
+}
+
+impl<T: FftNum> Transforms<T> {
+    /// The transforms of rows of `row` samples and columns of `column`.
+    pub fn plan(row: usize, column: usize) -> Transforms<T> {
+        let mut real = RealFftPlanner::<T>::new();
+        let mut complex = FftPlanner::<T>::new();
+        Transforms {
+            row_fft: real.plan_fft_forward(row),
+            row_ifft: real.plan_fft_inverse(row),
+            column_fft: complex.plan_fft_forward(column),
+            column_ifft: complex.plan_fft_inverse(column),
+        }
+    }
+}
 
 /// The smallest 5-smooth number (2^a 3^b 5^c) at or above `n`: rustfft is
 /// fastest on those sizes.

@@ -1,21 +1,24 @@
 //! The convolution engine: spreading planes of light through a kernel
 //! (docs/physics.md §8). The pipeline calls it through one trait,
-//! [`Engine`]; the f32 engine ([`single`]) and the f64 engine ([`double`])
-//! implement it, sharing the size planning ([`grid`]), the kernel's
-//! placement in the period and the buffer pool. [`engine`] chooses among
-//! them. A further backend (a GPU) is a third implementation chosen there;
-//! nothing outside this module changes for it.
+//! [`Engine`]; the f32 engine (`single.rs`, its one-kernel form
+//! [`Convolver`]) and the f64 engine (`double.rs`) implement it, sharing
+//! the size planning and the transforms planned for it (`grid.rs`), the
+//! kernel's placement in the period and the buffer pool. [`engine`] chooses
+//! among them, and [`compose`] is how kernels convolve one another, so a
+//! further backend (a GPU) is a third implementation chosen in this module
+//! alone.
 
-pub mod double;
+mod double;
 mod grid;
 mod near;
 mod placement;
 mod pool;
 mod simd;
-pub mod single;
+mod single;
 
 pub use grid::{fast_size, padded_size};
 pub use simd::{force_scalar, vectors_in_use};
+pub use single::Convolver;
 
 use crate::control::Control;
 use crate::error::Result;
@@ -90,6 +93,28 @@ pub fn engine(
             planes, size, width, height, centre, control,
         )?),
     })
+}
+
+/// `plane` (the `extent`'s width × height) convolved whole with one
+/// kernel plane of `size`, centre at its middle, in f32: how kernels
+/// compose (an optical chain, a filter's orders), through the engine
+/// chosen here as applications are.
+pub fn compose(
+    kernel: &[f32],
+    size: (usize, usize),
+    plane: &[f32],
+    (width, height): (usize, usize),
+    control: &mut Control,
+) -> Result<Vec<f32>> {
+    let convolver = single::Convolver::new(
+        &[kernel],
+        size,
+        width,
+        height,
+        Centre::Include,
+        &mut control.part(0.0, 0.5),
+    )?;
+    convolver.convolve(plane, 0, &mut control.part(0.5, 1.0))
 }
 
 /// Spreads planes of light through a kernel whose spectrum it holds, for

@@ -21,10 +21,10 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use rayon::prelude::*;
 use realfft::num_complex::Complex;
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 
-use super::grid::{ColumnTransform, Grid};
+use super::grid::{ColumnTransform, Grid, Transforms};
 use super::near::Near;
 use super::placement::Placement;
 use super::pool::Pool;
@@ -192,10 +192,7 @@ pub struct Convolver {
     centres: Vec<f32>,
     /// e^{−iπn/N} for n < N, for pruned columns.
     twiddles: Vec<Complex<f32>>,
-    row_fft: Arc<dyn RealToComplex<f32>>,
-    row_ifft: Arc<dyn ComplexToReal<f32>>,
-    column_fft: Arc<dyn Fft<f32>>,
-    column_ifft: Arc<dyn Fft<f32>>,
+    transforms: Transforms<f32>,
     buffers: Pool<Buffers>,
 }
 
@@ -228,8 +225,6 @@ impl Convolver {
         centre: Centre,
     ) -> Convolver {
         let grid = Grid::new(size, (width, height), true);
-        let mut real_planner = RealFftPlanner::<f32>::new();
-        let mut planner = FftPlanner::<f32>::new();
         let twiddles = match grid.columns {
             ColumnTransform::Full(_) => Vec::new(),
             ColumnTransform::Halves(n) => (0..n)
@@ -266,10 +261,7 @@ impl Convolver {
             })),
             centres,
             twiddles,
-            row_fft: real_planner.plan_fft_forward(grid.px),
-            row_ifft: real_planner.plan_fft_inverse(grid.px),
-            column_fft: planner.plan_fft_forward(grid.columns.transform_length()),
-            column_ifft: planner.plan_fft_inverse(grid.columns.transform_length()),
+            transforms: Transforms::plan(grid.px, grid.columns.transform_length()),
             buffers: Pool::new(),
         }
     }
@@ -377,7 +369,7 @@ impl Convolver {
         cancel: &Cancel,
     ) {
         let w = self.width;
-        let row_fft = &self.row_fft;
+        let row_fft = &self.transforms.row_fft;
         rows.par_chunks_mut(strips * TILE)
             .zip(input.plane.par_chunks(BLOCK * w))
             .enumerate()
@@ -427,12 +419,12 @@ impl Convolver {
         rows.dedup();
         rows.into_par_iter()
             .map(|y| {
-                let mut padded = self.row_fft.make_input_vec();
+                let mut padded = self.transforms.row_fft.make_input_vec();
                 for &i in lamps_in_row(input.lamps, y, w) {
                     padded[i % w] = input.bright(i);
                 }
-                let mut spectrum = self.row_fft.make_output_vec();
-                let _ = self.row_fft.process(&mut padded, &mut spectrum);
+                let mut spectrum = self.transforms.row_fft.make_output_vec();
+                let _ = self.transforms.row_fft.process(&mut padded, &mut spectrum);
                 (y, spectrum)
             })
             .collect()
@@ -463,9 +455,10 @@ impl Convolver {
             }
         }
         let scratch_len = self
+            .transforms
             .column_fft
             .get_inplace_scratch_len()
-            .max(self.column_ifft.get_inplace_scratch_len());
+            .max(self.transforms.column_ifft.get_inplace_scratch_len());
         tasks.into_par_iter().enumerate().for_each_init(
             || {
                 (
@@ -572,7 +565,9 @@ impl Convolver {
         }
         // For pruned columns both halves go in one call: rustfft transforms
         // a buffer of several lengths one after the other.
-        self.column_fft.process_with_scratch(column, scratch);
+        self.transforms
+            .column_fft
+            .process_with_scratch(column, scratch);
         match kernel {
             KernelColumn::Whole(spectrum) => {
                 for (a, b) in column.iter_mut().zip(spectrum) {
@@ -592,13 +587,17 @@ impl Convolver {
                     window,
                     rows.enumerate().map(|(i, v)| (i as i64 - r as i64, v)),
                 );
-                self.column_fft.process_with_scratch(window, scratch);
+                self.transforms
+                    .column_fft
+                    .process_with_scratch(window, scratch);
                 if let Some(lamp_rows) = lamp_rows {
                     let rows = lamp_rows
                         .iter()
                         .map(|(y, spectrum)| (*y as i64, spectrum[u]));
                     self.place_rows(lamps, rows);
-                    self.column_fft.process_with_scratch(lamps, scratch);
+                    self.transforms
+                        .column_fft
+                        .process_with_scratch(lamps, scratch);
                     for (((a, w), e), f) in column
                         .iter_mut()
                         .zip(window.iter())
@@ -614,7 +613,9 @@ impl Convolver {
                 }
             }
         }
-        self.column_ifft.process_with_scratch(column, scratch);
+        self.transforms
+            .column_ifft
+            .process_with_scratch(column, scratch);
         let values = strip.iter_mut().skip(j).step_by(STRIP);
         match self.grid.columns {
             ColumnTransform::Full(_) => {
@@ -676,7 +677,7 @@ impl Convolver {
     ) {
         let w = self.width;
         let count = self.grid.spectrum_width();
-        let row_ifft = &self.row_ifft;
+        let row_ifft = &self.transforms.row_ifft;
         let zero = Complex::new(0.0, 0.0);
         out.par_chunks_mut(BLOCK * w)
             .zip(input.plane.par_chunks(BLOCK * w))

@@ -8,8 +8,7 @@ use rayon::prelude::*;
 use super::raster::{plane_sum, shape_plane};
 use super::{Extent, Kernel};
 use crate::control::Control;
-use crate::convolve::single::Convolver;
-use crate::convolve::Centre;
+use crate::convolve;
 use crate::error::Result;
 use crate::optics::shape::SpreadShape;
 
@@ -174,15 +173,8 @@ fn compose(s: &[f32], t: &[f32], extent: &Extent, control: &mut Control) -> Resu
         }
         Some(cut)
     };
-    let convolver = Convolver::new(
-        &[cut.as_deref().unwrap_or(kernel)],
-        (kw, kh),
-        extent.width,
-        extent.height,
-        Centre::Include,
-        &mut control.part(0.0, 0.5),
-    )?;
-    convolver.convolve(image, 0, &mut control.part(0.5, 1.0))
+    let kernel = cut.as_deref().unwrap_or(kernel);
+    convolve::compose(kernel, (kw, kh), image, (w, h), control)
 }
 
 /// How far from the centre a plane of the extent holds light, columns and

@@ -58,10 +58,12 @@ pub struct Plan {
     kernel: Kernel,
     /// The configuration's threshold, cd/m², for callers that give none.
     threshold: f64,
-    /// The f32 engine, the kernel's centre weight applied exactly.
-    single: Box<dyn Engine>,
-    /// The f64 engine, built the first time a scene's range needs it.
-    double: OnceLock<Box<dyn Engine>>,
+    /// The engine every scene starts in (f32 on the CPU), the kernel's
+    /// centre weight applied exactly.
+    engine: Box<dyn Engine>,
+    /// The exact engine (f64), built the first time a scene's range needs
+    /// it.
+    exact: OnceLock<Box<dyn Engine>>,
     /// Where the kernel can be split for lamps, and the light beyond
     /// ([`precision::split_radii`]), found the first time a scene has
     /// lamps.
@@ -135,7 +137,7 @@ impl Plan {
         height: usize,
         control: &mut Control,
     ) -> std::result::Result<Plan, Box<(Kernel, Error)>> {
-        let single = engine(
+        let built = engine(
             Precision::Single,
             &kernel_planes(&kernel),
             (kernel.width(), kernel.height()),
@@ -143,14 +145,14 @@ impl Plan {
             Centre::Leave,
             control,
         );
-        match single {
-            Ok(single) => Ok(Plan {
+        match built {
+            Ok(engine) => Ok(Plan {
                 width,
                 height,
                 kernel,
                 threshold: 0.0,
-                single,
-                double: OnceLock::new(),
+                engine,
+                exact: OnceLock::new(),
                 near: OnceLock::new(),
                 split: Mutex::new(()),
                 double_refused: None,
@@ -230,8 +232,8 @@ impl Plan {
         let estimate = Estimate::of(
             &survey,
             (size, image.layout),
-            (kernel_size, self.single.kernel_planes()),
-            self.single.padded_size(),
+            (kernel_size, self.engine.kernel_planes()),
+            self.engine.padded_size(),
         );
         let method = estimate.choose(options.method);
         let route = if survey.spread > 0 && method == Method::Fft {
@@ -311,7 +313,7 @@ impl Plan {
                     .into_iter()
                     .fold(1.0f32, f32::min),
             );
-        let padded = self.single.padded_size();
+        let padded = self.engine.padded_size();
         let scene = Scene {
             luminance,
             threshold,
@@ -343,13 +345,13 @@ impl Plan {
         let planes = kernel_planes(&self.kernel);
         match route {
             Route::Lamps { radius, lamps } => {
-                let spread_from = if self.single.has_split(radius) {
+                let spread_from = if self.engine.has_split(radius) {
                     0.0
                 } else {
                     0.5
                 };
                 let split =
-                    self.single
+                    self.engine
                         .split_near(&planes, radius, &mut control.part(0.0, spread_from))?;
                 let route = if split {
                     Route::Lamps { radius, lamps }
@@ -359,8 +361,8 @@ impl Plan {
                 Ok((route, spread_from))
             }
             Route::Single => {
-                let spread_from = if self.single.ready() { 0.0 } else { 0.5 };
-                self.single
+                let spread_from = if self.engine.ready() { 0.0 } else { 0.5 };
+                self.engine
                     .prepare(&planes, &mut control.part(0.0, spread_from))?;
                 Ok((Route::Single, spread_from))
             }
@@ -392,9 +394,9 @@ impl Plan {
             })
             .collect();
         let engine = if *fft.route == Route::Double {
-            self.double_engine(control)?
+            self.exact_engine(control)?
         } else {
-            self.single.as_ref()
+            self.engine.as_ref()
         };
         engine.spread(&spreads, recycled, &mut control.part(fft.spread_from, 1.0))
     }
@@ -414,8 +416,8 @@ impl Plan {
     }
 
     /// The f64 engine, built on first use.
-    fn double_engine(&self, control: &mut Control) -> Result<&dyn Engine> {
-        if let Some(built) = self.double.get() {
+    fn exact_engine(&self, control: &mut Control) -> Result<&dyn Engine> {
+        if let Some(built) = self.exact.get() {
             return Ok(built.as_ref());
         }
         if let Some(refused) = self.double_refused {
@@ -429,7 +431,7 @@ impl Plan {
             Centre::Leave,
             &mut control.part(0.0, 0.0),
         )?;
-        Ok(self.double.get_or_init(|| built).as_ref())
+        Ok(self.exact.get_or_init(|| built).as_ref())
     }
 }
 

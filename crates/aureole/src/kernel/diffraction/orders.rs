@@ -6,8 +6,7 @@
 use super::near::NearField;
 use super::Spectrum;
 use crate::control::{for_each_row, Control};
-use crate::convolve::single::Convolver;
-use crate::convolve::Centre;
+use crate::convolve;
 use crate::error::Result;
 use crate::kernel::{Extent, Kernel};
 use crate::optics::aperture::Optics;
@@ -94,16 +93,10 @@ fn spread_orders(
     match Kernel::from_planes(side, side, vec![plane]) {
         Ok(kernel) => {
             let comb: Vec<f32> = comb.iter().map(|&v| v as f32).collect();
-            let convolver = Convolver::new(
-                &[kernel.planes()[0].as_slice()],
-                (side, side),
-                extent.width,
-                extent.height,
-                Centre::Include,
-                &mut control.part(0.0, 0.5),
-            )?;
-            Ok(convolver
-                .convolve(&comb, 0, &mut control.part(0.5, 1.0))?
+            let size = (extent.width, extent.height);
+            let composed =
+                convolve::compose(&kernel.planes()[0], (side, side), &comb, size, control)?;
+            Ok(composed
                 .into_iter()
                 .map(|v| f64::from(v).max(0.0))
                 .collect())
@@ -515,16 +508,8 @@ mod tests {
         let plane: Vec<f32> = window.values.iter().map(|&v| v as f32).collect();
         let kernel = Kernel::from_planes(7, 7, vec![plane]).unwrap();
         let comb32: Vec<f32> = comb.iter().map(|&v| v as f32).collect();
-        let convolver = Convolver::new(
-            &[kernel.planes()[0].as_slice()],
-            (7, 7),
-            47,
-            33,
-            Centre::Include,
-            &mut quiet,
-        )
-        .unwrap();
-        let fft = convolver.convolve(&comb32, 0, &mut quiet).unwrap();
+        let fft =
+            convolve::compose(&kernel.planes()[0], (7, 7), &comb32, (47, 33), &mut quiet).unwrap();
         for (a, b) in direct.iter().zip(&fft) {
             assert!((a - f64::from(*b)).abs() < 1e-6, "{a} vs {b}");
         }
