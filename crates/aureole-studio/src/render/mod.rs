@@ -5,16 +5,20 @@
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant, SystemTime};
+use std::time::{Duration, Instant};
 
 use aureole::config::ConfigFile;
-use aureole::kernel::profile;
 use aureole::memory::Workload;
-use aureole::{ApplyOptions, Cancel, Config, Frame, FrameOptions, Image, Method, Session};
-use aureole_io::display::{meter, render, DisplayOptions, Exposure, Picture, ToneCurve};
+use aureole::{ApplyOptions, Cancel, Config, Frame, Method, Session};
+use aureole_io::display::{meter, render, DisplayOptions, Exposure, ToneCurve};
 use aureole_io::kernel::log_picture_window;
-use aureole_io::limits::Limits;
 use serde::Deserialize;
+
+mod cache;
+mod views;
+
+use cache::{KeptSession, Loaded, Preview};
+use views::{kernel_profiles, linear_bytes, png, spread_overlay};
 
 use crate::budget::Budget;
 use crate::error::StudioError;
@@ -219,31 +223,6 @@ impl Summary {
         }
     }
 }
-
-/// A full image in memory, with where it came from.
-struct Loaded {
-    key: (String, Option<SystemTime>),
-    frame: Arc<Frame>,
-    summary: Summary,
-}
-
-/// A preview: the full frame it was made from, its width, and the
-/// resampled frame.
-struct Preview {
-    source: Arc<Frame>,
-    width: usize,
-    frame: Arc<Frame>,
-}
-
-/// The session of the last config and preview size, kept so that a change
-/// of threshold or exposure reuses its kernel and spectra.
-struct KeptSession {
-    key: SessionKey,
-    session: Session,
-}
-
-/// A session's config, preview size and kernel cap.
-type SessionKey = ((String, (usize, usize)), Option<(usize, usize)>);
 
 /// What renders share: the roots, the memory budget, the last image, its
 /// preview, the last session, and the running render's cancellation.
@@ -455,68 +434,6 @@ impl Renderer {
             profiles,
         })
     }
-
-    /// The full image `name` names, read once while it does not change.
-    fn load(&self, name: &str) -> Result<(Arc<Frame>, Summary), StudioError> {
-        let (path, modified) = if name == DEMO {
-            (None, None)
-        } else {
-            let path = self.roots.resolve(name)?;
-            let modified = std::fs::metadata(&path).and_then(|m| m.modified()).ok();
-            (Some(path), modified)
-        };
-        let key = (name.to_string(), modified);
-        let mut loaded = locked(&self.loaded);
-        if let Some(hit) = loaded.as_ref().filter(|l| l.key == key) {
-            return Ok((hit.frame.clone(), hit.summary));
-        }
-        let image = match &path {
-            None => aureole_io::demo::night_street(1280, 720),
-            Some(path) => read(path, self.budget.total())?,
-        };
-        let frame = Arc::new(
-            Frame::new(image, &FrameOptions::default())
-                .map_err(|e| StudioError::Unprocessable(format!("{name}: {e}")))?,
-        );
-        let summary = Summary::of(&frame);
-        *loaded = Some(Loaded {
-            key,
-            frame: frame.clone(),
-            summary,
-        });
-        Ok((frame, summary))
-    }
-
-    /// `full` resampled by area to `width` (no wider than it is).
-    fn preview(&self, full: &Arc<Frame>, width: usize) -> Result<Arc<Frame>, StudioError> {
-        let image = full.image();
-        let width = width.min(image.width);
-        let height =
-            ((image.height as f64 * width as f64 / image.width as f64).round() as usize).max(1);
-        let mut preview = locked(&self.preview);
-        let hit = |p: &&Preview| Arc::ptr_eq(&p.source, full) && p.width == width;
-        if let Some(hit) = preview.as_ref().filter(hit) {
-            return Ok(hit.frame.clone());
-        }
-        let options = FrameOptions {
-            input_scale: Some(full.scale()),
-            sanitize: false,
-        };
-        let frame = Arc::new(Frame::new(image.resampled(width, height), &options)?);
-        *preview = Some(Preview {
-            source: full.clone(),
-            width,
-            frame: frame.clone(),
-        });
-        Ok(frame)
-    }
-}
-
-fn read(path: &std::path::Path, memory_limit: u64) -> Result<Image, StudioError> {
-    let limits = Limits {
-        max_bytes: memory_limit,
-    };
-    Ok(aureole_io::read::read_image(path, limits)?.image)
 }
 
 /// The camera a TOML text describes, on top of the defaults.
@@ -554,74 +471,4 @@ pub(crate) fn display_options(request: &RenderRequest) -> Result<DisplayOptions,
         .map_or(Ok(ToneCurve::Filmic), str::parse)
         .map_err(StudioError::BadRequest)?;
     Ok(DisplayOptions { exposure, tone })
-}
-
-/// The kernel's profiles as `aureole psf --profile` draws them
-/// ([`aureole::kernel::profile`]), over its planes' mean: the radial one
-/// out to `reach` px (at most 64 samples), the angular one in 2° steps on
-/// the circle of reach/4, relative to its median.
-fn kernel_profiles(kernel: &aureole::Kernel, reach: usize) -> (Vec<f64>, Vec<f64>) {
-    let planes = kernel.planes().len();
-    let mean = |each: &dyn Fn(usize) -> Vec<f64>| {
-        let mut sum = each(0);
-        for plane in 1..planes {
-            sum.iter_mut().zip(each(plane)).for_each(|(s, v)| *s += v);
-        }
-        sum.iter_mut().for_each(|s| *s /= planes as f64);
-        sum
-    };
-    let rings = mean(&|plane| profile::radial_profile(kernel, plane));
-    let reach = reach.clamp(2, rings.len().saturating_sub(1).max(2));
-    let step = (reach as f64 / 64.0).max(1.0);
-    let radial = (1..=reach.min(64))
-        .filter_map(|k| rings.get((k as f64 * step).round() as usize).copied())
-        .collect();
-    const BINS: usize = 180;
-    let radius = (reach as f64 / 4.0).max(2.0);
-    let mut angular = mean(&|plane| {
-        let samples = profile::angular_profile(kernel, plane, radius, BINS);
-        samples.into_iter().map(|(_, value)| value).collect()
-    });
-    let mut sorted = angular.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[BINS / 2].max(1e-300);
-    angular.iter_mut().for_each(|v| *v /= median);
-    (radial, angular)
-}
-
-/// `image` dimmed to a quarter, with the pixels the camera spreads (above
-/// `threshold` cd/m², through the soft `knee` as the core spreads them) in
-/// magenta at their own luminance, by the fraction of their light spread.
-fn spread_overlay(image: &Image, scale: f64, threshold: f64, knee: f64) -> Image {
-    let luminance = image.luminance();
-    let mut shown = Image::filled(image.width, image.height, aureole::Layout::Rgb, 0.0);
-    shown.white_luminance = image.white_luminance;
-    for (i, &y) in luminance.iter().enumerate() {
-        let spread = aureole::pipeline::spread_fraction(f64::from(y) * scale, threshold, knee);
-        for c in 0..3 {
-            let own = 0.25 * image.planes[c.min(image.planes.len() - 1)][i];
-            let magenta = if c == 1 { 0.2 * y } else { y };
-            shown.planes[c][i] = spread * magenta + (1.0 - spread) * own;
-        }
-    }
-    shown
-}
-
-/// The image in cd/m² as little-endian f32 R, G, B per pixel (a
-/// luminance image in all three).
-fn linear_bytes(image: &Image, scale: f64) -> Vec<u8> {
-    let n = image.width * image.height;
-    let mut bytes = Vec::with_capacity(n * 12);
-    for i in 0..n {
-        for c in 0..3 {
-            let plane = &image.planes[c.min(image.planes.len() - 1)];
-            bytes.extend_from_slice(&((f64::from(plane[i]) * scale) as f32).to_le_bytes());
-        }
-    }
-    bytes
-}
-
-/// A picture as the PNG a page shows.
-fn png(picture: &Picture) -> Result<Vec<u8>, StudioError> {
-    picture.preview_png().map_err(StudioError::Internal)
 }

@@ -1,0 +1,105 @@
+//! What the studio keeps between renders: the last full image, its
+//! preview, and the session of the last camera at that preview's size.
+
+use std::sync::Arc;
+use std::time::SystemTime;
+
+use aureole::{Frame, FrameOptions, Image, Session};
+use aureole_io::limits::Limits;
+
+use super::{Renderer, Summary, DEMO};
+use crate::error::StudioError;
+use crate::locked;
+
+/// A full image in memory, with where it came from.
+pub(super) struct Loaded {
+    key: (String, Option<SystemTime>),
+    frame: Arc<Frame>,
+    summary: Summary,
+}
+
+/// A preview: the full frame it was made from, its width, and the
+/// resampled frame.
+pub(super) struct Preview {
+    source: Arc<Frame>,
+    width: usize,
+    frame: Arc<Frame>,
+}
+
+/// The session of the last config and preview size, kept so that a change
+/// of threshold or exposure reuses its kernel and spectra.
+pub(super) struct KeptSession {
+    pub key: SessionKey,
+    pub session: Session,
+}
+
+/// A session's config, preview size and kernel cap.
+pub(super) type SessionKey = ((String, (usize, usize)), Option<(usize, usize)>);
+
+impl Renderer {
+    /// The full image `name` names, read once while it does not change.
+    pub(super) fn load(&self, name: &str) -> Result<(Arc<Frame>, Summary), StudioError> {
+        let (path, modified) = if name == DEMO {
+            (None, None)
+        } else {
+            let path = self.roots.resolve(name)?;
+            let modified = std::fs::metadata(&path).and_then(|m| m.modified()).ok();
+            (Some(path), modified)
+        };
+        let key = (name.to_string(), modified);
+        let mut loaded = locked(&self.loaded);
+        if let Some(hit) = loaded.as_ref().filter(|l| l.key == key) {
+            return Ok((hit.frame.clone(), hit.summary));
+        }
+        let image = match &path {
+            None => aureole_io::demo::night_street(1280, 720),
+            Some(path) => read(path, self.budget.total())?,
+        };
+        let frame = Arc::new(
+            Frame::new(image, &FrameOptions::default())
+                .map_err(|e| StudioError::Unprocessable(format!("{name}: {e}")))?,
+        );
+        let summary = Summary::of(&frame);
+        *loaded = Some(Loaded {
+            key,
+            frame: frame.clone(),
+            summary,
+        });
+        Ok((frame, summary))
+    }
+
+    /// `full` resampled by area to `width` (no wider than it is).
+    pub(super) fn preview(
+        &self,
+        full: &Arc<Frame>,
+        width: usize,
+    ) -> Result<Arc<Frame>, StudioError> {
+        let image = full.image();
+        let width = width.min(image.width);
+        let height =
+            ((image.height as f64 * width as f64 / image.width as f64).round() as usize).max(1);
+        let mut preview = locked(&self.preview);
+        let hit = |p: &&Preview| Arc::ptr_eq(&p.source, full) && p.width == width;
+        if let Some(hit) = preview.as_ref().filter(hit) {
+            return Ok(hit.frame.clone());
+        }
+        let options = FrameOptions {
+            input_scale: Some(full.scale()),
+            sanitize: false,
+        };
+        let frame = Arc::new(Frame::new(image.resampled(width, height), &options)?);
+        *preview = Some(Preview {
+            source: full.clone(),
+            width,
+            frame: frame.clone(),
+        });
+        Ok(frame)
+    }
+}
+
+fn read(path: &std::path::Path, memory_limit: u64) -> Result<Image, StudioError> {
+    let limits = Limits {
+        max_bytes: memory_limit,
+    };
+    Ok(aureole_io::read::read_image(path, limits)?.image)
+}
