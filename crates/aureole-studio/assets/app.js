@@ -1,12 +1,8 @@
 // The studio page: every control change asks the server for a new
 // picture of the view's width; a newer request aborts an older one.
-"use strict";
-
-const $ = (id) => document.getElementById(id);
-// Each tab is a client of its own: a new render replaces only this tab's
-// last one, never another tab's.
-const client = self.crypto && crypto.randomUUID ? crypto.randomUUID() : `${Date.now()}-${Math.random()}`;
-const state = { view: "result", split: 0.5, controller: null, timer: null, presets: [] };
+import { $, client, schedule, showError, state } from "./common.js";
+import { canvasDisplay, makeDisplay } from "./display.js";
+import { choosePreset, readConfig, writeConfig } from "./panels.js";
 
 function previewWidth() {
   // At 1:1 the preview is the image itself (up to 4096 px wide).
@@ -71,187 +67,10 @@ async function fetchPicture(body, signal) {
   };
 }
 
-function showError(message) {
-  // Each message goes next to the control that caused it.
-  $("error").textContent = "";
-  $("config-error").textContent = "";
-  $("light-error").textContent = "";
-  if (!message) return;
-  if (/^config:|effect|camera|preset|seed|no effect/i.test(message)) $("config-error").textContent = message;
-  else if (/threshold|knee/i.test(message)) $("light-error").textContent = message;
-  else $("error").textContent = message;
-}
-
-// The display transform of aureole-io's display.rs, run here so that
-// exposure and tone curve redraw at the display's rate without the server:
-// x = L / white, the tone curve, then sRGB (a fine table).
-const SRGB_STEPS = 65536;
-const SRGB = (() => {
-  const table = new Uint8ClampedArray(SRGB_STEPS + 1);
-  for (let i = 0; i <= SRGB_STEPS; i++) {
-    const v = i / SRGB_STEPS;
-    const e = v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055;
-    table[i] = Math.round(e * 255);
-  }
-  return table;
-})();
-const CURVES = {
-  clip: (x) => Math.min(x, 1),
-  reinhard: (x) => Math.min((x * (1 + x / 4)) / (1 + x), 1),
-  filmic: (x) => Math.min(Math.max((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0), 1),
-};
-
-// srgb(curve(x)) as codes over 0 ≤ x < the curve's clipping point (code
-// 255 beyond), one table per curve: a draw is a multiply and a look-up.
-const CODE_STEPS = 1 << 18;
-const codeTables = {};
-function codeTable(name) {
-  if (codeTables[name]) return codeTables[name];
-  const curve = CURVES[name];
-  const srgb = (t) => SRGB[Math.round(t * SRGB_STEPS)];
-  let top = 1;
-  while (srgb(curve(top)) < 255) top *= 2;
-  const table = new Uint8ClampedArray(CODE_STEPS + 1);
-  for (let i = 0; i <= CODE_STEPS; i++) table[i] = srgb(curve((i / CODE_STEPS) * top));
-  codeTables[name] = { table, perUnit: CODE_STEPS / top };
-  return codeTables[name];
-}
 
 function white(shown) {
   const tone = $("tonemap").value;
   return $("auto").checked ? shown.autoWhite[tone] : 1.2 * Math.pow(2, Number($("ev").value));
-}
-
-// The display: WebGL2 where the browser has it, so that the tone mapping
-// runs per pixel on the GPU at the display's frame rate, else a 2D canvas
-// (also with ?display=2d), where codes are looked up in a table of the same
-// transform.
-const VERTEX = `#version 300 es
-in vec2 corner;
-void main() { gl_Position = vec4(corner, 0.0, 1.0); }`;
-// The curves and the sRGB encoding of display.rs, in f32 as there.
-const FRAGMENT = `#version 300 es
-precision highp float;
-precision highp int;
-uniform highp sampler2D shown;
-uniform highp sampler2D under;
-uniform float gain;
-uniform int curve;
-uniform int split;
-uniform int height;
-out vec4 colour;
-vec3 tone(vec3 x) {
-  x = max(x, 0.0);
-  if (curve == 0) return min(x, 1.0);
-  if (curve == 1) return min(x * (1.0 + x / 4.0) / (1.0 + x), 1.0);
-  return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
-}
-vec3 srgb(vec3 v) {
-  return mix(1.055 * pow(v, vec3(1.0 / 2.4)) - 0.055, 12.92 * v, lessThanEqual(v, vec3(0.0031308)));
-}
-void main() {
-  ivec2 p = ivec2(gl_FragCoord.xy);
-  p.y = height - 1 - p.y;
-  vec3 v = p.x < split ? texelFetch(under, p, 0).rgb : texelFetch(shown, p, 0).rgb;
-  colour = vec4(srgb(tone(v * gain)), 1.0);
-}`;
-const CURVE_NUMBERS = { clip: 0, reinhard: 1, filmic: 2 };
-
-function makeDisplay(canvas, wanted) {
-  const gl = wanted === "2d" ? null : canvas.getContext("webgl2", { preserveDrawingBuffer: true, antialias: false });
-  if (!gl) return canvasDisplay(canvas);
-  const compile = (type, text) => {
-    const shader = gl.createShader(type);
-    gl.shaderSource(shader, text);
-    gl.compileShader(shader);
-    if (!gl.getShaderParameter(shader, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(shader));
-    return shader;
-  };
-  const program = gl.createProgram();
-  gl.attachShader(program, compile(gl.VERTEX_SHADER, VERTEX));
-  gl.attachShader(program, compile(gl.FRAGMENT_SHADER, FRAGMENT));
-  gl.linkProgram(program);
-  if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(program));
-  gl.useProgram(program);
-  gl.bindBuffer(gl.ARRAY_BUFFER, gl.createBuffer());
-  gl.bufferData(gl.ARRAY_BUFFER, new Float32Array([-1, -1, 1, -1, -1, 1, 1, 1]), gl.STATIC_DRAW);
-  const corner = gl.getAttribLocation(program, "corner");
-  gl.enableVertexAttribArray(corner);
-  gl.vertexAttribPointer(corner, 2, gl.FLOAT, false, 0, 0);
-  gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
-  const uniform = (name) => gl.getUniformLocation(program, name);
-  const texture = (unit, name) => {
-    const t = gl.createTexture();
-    gl.activeTexture(gl.TEXTURE0 + unit);
-    gl.bindTexture(gl.TEXTURE_2D, t);
-    for (const p of [gl.TEXTURE_MIN_FILTER, gl.TEXTURE_MAG_FILTER]) gl.texParameteri(gl.TEXTURE_2D, p, gl.NEAREST);
-    gl.uniform1i(uniform(name), unit);
-    return t;
-  };
-  const textures = { shown: texture(0, "shown"), under: texture(1, "under") };
-  const loaded = { shown: null, under: null };
-  const upload = (unit, name, picture) => {
-    if (loaded[name] === picture) return;
-    loaded[name] = picture;
-    gl.activeTexture(gl.TEXTURE0 + unit);
-    gl.bindTexture(gl.TEXTURE_2D, textures[name]);
-    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGB32F, picture.width, picture.height, 0, gl.RGB, gl.FLOAT, picture.linear);
-  };
-  return {
-    kind: "webgl2",
-    draw(shown, under, curve, white, split) {
-      upload(0, "shown", shown);
-      upload(1, "under", under || shown);
-      gl.viewport(0, 0, shown.width, shown.height);
-      gl.uniform1f(uniform("gain"), 1 / white);
-      gl.uniform1i(uniform("curve"), CURVE_NUMBERS[curve]);
-      gl.uniform1i(uniform("split"), split);
-      gl.uniform1i(uniform("height"), shown.height);
-      gl.drawArrays(gl.TRIANGLE_STRIP, 0, 4);
-    },
-    finish() {
-      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
-    },
-    pixels() {
-      const data = new Uint8Array(canvas.width * canvas.height * 4);
-      gl.readPixels(0, 0, canvas.width, canvas.height, gl.RGBA, gl.UNSIGNED_BYTE, data);
-      // Rows come bottom first.
-      const row = canvas.width * 4;
-      const flipped = new Uint8Array(data.length);
-      for (let y = 0; y < canvas.height; y++) flipped.set(data.subarray(y * row, (y + 1) * row), (canvas.height - 1 - y) * row);
-      return flipped;
-    },
-  };
-}
-
-function canvasDisplay(canvas) {
-  const context = canvas.getContext("2d");
-  return {
-    kind: "2d",
-    draw(shown, under, curve, white, split) {
-      const { width, height } = shown;
-      const picture = context.createImageData(width, height);
-      const data = picture.data;
-      const { table, perUnit } = codeTable(curve);
-      const gain = perUnit / white;
-      for (let y = 0; y < height; y++) {
-        for (let x = 0; x < width; x++) {
-          const i = y * width + x;
-          const source = x < split ? under.linear : shown.linear;
-          for (let c = 0; c < 3; c++) {
-            const k = source[3 * i + c] * gain;
-            data[4 * i + c] = k > 0 ? (k < CODE_STEPS ? table[Math.round(k)] : 255) : 0;
-          }
-          data[4 * i + 3] = 255;
-        }
-      }
-      context.putImageData(picture, 0, 0);
-    },
-    finish() {},
-    pixels() {
-      return context.getImageData(0, 0, canvas.width, canvas.height).data;
-    },
-  };
 }
 
 function draw() {
@@ -388,10 +207,6 @@ async function selfCheck(signal) {
   document.body.dataset.displayMismatch = String(worst);
 }
 
-function schedule() {
-  clearTimeout(state.timer);
-  state.timer = setTimeout(render, 120);
-}
 
 function placeSplit() {
   const canvas = $("canvas");
@@ -414,6 +229,7 @@ async function updateCommand() {
 }
 
 async function start() {
+  state.render = render;
   const [presets, images, schema] = await Promise.all([
     fetch("/api/presets").then((r) => r.json()),
     fetch("/api/images").then((r) => r.json()),
@@ -566,146 +382,6 @@ async function exportFull() {
   $("cancel-export").hidden = true;
 }
 
-// The camera as panels: the library's schema gives each parameter its
-// control, unit and range; the server reads the TOML into a table and
-// writes the table back, so the panels and the TOML stay one camera.
-async function readConfig() {
-  const reply = await fetch("/api/config/read", { method: "POST", body: $("config").value });
-  const table = await reply.json();
-  if (!reply.ok) { showError(table.error); return false; }
-  const effects = table.effect || [];
-  delete table.effect;
-  state.top = table;
-  state.effects = effects.map((t) => ({ table: t, on: true }));
-  buildPanels();
-  return true;
-}
 
-async function writeConfig() {
-  const table = { ...state.top, effect: state.effects.filter((e) => e.on).map((e) => e.table) };
-  const reply = await fetch("/api/config/write", {
-    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(table),
-  });
-  const text = await reply.text();
-  if (!reply.ok) { showError(JSON.parse(text).error); return; }
-  $("config").value = text;
-  buildPanels();
-  schedule();
-}
-
-function control(parameter, table, changed) {
-  const label = document.createElement("label");
-  label.title = `${parameter.about} (${parameter.allowed})`;
-  label.dataset.param = parameter.name;
-  const name = document.createElement("span");
-  name.textContent = parameter.name;
-  const input = document.createElement("input");
-  const value = table[parameter.name];
-  const fallback = parameter.default === null ? "required" : String(parameter.default);
-  if (parameter.kind === "flag") {
-    input.type = "checkbox";
-    input.checked = value === undefined ? Boolean(parameter.default) : value;
-    input.addEventListener("change", () => { table[parameter.name] = input.checked; changed(); });
-  } else if (parameter.kind === "length") {
-    input.type = "text";
-    input.value = value === undefined ? "" : value;
-    input.placeholder = fallback;
-    input.addEventListener("change", () => {
-      if (input.value.trim() === "") delete table[parameter.name]; else table[parameter.name] = input.value.trim();
-      changed();
-    });
-  } else {
-    input.type = "number";
-    input.step = parameter.kind === "whole" ? "1" : "any";
-    if (parameter.low && parameter.low.closed) input.min = parameter.low.value;
-    if (parameter.high && parameter.high.closed) input.max = parameter.high.value;
-    input.value = value === undefined ? "" : value;
-    input.placeholder = fallback;
-    input.addEventListener("change", () => {
-      if (input.value === "") delete table[parameter.name];
-      else table[parameter.name] = parameter.kind === "whole" ? Math.round(Number(input.value)) : Number(input.value);
-      changed();
-    });
-  }
-  const unit = document.createElement("span");
-  unit.className = "unit";
-  unit.textContent = parameter.unit;
-  label.append(name, input, unit);
-  return label;
-}
-
-function buildPanels() {
-  const panels = $("panels");
-  panels.replaceChildren();
-  const fieldset = (title, extra) => {
-    const set = document.createElement("fieldset");
-    const legend = document.createElement("legend");
-    const name = document.createElement("b");
-    name.textContent = title;
-    legend.append(name, ...extra);
-    set.append(legend);
-    panels.append(set);
-    return set;
-  };
-  const camera = fieldset("camera", []);
-  state.top.camera = state.top.camera || {};
-  for (const p of state.schema.camera) camera.append(control(p, state.top.camera, writeConfig));
-  camera.append(control({ name: "seed", kind: "whole", low: { value: 0, closed: true }, high: null,
-    default: 1, unit: "", allowed: "a whole number from 0", about: "the seed of the rays' randomness" },
-  state.top, writeConfig));
-  state.effects.forEach((effect, i) => {
-    const button = (text, title, act) => {
-      const b = document.createElement("button");
-      b.textContent = text;
-      b.title = title;
-      b.addEventListener("click", (e) => { e.preventDefault(); act(); writeConfig(); });
-      return b;
-    };
-    const on = document.createElement("input");
-    on.type = "checkbox";
-    on.checked = effect.on;
-    on.title = "on or off (an effect off stays here, out of the camera)";
-    on.addEventListener("change", () => { effect.on = on.checked; writeConfig(); });
-    const move = (d) => () => {
-      const j = i + d;
-      if (j < 0 || j >= state.effects.length) return;
-      [state.effects[i], state.effects[j]] = [state.effects[j], state.effects[i]];
-    };
-    const set = fieldset(effect.table.type, [on,
-      button("↑", "earlier in the chain", move(-1)), button("↓", "later in the chain", move(1)),
-      button("✕", "remove", () => state.effects.splice(i, 1))]);
-    set.classList.toggle("off", !effect.on);
-    const kind = state.schema.effects.find((e) => e.type === effect.table.type);
-    for (const p of kind ? kind.parameters : []) set.append(control(p, effect.table, writeConfig));
-    // Sub-tables (an aperture's star-filter families): each with its
-    // controls and a remove, and one to add.
-    for (const [name, parameters] of Object.entries((kind && kind.tables) || {})) {
-      const families = effect.table[name] || [];
-      families.forEach((family, f) => {
-        const sub = document.createElement("fieldset");
-        const legend = document.createElement("legend");
-        legend.textContent = `${name} ${f + 1} `;
-        legend.append(button("✕", `remove this ${name} family`, () => {
-          families.splice(f, 1);
-          if (!families.length) delete effect.table[name];
-        }));
-        sub.append(legend);
-        for (const p of parameters) sub.append(control(p, family, writeConfig));
-        set.append(sub);
-      });
-      set.append(button(`+ ${name}`, `add a ${name} family of lines`, () => {
-        effect.table[name] = families.concat([{ angle_deg: 0, spacing_um: 20, width_um: 10 }]);
-      }));
-    }
-  });
-}
-
-function choosePreset() {
-  const preset = state.presets.find((p) => p.name === $("preset").value);
-  $("config").value = preset.toml;
-  $("preset-info").textContent = preset.description;
-  readConfig();
-  schedule();
-}
 
 start();

@@ -57,7 +57,13 @@ pub use roots::Roots;
 pub const MAX_BODY: usize = 1 << 20;
 
 const INDEX: &str = include_str!("../assets/index.html");
-const SCRIPT: &str = include_str!("../assets/app.js");
+/// The page's ES modules: the entry and what it imports.
+const SCRIPTS: [(&str, &str); 4] = [
+    ("/app.js", include_str!("../assets/app.js")),
+    ("/common.js", include_str!("../assets/common.js")),
+    ("/display.js", include_str!("../assets/display.js")),
+    ("/panels.js", include_str!("../assets/panels.js")),
+];
 const STYLE: &str = include_str!("../assets/app.css");
 
 /// What the routes share: who may drive the studio, previews and
@@ -85,14 +91,17 @@ impl Studio {
 
 /// The studio's routes.
 pub fn router(studio: Studio) -> Router {
-    Router::new()
+    let mut router = Router::new();
+    for (path, script) in SCRIPTS {
+        router = router.route(
+            path,
+            get(move || async move { page(script, "text/javascript; charset=utf-8") }),
+        );
+    }
+    router
         .route(
             "/",
             get(|| async { page(INDEX, "text/html; charset=utf-8") }),
-        )
-        .route(
-            "/app.js",
-            get(|| async { page(SCRIPT, "text/javascript; charset=utf-8") }),
         )
         .route(
             "/app.css",

@@ -162,9 +162,23 @@ fn the_page_presets_and_images_are_served() {
     let page = http(addr, "GET", "/", "");
     assert_eq!(page.status, 200);
     assert!(String::from_utf8_lossy(&page.body).contains("aureole"));
-    for asset in ["/app.js", "/app.css"] {
-        assert_eq!(http(addr, "GET", asset, "").status, 200, "{asset}");
+    // The page's modules: each one imported is served.
+    let mut scripts = vec!["/app.js".to_string()];
+    let mut at = 0;
+    while let Some(script) = scripts.get(at).cloned() {
+        let reply = http(addr, "GET", &script, "");
+        assert_eq!(reply.status, 200, "{script}");
+        let text = String::from_utf8_lossy(&reply.body).to_string();
+        for import in text.split("from \"./").skip(1) {
+            let name = format!("/{}", import.split('"').next().unwrap());
+            if !scripts.contains(&name) {
+                scripts.push(name);
+            }
+        }
+        at += 1;
     }
+    assert!(scripts.len() >= 4, "{scripts:?}");
+    assert_eq!(http(addr, "GET", "/app.css", "").status, 200);
     let presets = http(addr, "GET", "/api/presets", "").json();
     let names: Vec<&str> = presets
         .as_array()
