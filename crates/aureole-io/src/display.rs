@@ -147,12 +147,6 @@ pub struct Picture {
 }
 
 impl Picture {
-    /// The picture as an 8-bit PNG in memory, compressed for speed (a
-    /// preview); the error says why it could not be encoded.
-    pub fn preview_png(&self) -> Result<Vec<u8>, String> {
-        crate::formats::picture::preview_png((self.width, self.height), &self.eight_bit())
-    }
-
     /// Its samples as 8-bit codes (RGB, row-major), as PNG and JPEG store
     /// them.
     pub fn eight_bit(&self) -> Vec<u8> {

@@ -16,9 +16,7 @@ use crate::read::read_image;
 /// Decades of weight the picture spans, from its brightest spread pixel down.
 pub const PICTURE_DECADES: f64 = 6.0;
 
-/// The EXR attribute that records the width of the images a kernel was
-/// built for: its µm and mm became pixels at that pitch.
-pub const IMAGE_WIDTH_ATTRIBUTE: &str = "aureoleImageWidth";
+pub use crate::formats::IMAGE_WIDTH_ATTRIBUTE;
 
 /// Writes `kernel` to `path` in the format its extension names: its planes
 /// as float32 (`.pfm`: `Pf` or `PF`; `.exr`: `Y` or `R`, `G`, `B`,

@@ -9,6 +9,7 @@ use aureole::memory::format_bytes;
 use crate::compression::Compression;
 use crate::error::{Error, Result};
 use crate::formats::{by_content, readable, Original};
+pub use crate::formats::{Choice, Shape};
 use crate::limits::Limits;
 
 /// A decoded file and what the user should know about how it was read.
@@ -29,37 +30,6 @@ pub struct Loaded {
     /// The rest of the file (an EXR's other layers, parts, windows and
     /// attributes), for writing the result back into it.
     pub original: Original,
-}
-
-/// Which of a file's layers and parts to read (OpenEXR); by default the
-/// beauty, as compositors find it.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Choice {
-    /// The layer, by its channel-name prefix (`ViewLayer.Combined` for
-    /// `ViewLayer.Combined.R`, …).
-    pub layer: Option<String>,
-    /// The part, by its index (from 0) or name.
-    pub part: Option<String>,
-}
-
-impl Choice {
-    /// Whether anything is chosen.
-    pub fn is_some(&self) -> bool {
-        self.layer.is_some() || self.part.is_some()
-    }
-}
-
-/// What a file will decode to, as its header declares it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Shape {
-    /// Width in pixels.
-    pub width: usize,
-    /// Height in pixels.
-    pub height: usize,
-    /// Colour planes: 1 (luminance) or 3 (RGB).
-    pub planes: usize,
-    /// Whether it has alpha.
-    pub alpha: bool,
 }
 
 /// The shape of the image at `path` (the layer `choice` names), from its
@@ -208,27 +178,5 @@ pub fn decode_image_with(
             &head[..head.len().min(8)],
             readable()
         )),
-    }
-}
-
-/// A decoder's message in the user's words: most of the ways a file can be
-/// cut short surface as one of these.
-pub(crate) fn explain(format: &str, message: String) -> String {
-    // Some decoders' messages span lines; ours are one line each.
-    let message = message.split_whitespace().collect::<Vec<_>>().join(" ");
-    let lower = message.to_lowercase();
-    let truncated = [
-        "missing bytes",
-        "fill whole buffer",
-        "unexpected end",
-        "unexpected eof",
-        "eof in header",
-    ]
-    .iter()
-    .any(|m| lower.contains(m));
-    if truncated {
-        format!("cannot read {format}: the file ends early (truncated?): {message}")
-    } else {
-        format!("cannot read {format}: {message}")
     }
 }

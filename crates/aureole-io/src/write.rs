@@ -153,6 +153,12 @@ pub fn write_linear_into(
     )
 }
 
+/// `picture` as an 8-bit PNG in memory, compressed for speed (a preview
+/// sent to a browser); the error says why it could not be encoded.
+pub fn preview_png(picture: &Picture) -> std::result::Result<Vec<u8>, String> {
+    crate::formats::picture::preview_png((picture.width, picture.height), &picture.eight_bit())
+}
+
 /// Writes `picture` as PNG, JPEG or TIFF by the extension of `path`.
 pub fn write_picture(path: &Path, picture: &Picture, depth: Depth) -> Result<()> {
     let picture_format = |f: &'static Format| match f.encode {

@@ -17,7 +17,6 @@ use crate::compression::Compression;
 use crate::display::Depth;
 use crate::error::Result;
 use crate::limits::Limits;
-use crate::read::Choice;
 
 /// What a format holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -382,4 +381,61 @@ fn sorted_depths(format: &Format) -> Vec<Depth> {
     let mut depths = format.depths.to_vec();
     depths.sort_by_key(|d| d.bits());
     depths
+}
+
+/// The EXR attribute that records the width of the images a kernel was
+/// built for: its µm and mm became pixels at that pitch.
+pub const IMAGE_WIDTH_ATTRIBUTE: &str = "aureoleImageWidth";
+
+/// Which of a file's layers and parts to read (OpenEXR); by default the
+/// beauty, as compositors find it.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Choice {
+    /// The layer, by its channel-name prefix (`ViewLayer.Combined` for
+    /// `ViewLayer.Combined.R`, …).
+    pub layer: Option<String>,
+    /// The part, by its index (from 0) or name.
+    pub part: Option<String>,
+}
+
+impl Choice {
+    /// Whether anything is chosen.
+    pub fn is_some(&self) -> bool {
+        self.layer.is_some() || self.part.is_some()
+    }
+}
+
+/// What a file will decode to, as its header declares it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shape {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Colour planes: 1 (luminance) or 3 (RGB).
+    pub planes: usize,
+    /// Whether it has alpha.
+    pub alpha: bool,
+}
+
+/// A decoder's message in the user's words: most of the ways a file can be
+/// cut short surface as one of these.
+pub(crate) fn explain(format: &str, message: String) -> String {
+    // Some decoders' messages span lines; ours are one line each.
+    let message = message.split_whitespace().collect::<Vec<_>>().join(" ");
+    let lower = message.to_lowercase();
+    let truncated = [
+        "missing bytes",
+        "fill whole buffer",
+        "unexpected end",
+        "unexpected eof",
+        "eof in header",
+    ]
+    .iter()
+    .any(|m| lower.contains(m));
+    if truncated {
+        format!("cannot read {format}: the file ends early (truncated?): {message}")
+    } else {
+        format!("cannot read {format}: {message}")
+    }
 }

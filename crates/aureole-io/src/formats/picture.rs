@@ -14,8 +14,8 @@ use super::Decoded;
 use crate::atomic::write_atomic;
 use crate::display::{srgb_to_linear, Depth, Picture};
 use crate::error::{Error, Result};
+use crate::formats::explain;
 use crate::limits::Limits;
-use crate::read::explain;
 
 /// Decodes what the `image` crate reads: Radiance RGBE, and PNG, JPEG and
 /// TIFF. 8/16-bit files are display images, decoded from sRGB to linear;

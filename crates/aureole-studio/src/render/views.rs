@@ -75,5 +75,5 @@ pub(super) fn linear_bytes(image: &Image, scale: f64) -> Vec<u8> {
 
 /// A picture as the PNG a page shows.
 pub(super) fn png(picture: &Picture) -> Result<Vec<u8>, StudioError> {
-    picture.preview_png().map_err(StudioError::Internal)
+    aureole_io::write::preview_png(picture).map_err(StudioError::Internal)
 }

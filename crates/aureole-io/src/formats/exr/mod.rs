@@ -23,8 +23,8 @@ use super::{Decoded, LinearPlanes, Note, Samples, HALF_MAX};
 use crate::atomic::write_atomic;
 use crate::compression::Compression;
 use crate::error::{Error, Result};
+use crate::formats::{explain, Choice, Shape};
 use crate::limits::Limits;
-use crate::read::{explain, Choice, Shape};
 
 mod b44;
 mod chroma;
@@ -88,7 +88,7 @@ impl Kept {
     /// The image width a kernel file records.
     pub(crate) fn recorded_image_width(&self) -> Option<usize> {
         // A custom attribute may be read as the file's or as its part's.
-        let key = x::Text::from(crate::kernel::IMAGE_WIDTH_ATTRIBUTE);
+        let key = x::Text::from(crate::formats::IMAGE_WIDTH_ATTRIBUTE);
         let part = self.image.layer_data.get(self.part);
         let value = self
             .image
@@ -1322,7 +1322,7 @@ fn new_image(planes: &LinearPlanes, clamped: &mut usize) -> FlatImage {
             });
     if let Some(width) = planes.image_width.and_then(|w| i32::try_from(w).ok()) {
         image.attributes.other.insert(
-            crate::kernel::IMAGE_WIDTH_ATTRIBUTE.into(),
+            crate::formats::IMAGE_WIDTH_ATTRIBUTE.into(),
             exr::meta::attribute::AttributeValue::I32(width),
         );
     }
