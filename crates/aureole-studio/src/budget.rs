@@ -1,7 +1,9 @@
 //! One memory budget for every render and export of a studio: each takes
 //! its estimated peak from the budget before its large buffers, and gives
 //! it back when it ends, so that six exports started together run as the
-//! budget allows instead of all at once.
+//! budget allows instead of all at once. What is kept between renders (a
+//! session's kernel and spectra) holds its lease too, and is given up when
+//! another job would otherwise wait ([`Budget::on_shortage`]).
 
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
@@ -20,7 +22,11 @@ pub struct Budget {
     total: u64,
     used: Mutex<u64>,
     freed: Condvar,
+    /// Gives back what is kept only to be reused, when a job must wait.
+    reclaim: Mutex<Option<Reclaim>>,
 }
+
+type Reclaim = Box<dyn Fn() + Send + Sync>;
 
 /// Bytes taken from a [`Budget`], given back when dropped.
 pub struct Lease {
@@ -43,7 +49,14 @@ impl Budget {
             total,
             used: Mutex::new(0),
             freed: Condvar::new(),
+            reclaim: Mutex::new(None),
         })
+    }
+
+    /// `reclaim` is called when a job would have to wait, to give back
+    /// leases held only for reuse (it must not wait for the budget).
+    pub fn on_shortage(&self, reclaim: impl Fn() + Send + Sync + 'static) {
+        *locked(&self.reclaim) = Some(Box::new(reclaim));
     }
 
     /// The bytes of the whole budget.
@@ -65,6 +78,12 @@ impl Budget {
     ) -> Result<Lease, StudioError> {
         let bytes = bytes.min(self.total);
         let start = Instant::now();
+        if *locked(&self.used) + bytes > self.total {
+            // Outside the lock: what it gives back takes the lock to return.
+            if let Some(reclaim) = locked(&self.reclaim).as_ref() {
+                reclaim();
+            }
+        }
         let mut used = locked(&self.used);
         let mut waiting = Some(waiting);
         while *used + bytes > self.total {
@@ -117,6 +136,23 @@ mod tests {
         drop(first);
         assert_eq!(waiting.join().unwrap().unwrap(), 40);
         assert_eq!(*locked(&budget.used), 0);
+    }
+
+    #[test]
+    fn a_shortage_gives_back_what_is_kept_for_reuse() {
+        let budget = Budget::new(100);
+        let kept = Arc::new(Mutex::new(Some(
+            budget.lease(80, &Cancel::new(), None, || {}).unwrap(),
+        )));
+        let held = kept.clone();
+        budget.on_shortage(move || drop(locked(&held).take()));
+        // Fits beside it: nothing given back.
+        let small = budget.lease(20, &Cancel::new(), None, || {}).unwrap();
+        assert!(locked(&kept).is_some());
+        drop(small);
+        let large = budget.lease(50, &Cancel::new(), Some(Duration::from_millis(200)), || {});
+        assert_eq!(large.unwrap().bytes, 50);
+        assert!(locked(&kept).is_none());
     }
 
     #[test]

@@ -81,9 +81,18 @@ impl Studio {
     /// `access` lets in.
     pub fn new(roots: Roots, memory_limit: u64, access: Access) -> Studio {
         let budget = budget::Budget::new(memory_limit);
+        let renderer = Arc::new(Renderer::new(roots.clone(), budget.clone()));
+        // A job that would wait takes the memory of the kept preview
+        // session first.
+        let kept = Arc::downgrade(&renderer);
+        budget.on_shortage(move || {
+            if let Some(renderer) = kept.upgrade() {
+                renderer.release_kept();
+            }
+        });
         Studio {
             access,
-            renderer: Arc::new(Renderer::new(roots.clone(), budget.clone())),
+            renderer,
             exports: Arc::new(export::Exports::new(roots, budget)),
         }
     }

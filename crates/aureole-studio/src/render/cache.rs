@@ -8,6 +8,7 @@ use aureole::{Frame, FrameOptions, Image, Session};
 use aureole_io::limits::Limits;
 
 use super::{Renderer, Summary, DEMO};
+use crate::budget::Lease;
 use crate::error::StudioError;
 use crate::locked;
 
@@ -31,12 +32,22 @@ pub(super) struct Preview {
 pub(super) struct KeptSession {
     pub key: SessionKey,
     pub session: Session,
+    /// Its memory, counted in the budget while it is kept.
+    pub _lease: Lease,
 }
 
 /// A session's config, preview size and kernel cap.
 pub(super) type SessionKey = ((String, (usize, usize)), Option<(usize, usize)>);
 
 impl Renderer {
+    /// Gives the kept session's memory back to the budget, unless a render
+    /// is using it.
+    pub fn release_kept(&self) {
+        if let Ok(mut kept) = self.kept.try_lock() {
+            *kept = None;
+        }
+    }
+
     /// The full image `name` names, read once while it does not change.
     pub(super) fn load(&self, name: &str) -> Result<(Arc<Frame>, Summary), StudioError> {
         let (path, modified) = if name == DEMO {

@@ -349,24 +349,23 @@ impl Renderer {
                 });
                 let key = (key, max_extent);
                 if kept.as_ref().is_none_or(|c| c.key != key) {
+                    // The last session's memory back before this one's.
+                    *kept = None;
                     let config = parse_config(&request.config)?.with_pixels_scaled(factor);
+                    let bytes = needs(&config, &preview, max_extent)?;
+                    let lease = self.budget.lease(bytes, &cancel, Some(PATIENCE), || {})?;
                     *kept = Some(KeptSession {
                         key,
                         session: Session::new(config)
                             .with_memory_limit(self.budget.total())
                             .with_max_extent(max_extent),
+                        _lease: lease,
                     });
                 }
                 let Some(kept) = kept.as_mut() else {
                     return Err(StudioError::Internal("no session".into()));
                 };
                 kept.session.set_cancel_token(cancel.clone());
-                let config = kept
-                    .session
-                    .config()
-                    .ok_or_else(|| StudioError::Internal("no session".into()))?;
-                let bytes = needs(config, &preview, max_extent)?;
-                let _lease = self.budget.lease(bytes, &cancel, Some(PATIENCE), || {})?;
                 let options = ApplyOptions {
                     threshold: request.threshold,
                     knee: request.knee,

@@ -306,8 +306,21 @@ impl Model for Aperture {
     /// The pattern in f64 beside its f32 planes: measured, `psf` of a 4K
     /// lens kernel peaks at 3 planes' bytes in one wavelength and 7 over the
     /// spectrum.
+    ///
+    /// Through a filter (kernel/diffraction/orders.rs) come, beside the
+    /// pattern: the filtered planes in f64 (2 plane bytes each), and for the
+    /// plane at work its comb of orders and the light they move, in f64 (4),
+    /// and the f32 convolution that spreads the comb: the comb, the result
+    /// and the spectrum with its buffers (about 4).
     fn building_bytes(&self, plane_bytes: u64) -> u64 {
-        plane_bytes * (2 * self.planes() as u64 + 1)
+        let planes = self.planes() as u64;
+        let pattern = plane_bytes * (2 * planes + 1);
+        let filter = if self.filters.is_empty() {
+            0
+        } else {
+            plane_bytes * (2 * planes + 8)
+        };
+        pattern + filter
     }
 }
 
