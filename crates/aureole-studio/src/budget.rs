@@ -45,6 +45,7 @@ impl Drop for Lease {
 impl Budget {
     /// A budget of `total` bytes.
     pub fn new(total: u64) -> Arc<Budget> {
+        return_freed_buffers();
         Arc::new(Budget {
             total,
             used: Mutex::new(0),
@@ -110,6 +111,27 @@ impl Budget {
             budget: self.clone(),
             bytes,
         })
+    }
+}
+
+/// Makes the allocator give every freed buffer of 1 MiB or more back to
+/// the system. glibc otherwise raises its mmap threshold to the largest
+/// block freed (up to 32 MiB), after which a frame's planes come from the
+/// heaps of the threads that ran them and stay there once freed: measured
+/// by the HTTP fuzz test, the process then held up to 1 GB under a 512 MB
+/// budget of live buffers, and 0.27–0.51 GB with the threshold fixed.
+fn return_freed_buffers() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        static ONCE: std::sync::Once = std::sync::Once::new();
+        ONCE.call_once(|| {
+            #[allow(unsafe_code)]
+            // SAFETY: mallopt only sets an allocator parameter; it is
+            // called once, and glibc serialises it with allocations.
+            unsafe {
+                libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
+            }
+        });
     }
 }
 
