@@ -62,12 +62,10 @@ pub fn check_output(output: &Path, input: Option<&Path>) -> Result<()> {
 /// file then says what is wrong with it.
 pub fn check_header(path: &Path, choice: &Choice, limits: Limits, session: &Session) -> Result<()> {
     if let Some(shape) = crate::read::probe(path, limits, choice)? {
-        session
-            .check_shape(shape.width, shape.height, shape.planes, shape.alpha)
-            .map_err(|error| Error::Content {
-                path: path.to_path_buf(),
-                error,
-            })?;
+        session.check_shape(shape).map_err(|error| Error::Content {
+            path: path.to_path_buf(),
+            error,
+        })?;
     }
     Ok(())
 }

@@ -9,20 +9,20 @@ use pyo3::types::PyDict;
 
 /// How an array's last axis maps to planes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Shape {
+pub enum ArrayShape {
     /// (H, W): one luminance plane.
     Flat,
     /// (H, W, c) with c = 1, 3 or 4.
     Channels(usize),
 }
 
-impl Shape {
+impl ArrayShape {
     /// The layout name the metadata uses.
     pub fn layout(self) -> &'static str {
         match self {
-            Shape::Flat | Shape::Channels(1) => "luminance",
-            Shape::Channels(3) => "rgb",
-            Shape::Channels(_) => "rgba",
+            ArrayShape::Flat | ArrayShape::Channels(1) => "luminance",
+            ArrayShape::Channels(3) => "rgb",
+            ArrayShape::Channels(_) => "rgba",
         }
     }
 }
@@ -54,11 +54,11 @@ pub fn float32<'py>(image: &Bound<'py, PyAny>) -> PyResult<PyReadonlyArrayDyn<'p
 
 /// The planes of a C-contiguous float32 array, read straight from its
 /// buffer: the split into planes is the only copy.
-pub fn to_image(array: &PyReadonlyArrayDyn<'_, f32>) -> PyResult<(Image, Shape)> {
+pub fn to_image(array: &PyReadonlyArrayDyn<'_, f32>) -> PyResult<(Image, ArrayShape)> {
     let dims = array.shape().to_vec();
     let (height, width, shape) = match dims.as_slice() {
-        [h, w] => (*h, *w, Shape::Flat),
-        [h, w, c @ (1 | 3 | 4)] => (*h, *w, Shape::Channels(*c)),
+        [h, w] => (*h, *w, ArrayShape::Flat),
+        [h, w, c @ (1 | 3 | 4)] => (*h, *w, ArrayShape::Channels(*c)),
         other => {
             return Err(PyValueError::new_err(format!(
                 "image: shape {other:?} is not allowed: (H, W), or (H, W, C) with C = 1, 3 or 4"
@@ -79,8 +79,8 @@ pub fn to_image(array: &PyReadonlyArrayDyn<'_, f32>) -> PyResult<(Image, Shape)>
         ))
     })?;
     let channels = match shape {
-        Shape::Flat => 1,
-        Shape::Channels(c) => c,
+        ArrayShape::Flat => 1,
+        ArrayShape::Channels(c) => c,
     };
     let plane = |c: usize| -> Vec<f32> { data.iter().skip(c).step_by(channels).copied().collect() };
     let (layout, planes) = if channels >= 3 {
@@ -101,10 +101,14 @@ pub fn to_image(array: &PyReadonlyArrayDyn<'_, f32>) -> PyResult<(Image, Shape)>
 }
 
 /// `image` as a float32 array of `shape` (alpha back in place).
-pub fn to_array<'py>(py: Python<'py>, image: &Image, shape: Shape) -> PyResult<Bound<'py, PyAny>> {
+pub fn to_array<'py>(
+    py: Python<'py>,
+    image: &Image,
+    shape: ArrayShape,
+) -> PyResult<Bound<'py, PyAny>> {
     let channels = match shape {
-        Shape::Flat => 1,
-        Shape::Channels(c) => c,
+        ArrayShape::Flat => 1,
+        ArrayShape::Channels(c) => c,
     };
     let n = image.width * image.height;
     let mut data = Vec::with_capacity(n * channels);
@@ -122,18 +126,18 @@ pub fn to_array<'py>(py: Python<'py>, image: &Image, shape: Shape) -> PyResult<B
         }
     }
     let dims: Vec<usize> = match shape {
-        Shape::Flat => vec![image.height, image.width],
-        Shape::Channels(c) => vec![image.height, image.width, c],
+        ArrayShape::Flat => vec![image.height, image.width],
+        ArrayShape::Channels(c) => vec![image.height, image.width, c],
     };
     Ok(PyArray1::from_vec(py, data).reshape(dims)?.into_any())
 }
 
 /// A file's image as an array: (H, W) for luminance, (H, W, 3) for RGB,
 /// (H, W, 4) with alpha.
-pub fn shape_of(image: &Image) -> Shape {
+pub fn shape_of(image: &Image) -> ArrayShape {
     match (image.layout, image.alpha.is_some()) {
-        (_, true) => Shape::Channels(4),
-        (Layout::Rgb, false) => Shape::Channels(3),
-        (Layout::Luminance, false) => Shape::Flat,
+        (_, true) => ArrayShape::Channels(4),
+        (Layout::Rgb, false) => ArrayShape::Channels(3),
+        (Layout::Luminance, false) => ArrayShape::Flat,
     }
 }

@@ -91,6 +91,32 @@ pub struct Image {
     pub primaries: Option<Primaries>,
 }
 
+/// What a frame is made of, from its pixels or a file's header alone:
+/// enough to know what a run on it needs before it is decoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shape {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Colour planes: 1 (luminance) or 3 (RGB).
+    pub planes: usize,
+    /// Whether it has alpha.
+    pub alpha: bool,
+}
+
+impl Shape {
+    /// The shape of `image`.
+    pub fn of(image: &Image) -> Shape {
+        Shape {
+            width: image.width,
+            height: image.height,
+            planes: image.planes.len(),
+            alpha: image.alpha.is_some(),
+        }
+    }
+}
+
 /// Samples that a luminance image must not hold (NaN or infinite, or
 /// negative): how many and where the first one is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -87,7 +87,7 @@ pub use camera::Camera;
 pub use config::{Config, ConfigFile};
 pub use control::{Cancel, Control};
 pub use error::{Error, Result};
-pub use image::{Image, Layout};
+pub use image::{Image, Layout, Shape};
 pub use kernel::{Extent, Kernel};
 pub use optics::{Aperture, Bloom, Corona, Effect, Filter, Vos};
 pub use pipeline::{

@@ -4,7 +4,7 @@
 
 use aureole::{
     presets, ApplyOptions, Config, Error, Frame, FrameOptions, Image, Layout, Method, ScaleSource,
-    Session, Stage,
+    Session, Shape, Stage,
 };
 
 fn config(preset: &str) -> Config {
@@ -286,7 +286,12 @@ fn a_kernel_given_survives_a_cancelled_plan() {
 fn a_frame_too_large_for_a_full_kernel_is_told_from_its_shape_and_runs_capped() {
     let limit = 8u64 << 30;
     let full = Session::new(config("camera-f8-7blade")).with_memory_limit(limit);
-    match full.check_shape(12_000, 8_000, 3, false) {
+    match full.check_shape(Shape {
+        width: 12_000,
+        height: 8_000,
+        planes: 3,
+        alpha: false,
+    }) {
         Err(Error::KernelSize { width, height, .. }) => {
             assert_eq!((width, height), (23_999, 15_999))
         }
@@ -296,11 +301,23 @@ fn a_frame_too_large_for_a_full_kernel_is_told_from_its_shape_and_runs_capped() 
     let capped = Session::new(config("camera-f8-7blade"))
         .with_memory_limit(2 * limit)
         .with_max_extent(Some((101, 101)));
-    capped.check_shape(12_000, 8_000, 3, false).unwrap();
+    capped
+        .check_shape(Shape {
+            width: 12_000,
+            height: 8_000,
+            planes: 3,
+            alpha: false,
+        })
+        .unwrap();
     // A frame that fits a full kernel but not the memory is refused with
     // the largest kernel that would fit.
     let small = Session::new(config("camera-f8-7blade")).with_memory_limit(1 << 30);
-    match small.check_shape(3840, 2160, 3, false) {
+    match small.check_shape(Shape {
+        width: 3840,
+        height: 2160,
+        planes: 3,
+        alpha: false,
+    }) {
         Err(Error::Memory { fits: Some(_), .. }) => {}
         other => panic!("{other:?}"),
     }

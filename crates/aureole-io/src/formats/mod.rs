@@ -405,18 +405,7 @@ impl Choice {
     }
 }
 
-/// What a file will decode to, as its header declares it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Shape {
-    /// Width in pixels.
-    pub width: usize,
-    /// Height in pixels.
-    pub height: usize,
-    /// Colour planes: 1 (luminance) or 3 (RGB).
-    pub planes: usize,
-    /// Whether it has alpha.
-    pub alpha: bool,
-}
+pub use aureole::image::Shape;
 
 /// A decoder's message in the user's words: most of the ways a file can be
 /// cut short surface as one of these.

@@ -8,7 +8,7 @@ use super::Extent;
 use crate::control::{for_each, for_each_row, Control};
 use crate::error::Result;
 use crate::image::sum_f64;
-use crate::optics::shape::{Grid, SpreadShape};
+use crate::optics::shape::{SpreadShape, Supersampling};
 
 /// Pixels of a row rasterised together where f has no mirror symmetry.
 const PIECE: usize = 256;
@@ -102,7 +102,7 @@ fn pixel_mean(shape: &dyn SpreadShape, x: f64, y: f64, centre: bool) -> f64 {
         // is undefined.
         let m = shape.grid(x, y);
         let even = |n: u32| n.max(16) + n.max(16) % 2;
-        let grid = Grid {
+        let grid = Supersampling {
             x: even(m.x),
             y: even(m.y),
         };
@@ -116,7 +116,7 @@ fn pixel_mean(shape: &dyn SpreadShape, x: f64, y: f64, centre: bool) -> f64 {
 
 /// The mean of f over the pixel centred at (x, y), by the midpoint rule on
 /// `grid`.
-fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, grid: Grid) -> f64 {
+fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, grid: Supersampling) -> f64 {
     if grid.x <= 1 && grid.y <= 1 {
         return shape.density(x, y);
     }

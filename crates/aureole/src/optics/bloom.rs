@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
-use super::shape::{Grid, SpreadShape};
+use super::shape::{SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -107,13 +107,13 @@ impl SpreadShape for BloomShape {
         power(1.0 + q2, -self.beta)
     }
 
-    fn grid(&self, x: f64, y: f64) -> Grid {
+    fn grid(&self, x: f64, y: f64) -> Supersampling {
         // |f''/f| of (1 + r²/R²)^−β is at most about 2β(2β + 1)/(R² + r²),
         // taken at the pixel's nearest point to the centre.
         let r_near = ((x * x + y * y).sqrt() - std::f64::consts::FRAC_1_SQRT_2).max(0.0);
         let curvature = 2.0 * self.beta * (2.0 * self.beta + 1.0)
             / (self.radius * self.radius + r_near * r_near);
-        Grid::for_curvature(curvature, 64)
+        Supersampling::for_curvature(curvature, 64)
     }
 }
 

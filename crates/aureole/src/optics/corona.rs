@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
-use super::shape::{Grid, SpreadShape};
+use super::shape::{SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -527,11 +527,11 @@ impl SpreadShape for CoronaShape {
         ray.intensity * libm::exp(-ray.fade_per_px * r - lobe)
     }
 
-    fn grid(&self, x: f64, y: f64) -> Grid {
+    fn grid(&self, x: f64, y: f64) -> Supersampling {
         let r = (x * x + y * y).sqrt();
         if r < 2.0 {
             // Every ray meets here, within a pixel or two.
-            return Grid::square(8);
+            return Supersampling::square(8);
         }
         // The same test as exp(−σr/l)·brightest < FADED, its exp taken
         // only within a hair of the radius where it turns.
@@ -541,7 +541,7 @@ impl SpreadShape for CoronaShape {
             libm::exp(-self.slowest_fade * r) * self.brightest < FADED
         };
         if faded {
-            return Grid::square(1);
+            return Supersampling::square(1);
         }
         let phi = libm::atan2(y, x);
         let (ray, offset) = self.nearest_ray(phi);
@@ -562,7 +562,7 @@ impl SpreadShape for CoronaShape {
             64
         };
         if across <= along {
-            return Grid::square(along);
+            return Supersampling::square(along);
         }
         // A thin ray needs fine steps only across itself: along the pixel
         // axis nearer its normal (a step there moves at least 1/√2 of it
@@ -572,9 +572,9 @@ impl SpreadShape for CoronaShape {
         let coarse = along.max(2);
         let axis = phi - offset;
         if libm::fabs(libm::cos(axis)) >= libm::fabs(libm::sin(axis)) {
-            Grid { x: coarse, y: fine }
+            Supersampling { x: coarse, y: fine }
         } else {
-            Grid { x: fine, y: coarse }
+            Supersampling { x: fine, y: coarse }
         }
     }
 }

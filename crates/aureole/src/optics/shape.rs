@@ -9,7 +9,7 @@ pub(crate) trait SpreadShape: Sync {
     /// The supersampling grid needed to average f over the pixel centred at
     /// (x, y): finer where f changes fast within the pixel, and in the
     /// direction it changes fastest.
-    fn grid(&self, x: f64, y: f64) -> Grid;
+    fn grid(&self, x: f64, y: f64) -> Supersampling;
 
     /// Whether f puts light in the centre pixel. A PSF singular at the
     /// centre leaves the light that moves by less than half a pixel in the
@@ -43,23 +43,23 @@ pub(crate) trait SpreadShape: Sync {
 /// A supersampling grid: `x` columns by `y` rows of sample points in a
 /// pixel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Grid {
+pub(crate) struct Supersampling {
     pub x: u32,
     pub y: u32,
 }
 
-impl Grid {
+impl Supersampling {
     /// The same count along both axes.
-    pub fn square(m: u32) -> Grid {
-        Grid { x: m, y: m }
+    pub fn square(m: u32) -> Supersampling {
+        Supersampling { x: m, y: m }
     }
 
     /// Points per axis so that the midpoint rule's relative error, about
     /// (h²/24)·|f''/f| with h = 1/m, stays near 10⁻³ for a curvature
     /// `relative_curvature` = |f''/f| in px⁻², at most `max`.
-    pub fn for_curvature(relative_curvature: f64, max: u32) -> Grid {
+    pub fn for_curvature(relative_curvature: f64, max: u32) -> Supersampling {
         let m = (relative_curvature / 0.024).sqrt().ceil();
-        Grid::square(if m.is_finite() {
+        Supersampling::square(if m.is_finite() {
             (m as u32).clamp(1, max)
         } else {
             max

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{Default, Kind, Parameter, EPSILON};
 
-use super::shape::{Grid, SpreadShape};
+use super::shape::{SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -87,11 +87,11 @@ impl SpreadShape for VosShape {
         libm::pow(theta, -self.exponent) * c * c * c
     }
 
-    fn grid(&self, x: f64, y: f64) -> Grid {
+    fn grid(&self, x: f64, y: f64) -> Supersampling {
         // |f''/f| of r⁻ⁿ is about n(n + 1)/r², largest at the pixel's nearest
         // point to the centre.
         let r_near = ((x * x + y * y).sqrt() - std::f64::consts::FRAC_1_SQRT_2).max(0.25);
-        Grid::for_curvature(
+        Supersampling::for_curvature(
             self.exponent * (self.exponent + 1.0) / (r_near * r_near),
             32,
         )

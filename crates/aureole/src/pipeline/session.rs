@@ -11,8 +11,7 @@ use crate::config::Config;
 use crate::control::{Cancel, Control};
 use crate::convolve::padded_size;
 use crate::error::{Error, Result};
-use crate::image::Image;
-use crate::image::PixelLuminance;
+use crate::image::{Image, PixelLuminance, Shape};
 use crate::kernel::Kernel;
 use crate::memory::Workload;
 use crate::optics::Effect;
@@ -327,25 +326,13 @@ impl Session {
         plan.apply_with(image, frame.scale(), options, recycled, &mut control)
     }
 
-    /// Refuses, before a file is decoded, a frame of `width`×`height` with
-    /// `planes` colour planes (1 or 3) and maybe alpha whose run would need
-    /// more than the memory limit, or whose kernel could not be built: what
-    /// [`Session::apply`] would refuse, known from a file's header.
-    pub fn check_shape(
-        &self,
-        width: usize,
-        height: usize,
-        planes: usize,
-        alpha: bool,
-    ) -> Result<()> {
-        let shape = Shape {
-            width,
-            height,
-            planes,
-            alpha,
-        };
+    /// Refuses, before a file is decoded, a frame of `shape` whose run
+    /// would need more than the memory limit, or whose kernel could not be
+    /// built: what [`Session::apply`] would refuse, known from a file's
+    /// header.
+    pub fn check_shape(&self, shape: Shape) -> Result<()> {
         match &self.plan {
-            Some(plan) if plan.size() == (width, height) => Ok(()),
+            Some(plan) if plan.size() == (shape.width, shape.height) => Ok(()),
             _ => {
                 self.workload(shape)?;
                 self.check_memory(shape).map(drop)
@@ -475,25 +462,5 @@ impl Session {
             fits: workload.largest_fitting(effects, start, limit_left),
             built: !effects.is_empty(),
         })
-    }
-}
-
-/// A frame's size and planes, from its pixels or a file's header.
-#[derive(Debug, Clone, Copy)]
-struct Shape {
-    width: usize,
-    height: usize,
-    planes: usize,
-    alpha: bool,
-}
-
-impl Shape {
-    fn of(image: &Image) -> Shape {
-        Shape {
-            width: image.width,
-            height: image.height,
-            planes: image.planes.len(),
-            alpha: image.alpha.is_some(),
-        }
     }
 }

@@ -54,7 +54,7 @@ struct Edge {
 }
 
 #[derive(Debug, Clone)]
-enum Shape {
+enum Outline {
     Polygon {
         edges: Vec<Edge>,
         centroid: [f64; 2],
@@ -68,7 +68,7 @@ enum Shape {
 
 #[derive(Debug, Clone)]
 struct Element {
-    shape: Shape,
+    shape: Outline,
     /// +1 transmits, −1 blocks (subtracted from what lies beneath).
     sign: f64,
     area: f64,
@@ -183,7 +183,7 @@ impl Pupil {
         }
         edges.retain(|e| e.length > 0.0);
         self.elements.push(Element {
-            shape: Shape::Polygon {
+            shape: Outline::Polygon {
                 edges,
                 centroid: [cx, cy],
                 reach,
@@ -196,7 +196,7 @@ impl Pupil {
     /// Adds a disc that transmits, or blocks with `transmits = false`.
     pub fn add_disc(&mut self, centre: [f64; 2], radius: f64, transmits: bool) {
         self.elements.push(Element {
-            shape: Shape::Disc { centre, radius },
+            shape: Outline::Disc { centre, radius },
             sign: if transmits { 1.0 } else { -1.0 },
             area: PI * radius * radius,
         });
@@ -214,8 +214,8 @@ impl Pupil {
         let mut sum = [0.0, 0.0];
         for element in &self.elements {
             let a = match &element.shape {
-                Shape::Disc { centre, radius } => disc(element.area, *centre, *radius, q, q2),
-                Shape::Polygon {
+                Outline::Disc { centre, radius } => disc(element.area, *centre, *radius, q, q2),
+                Outline::Polygon {
                     edges,
                     centroid,
                     reach,
@@ -246,7 +246,7 @@ impl Pupil {
         let mut discs = Vec::new();
         for (polygon, element) in self.elements.iter().enumerate() {
             match &element.shape {
-                Shape::Polygon { edges: list, .. } => {
+                Outline::Polygon { edges: list, .. } => {
                     for e in list {
                         edges.push(EdgeTerm {
                             length: e.length,
@@ -259,7 +259,7 @@ impl Pupil {
                         });
                     }
                 }
-                Shape::Disc { centre, radius } => discs.push(DiscTerm {
+                Outline::Disc { centre, radius } => discs.push(DiscTerm {
                     centre: *centre,
                     radius: *radius,
                     sign: element.sign,
@@ -302,8 +302,8 @@ impl Pupil {
         self.elements
             .iter()
             .flat_map(|element| match &element.shape {
-                Shape::Polygon { edges, .. } => edges.as_slice(),
-                Shape::Disc { .. } => &[],
+                Outline::Polygon { edges, .. } => edges.as_slice(),
+                Outline::Disc { .. } => &[],
             })
     }
 
@@ -331,12 +331,12 @@ impl Pupil {
         let mut edge_index = 0;
         for element in &self.elements {
             let (edges, centroid, reach) = match &element.shape {
-                Shape::Polygon {
+                Outline::Polygon {
                     edges,
                     centroid,
                     reach,
                 } => (edges, *centroid, *reach),
-                Shape::Disc { centre, radius } => {
+                Outline::Disc { centre, radius } => {
                     for (at, t) in total.iter_mut().enumerate() {
                         let q = [qx[at], qy[at]];
                         let q2 = q[0] * q[0] + q[1] * q[1];
