@@ -10,7 +10,7 @@
 
 mod double;
 mod grid;
-mod near;
+mod lamps;
 mod placement;
 mod pool;
 mod simd;

@@ -25,7 +25,7 @@ use realfft::{RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 
 use super::grid::{ColumnTransform, Grid, Transforms};
-use super::near::Near;
+use super::lamps::Near;
 use super::placement::Placement;
 use super::pool::Pool;
 use super::{Centre, Engine, Spread};
