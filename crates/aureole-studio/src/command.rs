@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::error::StudioError;
 use crate::export::ExportRequest;
-use crate::render::{display_options, max_extent, View};
+use crate::render::{display_options, max_extent, View, DEMO};
 use aureole_io::display::{Exposure, ToneCurve};
 
 /// The name the page gives the camera's TOML when it downloads it.
@@ -28,7 +28,7 @@ pub fn for_export(request: &ExportRequest) -> Result<Commands, StudioError> {
     let render = &request.render;
     let display = display_options(render)?;
     let mut argv = Vec::new();
-    let image = if render.image == "demo" {
+    let image = if render.image == DEMO {
         argv.push(words(&[
             "aureole",
             "demo",

@@ -5,7 +5,7 @@ use std::net::{SocketAddr, TcpStream};
 
 mod common;
 
-use common::{server, server_within, TOKEN};
+use common::{server, server_within, street, TOKEN};
 
 struct Reply {
     status: u16,
@@ -150,12 +150,7 @@ fn preset(name: &str) -> &'static str {
 #[test]
 fn the_page_presets_and_images_are_served() {
     let dir = tempfile::tempdir().unwrap();
-    aureole_io::write::write_linear(
-        &dir.path().join("street.exr"),
-        &aureole_io::demo::night_street(64, 36),
-        Default::default(),
-    )
-    .unwrap();
+    street(dir.path(), "street.exr", (64, 36));
     std::fs::write(dir.path().join("notes.txt"), "not an image").unwrap();
     let addr = server(dir.path());
 
@@ -533,13 +528,7 @@ fn changing_the_blade_count_from_7_to_8_changes_the_picture_and_its_rays() {
 #[test]
 fn a_full_resolution_render_is_written_under_the_roots_with_its_progress() {
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("street.exr");
-    aureole_io::write::write_linear(
-        &input,
-        &aureole_io::demo::night_street(320, 180),
-        Default::default(),
-    )
-    .unwrap();
+    let input = street(dir.path(), "street.exr", (320, 180));
     std::fs::hard_link(&input, dir.path().join("same.exr")).unwrap();
     let addr = server(dir.path());
     let body = |output: &str| export_body("street.exr", preset("paper-fig5-both"), output, "");
@@ -1036,13 +1025,7 @@ fn an_export_puts_both_eyes_of_a_stereo_plate_through_the_camera() {
 fn an_export_refuses_from_the_header_a_frame_the_camera_cannot_take() {
     let dir = tempfile::tempdir().unwrap();
     // A 16x16 EXR whose header says 12000x12000: only the header is read.
-    let small = dir.path().join("small.exr");
-    aureole_io::write::write_linear(
-        &small,
-        &aureole_io::demo::night_street(16, 16),
-        Default::default(),
-    )
-    .unwrap();
+    let small = street(dir.path(), "small.exr", (16, 16));
     let mut data = std::fs::read(&small).unwrap();
     for name in [&b"dataWindow\0box2i\0"[..], b"displayWindow\0box2i\0"] {
         let at = data.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;

@@ -19,7 +19,7 @@ use serde_json::Value;
 
 mod common;
 
-use common::{server_within, TOKEN};
+use common::{server_within, street, TOKEN};
 
 /// The studio's budget for renders and exports in this test.
 const BUDGET: u64 = 512 << 20;
@@ -392,13 +392,7 @@ fn peak_memory() -> Option<u64> {
 #[test]
 fn random_and_malformed_requests_get_answers_and_the_server_keeps_serving() {
     let dir = tempfile::tempdir().unwrap();
-    let image = dir.path().join("street.exr");
-    aureole_io::write::write_linear(
-        &image,
-        &aureole_io::demo::night_street(64, 36),
-        Default::default(),
-    )
-    .unwrap();
+    let image = street(dir.path(), "street.exr", (64, 36));
     std::fs::create_dir(dir.path().join("renders")).unwrap();
     let addr = server_within(dir.path(), BUDGET);
     let cases = std::env::var("AUREOLE_FUZZ_CASES")

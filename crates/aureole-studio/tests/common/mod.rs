@@ -3,12 +3,25 @@
 #![allow(dead_code)]
 
 use std::net::SocketAddr;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use aureole_studio::{Access, Roots, Studio};
 
 /// The token of the tests' servers.
 pub const TOKEN: &str = "a-token-for-the-tests";
+
+/// The demo night street of `width`×`height` written to `dir/name` as an
+/// EXR; its path.
+pub fn street(dir: &Path, name: &str, (width, height): (usize, usize)) -> PathBuf {
+    let path = dir.join(name);
+    aureole_io::write::write_linear(
+        &path,
+        &aureole_io::demo::night_street(width, height),
+        Default::default(),
+    )
+    .unwrap();
+    path
+}
 
 /// A server reading from `root`, on an ephemeral port, for the test's life.
 pub fn server(root: &Path) -> SocketAddr {

@@ -301,11 +301,9 @@ impl Model for Aperture {
         })
     }
 
-    /// A diffraction pattern is held in f64, at four times an f32 plane's
-    /// bytes per plane, before it becomes f32.
-    /// The pattern in f64 beside its f32 planes: measured, `psf` of a 4K
-    /// lens kernel peaks at 3 planes' bytes in one wavelength and 7 over the
-    /// spectrum.
+    /// The pattern in f64 (2 plane bytes per plane) beside its f32 planes:
+    /// measured, `psf` of a 4K lens kernel peaks at 3 planes' bytes in one
+    /// wavelength and 7 over the spectrum.
     ///
     /// Through a filter (kernel/diffraction/orders.rs) come, beside the
     /// pattern: the filtered planes in f64 (2 plane bytes each), and for the
