@@ -4,7 +4,7 @@
 pub use crate::bytes::format_bytes;
 
 use crate::config::Config;
-use crate::convolve::padded_size;
+use crate::convolve::{compose_bytes, footprint, Backend, Footprint, Load, Precision};
 use crate::error::{Fit, Result};
 use crate::kernel::Extent;
 use crate::optics::{Context, Effect};
@@ -34,6 +34,8 @@ pub struct Workload {
     pub kernel: (usize, usize),
     /// Kernel planes (1, or 3 for a coloured kernel).
     pub kernel_planes: usize,
+    /// Where the engine computes.
+    pub backend: Backend,
     /// How far each effect's light reaches from the centre, in pixels
     /// (the first [`REACHES`] effects; `u32::MAX` for the whole kernel).
     pub reaches: [u32; REACHES],
@@ -80,6 +82,7 @@ impl Workload {
             alpha,
             kernel: (extent.width, extent.height),
             kernel_planes: config.effects.iter().map(Effect::planes).max().unwrap_or(1),
+            backend: Backend::default(),
             reaches,
         })
     }
@@ -92,7 +95,6 @@ impl Workload {
     /// baseline are added to stay on the safe side, and measured peaks of
     /// whole runs lie below it (`bench/memory.sh`).
     pub fn estimate(&self, effects: &[Effect]) -> Estimate {
-        const COMPLEX: u64 = 8;
         const BASELINE: u64 = 16 << 20;
         let pixels = self.width as u64 * self.height as u64;
         let planes = self.planes as u64 + u64::from(self.alpha);
@@ -103,9 +105,8 @@ impl Workload {
 
         // Building: the chain so far and the next effect's layers; to
         // compose them, the plane that reaches less far cut to its reach,
-        // the zero-padded transform of that, the row spectra of the other
-        // and the result; a diffraction pattern is held in f64 before it
-        // becomes f32.
+        // what the composition holds for it and the result; a diffraction
+        // pattern is held in f64 before it becomes f32.
         let reach = |index: usize| self.reaches.get(index).copied().unwrap_or(u32::MAX);
         let mut building = 0u64;
         let mut chain = 0u64;
@@ -119,9 +120,9 @@ impl Workload {
                     (2 * shorter + 1).min(kw) as usize,
                     (2 * shorter + 1).min(kh) as usize,
                 );
-                let (cx, cy) = padded_size(cut.0, cut.1, self.kernel.0, self.kernel.1);
-                let transform = (cx as u64 / 2 + 1) * (cy as u64 + 2 * cut.1 as u64) * COMPLEX;
-                transform + (cut.0 * cut.1) as u64 * 4 + layer * chain.max(layers)
+                compose_bytes(cut, self.kernel)
+                    + (cut.0 * cut.1) as u64 * 4
+                    + layer * chain.max(layers)
             } else {
                 0
             };
@@ -130,25 +131,15 @@ impl Workload {
             chain_reach = chain_reach.max(reach(index));
         }
 
-        // Then the plan (the kernel and its spectrum at the apply size, and
-        // the row spectra it keeps for every plane) and the output planes
-        // stay until the result is written; a night scene's lamps add the
-        // spectrum of the kernel beyond their windows.
-        let (px, py) = padded_size(self.kernel.0, self.kernel.1, self.width, self.height);
-        let half = px as u64 / 2 + 1;
-        let spectrum = half * py as u64 * COMPLEX * self.kernel_planes as u64;
-        let rows = half * self.height as u64 * COMPLEX * self.planes as u64;
-        // Split for lamps, a plane keeps the spectrum beyond its near window
-        // in place of the whole one, and the window's rows (at most 257).
-        let window = 257.min(py as u64) * half * COMPLEX * self.kernel_planes as u64;
-        let plan = kernel + spectrum + window + rows + image;
+        // Then the plan (the kernel, and what its engine holds, split for
+        // a night scene's lamps) and the output planes stay until the
+        // result is written.
+        let engine = self.footprint(Precision::Single, true);
+        let plan = kernel + engine.spreading + image;
         let stages = [
             ("reading", 2 * image),
             ("building the kernel", building),
-            (
-                "transforming the kernel",
-                kernel + spectrum + half * kh * COMPLEX,
-            ),
+            ("transforming the kernel", kernel + engine.preparing),
             ("convolving", plan + image / 3),
             ("writing", plan + image + image / 2),
         ];
@@ -165,21 +156,28 @@ impl Workload {
     }
 
     /// What the f64 engine adds to [`Workload::estimate`] when a scene's
-    /// range needs it: the spectra in f64, and per plane its f64 planes and
-    /// the column spectra, in place of the f32 engine's spectra and row
-    /// spectra, with the same margin.
+    /// range needs it: what it holds at its peak in place of the f32
+    /// engine's whole (not split) kernel, with the same margin.
     pub fn double_extra(&self) -> u64 {
-        const COMPLEX: u64 = 16;
-        let (px, py) = padded_size(self.kernel.0, self.kernel.1, self.width, self.height);
-        let half = px as u64 / 2 + 1;
-        let pixels = self.width as u64 * self.height as u64;
-        let spectra = half * py as u64 * COMPLEX * self.kernel_planes as u64;
-        let plane =
-            3 * pixels * 8 + half * py as u64 * COMPLEX + self.height as u64 * px as u64 * 24;
-        let single = half * COMPLEX / 2
-            * (py as u64 * self.kernel_planes as u64 + self.height as u64 * self.planes as u64);
-        let bytes = (spectra + plane).saturating_sub(single);
+        let double = self.footprint(Precision::Double, false);
+        let single = self.footprint(Precision::Single, false);
+        let bytes = double
+            .preparing
+            .max(double.spreading)
+            .saturating_sub(single.spreading);
         bytes + bytes / 8
+    }
+
+    /// What the engine of `precision` holds for this workload.
+    fn footprint(&self, precision: Precision, split: bool) -> Footprint {
+        let load = Load {
+            image: (self.width, self.height),
+            planes: self.planes,
+            kernel: self.kernel,
+            kernel_planes: self.kernel_planes,
+            split,
+        };
+        footprint((self.backend, precision), &load)
     }
 
     /// The largest kernel, halving the extent from `start` (width, height),
@@ -224,6 +222,7 @@ mod tests {
             alpha: false,
             kernel: (1999, 1199),
             kernel_planes: 1,
+            backend: Backend::Cpu,
             reaches: [u32::MAX; REACHES],
         };
         let half = Workload {

@@ -11,9 +11,24 @@ use realfft::num_complex::Complex;
 use super::grid::{Grid, Transforms};
 use super::placement::Placement;
 use super::pool::Pool;
-use super::{Centre, Engine, Spread};
+use super::{Centre, Engine, Footprint, Load, Spread};
 use crate::control::{Cancel, Control};
 use crate::error::Result;
+
+/// What the engine holds: transforming, the spectra and one kernel
+/// plane's rows; spreading, the spectra, and for the plane in flight its
+/// spread and summed planes and their spectrum, and its output rows.
+pub(super) fn footprint(load: &Load) -> Footprint {
+    const COMPLEX: u64 = 16;
+    let (px, py) = Grid::new(load.kernel, load.image, false).padded();
+    let (half, px, py) = (px as u64 / 2 + 1, px as u64, py as u64);
+    let spectra = half * py * COMPLEX * load.kernel_planes as u64;
+    let pixels = load.image.0 as u64 * load.image.1 as u64;
+    Footprint {
+        preparing: spectra + load.kernel.1 as u64 * (px * 8 + half * COMPLEX),
+        spreading: spectra + 3 * pixels * 8 + half * py * COMPLEX + load.image.1 as u64 * px * 24,
+    }
+}
 
 /// The kernel's spectra and the transforms for one image size, in f64.
 pub struct Convolver {

@@ -1,12 +1,13 @@
 //! The convolution engine: spreading planes of light through a kernel
 //! (docs/physics.md §8). The pipeline calls it through one trait,
 //! [`Engine`]; the f32 engine (`single.rs`, its one-kernel form
-//! [`Convolver`]) and the f64 engine (`double.rs`) implement it, sharing
-//! the size planning and the transforms planned for it (`grid.rs`), the
-//! kernel's placement in the period and the buffer pool. [`engine`] chooses
-//! among them, and [`compose`] is how kernels convolve one another, so a
-//! further backend (a GPU) is a third implementation chosen in this module
-//! alone.
+//! [`Convolver`]) and the f64 engine (`double.rs`) implement it on the
+//! CPU, sharing the size planning and the transforms planned for it
+//! (`grid.rs`), the kernel's placement in the period and the buffer pool.
+//! [`engine`] chooses among them by [`Backend`] and [`Precision`],
+//! [`footprint`] says what each holds for the memory estimate, and
+//! [`compose`] is how kernels convolve one another: a further backend (a
+//! GPU) is one more module and one more arm in each of those matches.
 
 mod double;
 mod grid;
@@ -72,27 +73,69 @@ pub enum Precision {
     Double,
 }
 
+/// Where an engine computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Backend {
+    /// The processor's cores, through rustfft (AVX2 where present).
+    #[default]
+    Cpu,
+}
+
 /// The engine that convolves `width`×`height` images with a kernel given as
-/// planes (row-major, `size` = width × height, centre at its middle) in
-/// `precision`: the one place that chooses among the implementations. The
-/// f32 engine transforms the kernel when first asked ([`Engine::prepare`],
-/// [`Engine::split_near`]); the f64 engine at once.
+/// planes (row-major, `size` = width × height, centre at its middle) on
+/// `backend` in `precision`: the one place that chooses among the
+/// implementations. The f32 engine transforms the kernel when first asked
+/// ([`Engine::prepare`], [`Engine::split_near`]); the f64 engine at once.
 pub fn engine(
-    precision: Precision,
+    (backend, precision): (Backend, Precision),
     planes: &[&[f32]],
     size: (usize, usize),
     (width, height): (usize, usize),
     centre: Centre,
     control: &mut Control,
 ) -> Result<Box<dyn Engine>> {
-    Ok(match precision {
-        Precision::Single => Box::new(single::Convolver::deferred(
+    Ok(match (backend, precision) {
+        (Backend::Cpu, Precision::Single) => Box::new(single::Convolver::deferred(
             planes, size, width, height, centre,
         )),
-        Precision::Double => Box::new(double::Convolver::new(
+        (Backend::Cpu, Precision::Double) => Box::new(double::Convolver::new(
             planes, size, width, height, centre, control,
         )?),
     })
+}
+
+/// What an engine is given to hold, as far as its memory goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Load {
+    /// The images' width and height.
+    pub image: (usize, usize),
+    /// Planes spread per image.
+    pub planes: usize,
+    /// The kernel's width and height.
+    pub kernel: (usize, usize),
+    /// Its planes.
+    pub kernel_planes: usize,
+    /// Whether the kernel is split for lamps ([`Engine::split_near`]).
+    pub split: bool,
+}
+
+/// The bytes an engine holds at its peaks, for the memory estimate
+/// (`memory.rs`), known before it is built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Footprint {
+    /// While it transforms the kernel.
+    pub preparing: u64,
+    /// While it spreads an image: the kernel's spectra and the buffers of
+    /// the planes in flight.
+    pub spreading: u64,
+}
+
+/// What the engine [`engine`] would choose for `load` holds.
+pub fn footprint((backend, precision): (Backend, Precision), load: &Load) -> Footprint {
+    match (backend, precision) {
+        (Backend::Cpu, Precision::Single) => single::footprint(load),
+        (Backend::Cpu, Precision::Double) => double::footprint(load),
+    }
 }
 
 /// `plane` (the `extent`'s width × height) convolved whole with one
@@ -115,6 +158,12 @@ pub fn compose(
         &mut control.part(0.0, 0.5),
     )?;
     convolver.convolve(plane, 0, &mut control.part(0.5, 1.0))
+}
+
+/// The bytes [`compose`] holds beside its plane and result: the kernel's
+/// spectrum at the plane's size, and the row spectra of the plane.
+pub fn compose_bytes(size: (usize, usize), (width, height): (usize, usize)) -> u64 {
+    single::compose_bytes(size, (width, height))
 }
 
 /// Spreads planes of light through a kernel whose spectrum it holds, for

@@ -13,7 +13,7 @@ use super::splat::{copies, splat};
 use super::threshold::{Survey, Threshold};
 use crate::config::Config;
 use crate::control::{Cancel, Control};
-use crate::convolve::{engine, Centre, Engine, Precision, Spread, Term};
+use crate::convolve::{engine, Backend, Centre, Engine, Precision, Spread, Term};
 use crate::error::{Error, Fit, Result};
 use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
 use crate::kernel::{Extent, Kernel};
@@ -58,8 +58,10 @@ pub struct Plan {
     kernel: Kernel,
     /// The configuration's threshold, cd/m², for callers that give none.
     threshold: f64,
-    /// The engine every scene starts in (f32 on the CPU), the kernel's
-    /// centre weight applied exactly.
+    /// Where its engines compute.
+    backend: Backend,
+    /// The engine every scene starts in (f32), the kernel's centre weight
+    /// applied exactly.
     engine: Box<dyn Engine>,
     /// The exact engine (f64), built the first time a scene's range needs
     /// it.
@@ -137,8 +139,9 @@ impl Plan {
         height: usize,
         control: &mut Control,
     ) -> std::result::Result<Plan, Box<(Kernel, Error)>> {
+        let backend = Backend::default();
         let built = engine(
-            Precision::Single,
+            (backend, Precision::Single),
             &kernel_planes(&kernel),
             (kernel.width(), kernel.height()),
             (width, height),
@@ -151,6 +154,7 @@ impl Plan {
                 height,
                 kernel,
                 threshold: 0.0,
+                backend,
                 engine,
                 exact: OnceLock::new(),
                 near: OnceLock::new(),
@@ -424,7 +428,7 @@ impl Plan {
             return Err(refused.error());
         }
         let built = engine(
-            Precision::Double,
+            (self.backend, Precision::Double),
             &kernel_planes(&self.kernel),
             (self.kernel.width(), self.kernel.height()),
             (self.width, self.height),

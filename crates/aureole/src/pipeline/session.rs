@@ -9,7 +9,7 @@ use super::plan::{DoubleRefused, Plan};
 use super::threshold::Threshold;
 use crate::config::Config;
 use crate::control::{Cancel, Control};
-use crate::convolve::padded_size;
+use crate::convolve::{padded_size, Backend};
 use crate::error::{Error, Result};
 use crate::image::{Image, PixelLuminance, Shape};
 use crate::kernel::Kernel;
@@ -415,6 +415,7 @@ impl Session {
                     alpha,
                     kernel: (kernel.width(), kernel.height()),
                     kernel_planes: kernel.planes().len(),
+                    backend: Backend::default(),
                     reaches: [u32::MAX; crate::memory::REACHES],
                 };
                 Ok((workload, &[]))
