@@ -99,7 +99,7 @@ impl Plan {
 
     /// [`Plan::for_image`], reporting to `control` and stopping when it is
     /// cancelled.
-    pub fn build(
+    pub(crate) fn build(
         config: &Config,
         width: usize,
         height: usize,
@@ -108,7 +108,8 @@ impl Plan {
     ) -> Result<Plan> {
         let extent = Extent::for_image_within(width, height, max_extent)?;
         let kernel = config.kernel_with(&extent, &mut control.part(0.0, 0.9))?;
-        let mut plan = Plan::transform(kernel, width, height, &mut control.part(0.9, 1.0))?;
+        let mut plan = Plan::transform(kernel, width, height, &mut control.part(0.9, 1.0))
+            .map_err(|failed| failed.1)?;
         plan.threshold = config.threshold;
         Ok(plan)
     }
@@ -118,22 +119,13 @@ impl Plan {
     /// threshold is 0 unless the options give one.
     pub fn with_kernel(kernel: Kernel, width: usize, height: usize) -> Result<Plan> {
         Plan::transform(kernel, width, height, &mut Control::quiet(&Cancel::new()))
+            .map_err(|failed| failed.1)
     }
 
     /// [`Plan::with_kernel`], reporting to `control` and stopping when it
-    /// is cancelled.
-    pub fn transform(
-        kernel: Kernel,
-        width: usize,
-        height: usize,
-        control: &mut Control,
-    ) -> Result<Plan> {
-        Plan::transform_or_return(kernel, width, height, control).map_err(|failed| failed.1)
-    }
-
-    /// [`Plan::transform`], handing the kernel back when it fails (is
-    /// cancelled), for a caller that keeps it for the next try.
-    pub(crate) fn transform_or_return(
+    /// is cancelled, and handing the kernel back when it fails, for a
+    /// caller that keeps it for the next try.
+    pub(crate) fn transform(
         kernel: Kernel,
         width: usize,
         height: usize,

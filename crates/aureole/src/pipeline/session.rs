@@ -355,7 +355,7 @@ impl Session {
                 let Some(kernel) = slot.take() else {
                     return Err(Error::NoEffect);
                 };
-                Plan::transform_or_return(kernel, width, height, &mut control).map_err(|failed| {
+                Plan::transform(kernel, width, height, &mut control).map_err(|failed| {
                     let (kernel, error) = *failed;
                     *slot = Some(kernel);
                     error
