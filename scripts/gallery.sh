@@ -176,6 +176,15 @@ if [ -d "$data" ]; then
   "$montage" "$out/guide-recipes-applied.jpg" --columns 2 --quality 85 \
     "$work/r1c.png=night-street.toml (demo)" "$work/r2c.png=candle-interior.toml" \
     "$work/r3c.png=astro-spikes.toml" "$work/r4c.png=star-filter.toml"
+
+  # Halation: the bridge's lamps on film without and with its backing.
+  for preset in film-35mm-no-remjet film-35mm-remjet; do
+    "$aureole" apply -q "$data/GoldenGate.exr" --preset "$preset" --threshold 10 --white 1 \
+      -o "$work/gg-$preset.png"
+  done
+  "$montage" "$out/guide-halation.jpg" --width 420 --quality 85 --crop 830,380,280,140 \
+    "$work/goldengate-none.png=no camera" "$work/gg-film-35mm-no-remjet.png=film-35mm-no-remjet" \
+    "$work/gg-film-35mm-remjet.png=film-35mm-remjet"
 else
   echo "gallery: $data not found: the pictures of photographs are left as they are" >&2
 fi
@@ -199,6 +208,12 @@ done
 "$montage" "$out/guide-roundness.png" \
   "$work/round0.0.png=roundness 0" "$work/round0.1.png=0.1" "$work/round0.4.png=0.4" \
   "$work/round1.0.png=1 (a circle)"
+for preset in film-35mm-no-remjet film-35mm-remjet; do
+  kernel "$work/$preset.png" 201 1920 --preset "$preset"
+done
+"$montage" "$out/guide-halation-kernels.png" \
+  "$work/film-35mm-no-remjet.png=no remjet" \
+  "$work/film-35mm-remjet.png=remjet"
 for e in 0.002 0.01 0.05; do
   bloom "bloom$e" "$e"
   "$aureole" apply -q "$work/street.exr" --config "$work/bloom$e.toml" --white 6 -o "$work/bloom$e.png"

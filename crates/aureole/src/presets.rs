@@ -38,6 +38,8 @@ pub const PRESETS: &[Preset] = presets!(
     "star-filter-4pt",
     "star-filter-6pt",
     "star-filter-8pt",
+    "film-35mm-no-remjet",
+    "film-35mm-remjet",
 );
 
 impl Preset {

@@ -285,6 +285,7 @@ pub fn build(
             Source::Shape(epsilon, shape) => {
                 SplitKernel::from_shape(epsilon, shape.as_ref(), extent, &mut rasterising)?
             }
+            Source::Shapes(planes) => SplitKernel::from_shapes(&planes, extent, &mut rasterising)?,
             Source::Diffraction {
                 optics,
                 light,

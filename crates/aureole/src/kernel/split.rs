@@ -60,6 +60,26 @@ impl SplitKernel {
         })
     }
 
+    /// One plane per shape, each K = (1 − ε)·[centre] + ε·F/ΣF: a PSF
+    /// whose colours spread differently.
+    pub fn from_shapes(
+        planes: &[(f64, Box<dyn SpreadShape>)],
+        extent: &Extent,
+        control: &mut Control,
+    ) -> Result<SplitKernel> {
+        let share = 1.0 / planes.len().max(1) as f64;
+        let mut layers = Vec::with_capacity(planes.len());
+        for (c, (epsilon, shape)) in planes.iter().enumerate() {
+            let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
+            let one = SplitKernel::from_shape(*epsilon, shape.as_ref(), extent, &mut part)?;
+            layers.extend(one.planes);
+        }
+        Ok(SplitKernel {
+            extent: *extent,
+            planes: layers,
+        })
+    }
+
     /// A PSF that is all pattern (no unspread part): planes summing to 1.
     pub fn from_pattern(planes: Vec<Vec<f64>>, extent: &Extent) -> SplitKernel {
         SplitKernel {

@@ -15,12 +15,14 @@
 pub mod aperture;
 pub mod bloom;
 pub mod corona;
+pub mod halation;
 pub(crate) mod shape;
 pub mod vos;
 
 pub use aperture::{Aperture, Filter};
 pub use bloom::Bloom;
 pub use corona::{Corona, RayFactors};
+pub use halation::Halation;
 pub use vos::Vos;
 
 use serde::de::Error as _;
@@ -51,6 +53,8 @@ pub(crate) struct Context<'a> {
 pub(crate) enum Source {
     /// ε and the shape of f: K = (1 − ε)·δ + ε·F/ΣF.
     Shape(f64, Box<dyn SpreadShape>),
+    /// One ε and shape per colour plane (R, G, B).
+    Shapes(Vec<(f64, Box<dyn SpreadShape>)>),
     /// A diffraction pattern, all of K, from the pupil and filter in
     /// `optics`, integrated over `light`, at `pitch_mm` per pixel.
     Diffraction {
@@ -234,4 +238,6 @@ effects! {
     /// Diffraction on the stop and on filters, computed from the pupil
     /// (paper §2).
     Aperture(Aperture),
+    /// Light reflected from the film base back into the emulsion.
+    Halation(Halation),
 }
