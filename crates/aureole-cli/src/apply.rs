@@ -102,6 +102,14 @@ input's name) or, with --frames, a pattern such as out/shot.%04d.exr",
     #[arg(long)]
     glare_only: bool,
 
+    /// Also write, beside the result in the output EXR, the light each
+    /// effect adds as a layer of its own (glare.bloom, glare.corona,
+    /// glare.aperture, glare.halation, …; negative where it took light
+    /// away) and the total (glare), which they sum to. Each effect after
+    /// the first costs a kernel and a spread more.
+    #[arg(long, conflicts_with = "glare_only")]
+    layers: bool,
+
     /// How to spread the bright pixels: auto picks by a cost estimate; fft
     /// costs the same however many are bright; splat adds the kernel at
     /// each one (fast for a few hundred lights or a small --max-kernel).
@@ -142,6 +150,9 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         output::check(&job.output, Some(&job.input))?;
         if args.glare_only {
             refuse_unsigned(&job.output)?;
+        }
+        if args.layers {
+            aureole_io::job::check_layers_output(&job.output)?;
         }
     }
     output::tidy(jobs.iter().map(|j| j.output.as_path()), quiet);
@@ -401,12 +412,13 @@ impl Run<'_> {
         let progress = &self.progress;
         let start = Instant::now();
         // A stereo plate's every view goes through the camera.
-        let applied = read
-            .input
-            .apply(session, &options, &mut |stage, done| {
-                progress.update(stage, done)
-            })
-            .map_err(|e| input::about(&job.input, e))?;
+        let mut report = |stage, done| progress.update(stage, done);
+        let applied = if self.args.layers {
+            read.input.apply_layers(session, &options, &mut report)
+        } else {
+            read.input.apply(session, &options, &mut report)
+        }
+        .map_err(|e| input::about(&job.input, e))?;
         let kernel = session
             .plan()
             .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));

@@ -665,3 +665,75 @@ fn info_describes_a_deep_stereo_file_that_apply_refuses() {
         .failure()
         .stderr(predicate::str::contains("deep data"));
 }
+
+#[test]
+fn glare_layers_go_beside_the_beauty_and_sum_to_the_glare() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("render.exr");
+    blender(&input);
+    let (plain, layered) = (dir.path().join("plain.exr"), dir.path().join("layered.exr"));
+    let camera = ["--preset", "paper-fig5-both", "-q"];
+    apply(&input, &plain, &camera);
+    apply(&input, &layered, &[&camera[..], &["--layers"]].concat());
+    let (a, b, c) = (read_all(&input), read_all(&plain), read_all(&layered));
+    let values = |image: &FlatImage, name: &str| -> Vec<f32> {
+        channel(image, 0, name).values_as_f32().collect()
+    };
+    for n in ["R", "G", "B"] {
+        let beauty = format!("ViewLayer.Combined.{n}");
+        // The beauty is the same with layers or without.
+        assert_eq!(channel(&b, 0, &beauty), channel(&c, 0, &beauty));
+        let (before, after) = (values(&a, &beauty), values(&c, &beauty));
+        let total = values(&c, &format!("ViewLayer.glare.{n}"));
+        let bloom = values(&c, &format!("ViewLayer.glare.bloom.{n}"));
+        let corona = values(&c, &format!("ViewLayer.glare.corona.{n}"));
+        let peak = before.iter().fold(0f32, |m, v| m.max(*v));
+        for i in 0..before.len() {
+            assert!(
+                (after[i] - before[i] - total[i]).abs() <= 1e-6 * peak,
+                "{n} {i}"
+            );
+            assert!(
+                (bloom[i] + corona[i] - total[i]).abs() <= 1e-6 * peak,
+                "{n} {i}"
+            );
+        }
+    }
+    // The other passes as they were.
+    assert_eq!(
+        channel(&a, 0, "ViewLayer.Depth.Z"),
+        channel(&c, 0, "ViewLayer.Depth.Z")
+    );
+    // Run again on its own output: the layers are replaced, not doubled.
+    let again = dir.path().join("again.exr");
+    apply(&layered, &again, &[&camera[..], &["--layers"]].concat());
+    let names = |i: &FlatImage| i.layer_data[0].channel_data.list.len();
+    assert_eq!(names(&read_all(&again)), names(&c));
+}
+
+#[test]
+fn glare_layers_need_an_exr_and_the_beauty() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("render.exr");
+    blender(&input);
+    let png = dir.path().join("out.png");
+    aureole()
+        .args(["apply", "--layers"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&png)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "glare layers are written only into OpenEXR; write to a .exr file",
+        ));
+    assert!(!png.exists());
+    aureole()
+        .args(["apply", "--layers", "--glare-only"])
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("out.exr"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--glare-only"));
+}

@@ -94,4 +94,24 @@ fn the_studios_command_lines_write_what_its_export_writes() {
             assert!(read("studio") == read("shell"), "{case}: {output} differs");
         }
     }
+    // Each effect's glare beside the result, into an EXR.
+    let layered = serde_json::json!({
+        "image": image, "config": format!("{camera}\n{bloom}"), "layers": true,
+    });
+    for who in ["studio", "shell"] {
+        let mut body = layered.clone();
+        body["output"] = format!("{who} layers.exr").into();
+        if who == "studio" {
+            export(root, &body);
+        } else {
+            paste(root, &body);
+        }
+    }
+    let read = |who: &str| std::fs::read(root.join(format!("{who} layers.exr"))).unwrap();
+    assert!(
+        read("studio") == read("shell"),
+        "the layered exports differ"
+    );
+    let text = String::from_utf8_lossy(&read("studio")).into_owned();
+    assert!(text.contains("glare.aperture.R") && text.contains("glare.bloom.R"));
 }

@@ -55,6 +55,20 @@ pub fn check_output(output: &Path, input: Option<&Path>) -> Result<()> {
         })
 }
 
+/// Refuses, before any work, glare layers for an output whose format
+/// cannot hold them: only OpenEXR has layers.
+pub fn check_layers_output(output: &Path) -> Result<()> {
+    let holds_layers = crate::formats::by_extension(output)
+        .is_some_and(|format| format.extensions.contains(&"exr"));
+    if holds_layers {
+        return Ok(());
+    }
+    Err(Error::Output {
+        path: output.to_path_buf(),
+        reason: "glare layers are written only into OpenEXR; write to a .exr file".into(),
+    })
+}
+
 /// Refuses, from its header and before it is decoded, a file whose frame
 /// `session` could not take: one that needs more memory than its limit,
 /// or a kernel beyond the largest allowed (`Error::Content` with the
@@ -134,6 +148,17 @@ impl Input {
         report: &mut dyn FnMut(Stage, f64),
     ) -> aureole::Result<Applied> {
         let applied = session.apply(&self.frame, options, report)?;
+        self.apply_views(session, options, report)?;
+        Ok(applied)
+    }
+
+    /// The camera applied to each other view, its result replacing it.
+    fn apply_views(
+        &mut self,
+        session: &mut Session,
+        options: &ApplyOptions,
+        report: &mut dyn FnMut(Stage, f64),
+    ) -> aureole::Result<()> {
         // The views share the frame's scale: they are one exposure.
         let views = FrameOptions {
             input_scale: Some(self.frame.scale()),
@@ -144,6 +169,21 @@ impl Input {
             let frame = Frame::new(std::mem::replace(image, empty), &views)?;
             *image = session.apply(&frame, options, report)?.image;
         }
+        Ok(())
+    }
+
+    /// [`Input::apply`], with the light each effect adds kept as layers
+    /// ([`aureole::Session::apply_layers`]) that [`Input::write`] puts
+    /// beside the frame's result; the other views get the beauty alone.
+    pub fn apply_layers(
+        &mut self,
+        session: &mut Session,
+        options: &ApplyOptions,
+        report: &mut dyn FnMut(Stage, f64),
+    ) -> aureole::Result<Applied> {
+        let (applied, layers) = session.apply_layers(&self.frame, options, report)?;
+        self.apply_views(session, options, report)?;
+        self.original.add_glare_layers(layers);
         Ok(applied)
     }
 

@@ -17,7 +17,7 @@ use aureole_io::read::Choice;
 use aureole_io::write::{LinearOptions, WriteOptions, Written};
 use pyo3::types::{PyDict, PyDictMethods};
 
-use crate::arrays::{float32, to_array, to_image};
+use crate::arrays::{float32, to_array, to_image, ArrayShape};
 use crate::run::file_error;
 use crate::run::{interruptible, one_line, value_error, Latest};
 
@@ -219,10 +219,14 @@ impl Camera {
     /// 1/input_scale): a new float32 array of the same shape, alpha
     /// carried through. `threshold` (cd/m², default the camera's) and
     /// `knee` choose what is spread; `glare_only` returns only the light
-    /// that moved; `method` is "auto", "fft" or "splat". One camera applied
-    /// to many frames of one size builds its kernel once.
+    /// that moved; `method` is "auto", "fft" or "splat". With `layers`,
+    /// returns (result, layers): a dict of the light each effect adds
+    /// ("glare.bloom", "glare.corona", …, negative where it took light
+    /// away) and the total ("glare"), which they sum to, each an array
+    /// of the image's shape without alpha. One camera applied to many
+    /// frames of one size builds its kernel once.
     #[pyo3(signature = (image, threshold = None, knee = 0.0, input_scale = 1.0,
-                        glare_only = false, method = "auto", progress = None))]
+                        glare_only = false, method = "auto", progress = None, layers = false))]
     #[allow(clippy::too_many_arguments)]
     fn apply<'py>(
         &self,
@@ -234,7 +238,13 @@ impl Camera {
         glare_only: bool,
         method: &str,
         progress: Option<&Bound<'py, PyAny>>,
+        layers: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
+        if layers && glare_only {
+            return Err(PyValueError::new_err(
+                "layers=True and glare_only=True: choose one (the layers hold the glare beside the result)",
+            ));
+        }
         let options = ApplyOptions {
             threshold,
             knee,
@@ -251,10 +261,27 @@ impl Camera {
         )
         .map_err(value_error)?;
         let size = (frame.image().width, frame.image().height);
-        let applied = self.with_session(py, size, progress, |session, report| {
-            session.apply(&frame, &options, report)
-        })?;
-        to_array(py, &applied.map_err(value_error)?.image, shape)
+        if !layers {
+            let applied = self.with_session(py, size, progress, |session, report| {
+                session.apply(&frame, &options, report)
+            })?;
+            return to_array(py, &applied.map_err(value_error)?.image, shape);
+        }
+        let (applied, glare) = self
+            .with_session(py, size, progress, |session, report| {
+                session.apply_layers(&frame, &options, report)
+            })?
+            .map_err(value_error)?;
+        let without_alpha = match shape {
+            ArrayShape::Channels(4) => ArrayShape::Channels(3),
+            other => other,
+        };
+        let named = PyDict::new(py);
+        for layer in &glare {
+            named.set_item(&layer.name, to_array(py, &layer.image, without_alpha)?)?;
+        }
+        let result = to_array(py, &applied.image, shape)?;
+        Ok((result, named).into_pyobject(py)?.into_any())
     }
 
     /// `aureole apply INPUT -o OUTPUT` with this camera: the file read
@@ -265,10 +292,12 @@ impl Camera {
     /// `half` or `compression` say otherwise; a picture is exposed
     /// automatically and tone-mapped filmic). The same bytes as the command
     /// line. Returns energy_in, energy_out (file units), spread_pixels,
-    /// threshold (cd/m²), scale and notes.
+    /// threshold (cd/m²), scale and notes. With `layers`, the output EXR
+    /// holds beside the result the light each effect adds and the total
+    /// (`aureole apply --layers`).
     #[pyo3(signature = (input, output, threshold = None, knee = 0.0, input_scale = None,
                         glare_only = false, method = "auto", half = None, compression = None,
-                        layer = None, part = None, progress = None))]
+                        layer = None, part = None, progress = None, layers = false))]
     #[allow(clippy::too_many_arguments)]
     fn apply_file<'py>(
         &self,
@@ -285,9 +314,18 @@ impl Camera {
         layer: Option<String>,
         part: Option<String>,
         progress: Option<&Bound<'py, PyAny>>,
+        layers: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         // The guards every front end keeps, before any work.
         aureole_io::job::check_output(&output, Some(&input)).map_err(file_error)?;
+        if layers {
+            if glare_only {
+                return Err(PyValueError::new_err(
+                    "layers=True and glare_only=True: choose one (the layers hold the glare beside the result)",
+                ));
+            }
+            aureole_io::job::check_layers_output(&output).map_err(file_error)?;
+        }
         let options = ApplyOptions {
             threshold,
             knee,
@@ -328,7 +366,12 @@ impl Camera {
         let size = (file.frame.image().width, file.frame.image().height);
         let (applied, written) = self.with_session(py, size, progress, |session, report| {
             // A stereo plate's every view goes through the camera.
-            file.apply(session, &options, report)
+            let applied = if layers {
+                file.apply_layers(session, &options, report)
+            } else {
+                file.apply(session, &options, report)
+            };
+            applied
                 .map_err(|e| value_error_about(&input, e))
                 .and_then(|applied| {
                     file.write(&output, &applied.image, &write_options)

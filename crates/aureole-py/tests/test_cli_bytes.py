@@ -71,3 +71,26 @@ def test_the_camera_toml_drives_the_cli_to_the_same_bytes(cli, street, tmp_path)
     run(cli, "apply", pfm, "-o", tmp_path / "out.pfm", "--config", config)
     image, _ = aureole.read(pfm)
     assert camera.apply(image).tobytes() == aureole.read(tmp_path / "out.pfm")[0].tobytes()
+
+
+def test_glare_layers_sum_to_the_glare_and_match_the_command_line(cli, street, tmp_path):
+    exr, pfm = street
+    camera = aureole.Camera.preset("paper-fig5-both")
+    image, meta = aureole.read(pfm)
+    result, layers = camera.apply(image, input_scale=meta["scale"], layers=True)
+    assert list(layers) == ["glare.bloom", "glare.corona", "glare"]
+    assert result.tobytes() == camera.apply(image, input_scale=meta["scale"]).tobytes()
+    peak = float(image.max())
+    np.testing.assert_allclose(layers["glare"], result - image, rtol=0, atol=1e-6 * peak)
+    np.testing.assert_allclose(
+        layers["glare.bloom"] + layers["glare.corona"], layers["glare"], rtol=0, atol=1e-6 * peak
+    )
+    # The file: the same bytes as aureole apply --layers.
+    run(cli, "apply", exr, "-o", tmp_path / "cli.exr", "--preset", "paper-fig5-both", "--layers")
+    camera.apply_file(exr, tmp_path / "py.exr", layers=True)
+    assert (tmp_path / "py.exr").read_bytes() == (tmp_path / "cli.exr").read_bytes()
+    with pytest.raises(OSError, match="glare layers are written only into OpenEXR"):
+        camera.apply_file(exr, tmp_path / "py.png", layers=True)
+    assert not (tmp_path / "py.png").exists()
+    with pytest.raises(ValueError, match="choose one"):
+        camera.apply(image, layers=True, glare_only=True)

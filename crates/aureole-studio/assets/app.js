@@ -213,11 +213,19 @@ function placeSplit() {
   $("handle").style.left = `${state.split * canvas.clientWidth}px`;
 }
 
-// The server words the command line, from the same fields as an export.
-async function updateCommand() {
+// An export's fields: the render's, the output and whether the glare
+// layers go beside the result.
+function exportBody() {
   const body = request(state.view === "glare" ? "glare" : "result");
   delete body.width;
   body.output = $("output").value;
+  if ($("layers").checked) body.layers = true;
+  return body;
+}
+
+// The server words the command line, from the same fields as an export.
+async function updateCommand() {
+  const body = exportBody();
   try {
     const response = await fetch("/api/command", {
       method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body),
@@ -281,6 +289,7 @@ async function start() {
   $("output").value = defaultOutput();
   $("image").addEventListener("change", () => { $("output").value = defaultOutput(); });
   $("output").addEventListener("input", updateCommand);
+  $("layers").addEventListener("change", updateCommand);
   $("export").addEventListener("click", exportFull);
   $("copy-toml").addEventListener("click", () => navigator.clipboard.writeText($("config").value));
   $("download-toml").addEventListener("click", () => {
@@ -352,9 +361,7 @@ function defaultOutput() {
 }
 
 async function exportFull() {
-  const body = request(state.view === "glare" ? "glare" : "result");
-  delete body.width;
-  body.output = $("output").value;
+  const body = exportBody();
   const status = $("export-status");
   const bar = $("export-progress");
   status.textContent = "";

@@ -59,6 +59,9 @@ pub fn for_export(request: &ExportRequest) -> Result<Commands, StudioError> {
     if render.view == View::Glare {
         apply.push("--glare-only".into());
     }
+    if request.layers {
+        apply.push("--layers".into());
+    }
     if let Some((width, height)) = max_extent(render)? {
         apply.extend(words(&["--max-kernel", &format!("{width}x{height}")]));
     }

@@ -32,6 +32,9 @@ pub struct ExportRequest {
     pub output: String,
     /// Whether an existing file at `output` may be replaced.
     pub overwrite: bool,
+    /// Whether the light each effect adds goes beside the result, as
+    /// layers of the output EXR (`aureole apply --layers`).
+    pub layers: bool,
 }
 
 impl ExportRequest {
@@ -52,6 +55,11 @@ impl ExportRequest {
             Some(serde_json::Value::Bool(overwrite)) => overwrite,
             Some(other) => return Err(refuse(format!("`overwrite` is {other}: true or false"))),
         };
+        let layers = match fields.remove("layers") {
+            None => false,
+            Some(serde_json::Value::Bool(layers)) => layers,
+            Some(other) => return Err(refuse(format!("`layers` is {other}: true or false"))),
+        };
         // The full image is rendered: the preview's width does not apply.
         fields.insert("width".into(), serde_json::Value::from(1));
         let render = serde_json::from_value(value).map_err(|e| refuse(e.to_string()))?;
@@ -59,6 +67,7 @@ impl ExportRequest {
             render,
             output,
             overwrite,
+            layers,
         })
     }
 }
@@ -118,6 +127,15 @@ impl Exports {
         // input itself, a plain file in a folder that can be written.
         aureole_io::job::check_output(&output, input.as_deref())
             .map_err(|e| StudioError::BadRequest(e.to_string()))?;
+        if request.layers {
+            if request.render.view == crate::render::View::Glare {
+                return Err(StudioError::BadRequest(
+                    "glare layers go beside the result: export the result view with them, or the glare view alone".into(),
+                ));
+            }
+            aureole_io::job::check_layers_output(&output)
+                .map_err(|e| StudioError::BadRequest(e.to_string()))?;
+        }
         if !request.overwrite && output.symlink_metadata().is_ok() {
             return Err(StudioError::Conflict(exists(&request.output)));
         }
@@ -252,7 +270,14 @@ fn run(
             aureole_io::job::read(path, &choice, limits, &FrameOptions::default())?
         }
     };
-    let bytes = needs(&config, &input.frame, max_extent)?;
+    let mut bytes = needs(&config, &input.frame, max_extent)?;
+    if request.layers {
+        // The layers, the chain before each effect and the result held
+        // beside the run.
+        let image = input.frame.image();
+        let frame = (image.width * image.height * image.planes.len() * 4) as u64;
+        bytes += (config.effects.len() as u64 + 2) * frame;
+    }
     let _lease = budget.lease(bytes, &job.cancel, None, || {
         locked(&job.progress).stage = "waiting for memory".into();
     })?;
@@ -268,7 +293,11 @@ fn run(
         progress.fraction = fraction;
     };
     // A stereo plate's every view goes through the camera.
-    let applied = input.apply(&mut session, &options, &mut report)?;
+    let applied = if request.layers {
+        input.apply_layers(&mut session, &options, &mut report)?
+    } else {
+        input.apply(&mut session, &options, &mut report)?
+    };
     job.cancel.check()?;
     locked(&job.progress).stage = "writing".into();
     // Another program may have made the file while the camera ran.

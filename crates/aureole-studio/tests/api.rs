@@ -559,6 +559,27 @@ fn a_full_resolution_render_is_written_under_the_roots_with_its_progress() {
     }
     assert!(!dir.path().parent().unwrap().join("escaped.exr").exists());
     assert_eq!(http(addr, "GET", "/api/export/999", "").status, 404);
+
+    // Glare layers: into an EXR, beside the result view.
+    let layers = |output: &str, view: &str| {
+        let extra = format!(r#", "layers": true, "view": "{view}""#);
+        export_body("street.exr", preset("paper-fig5-both"), output, &extra)
+    };
+    for (body, words) in [
+        (layers("layers.png", "result"), "only into OpenEXR"),
+        (
+            layers("layers.exr", "glare"),
+            "glare layers go beside the result",
+        ),
+    ] {
+        let reply = http(addr, "POST", "/api/export", &body);
+        assert_eq!(reply.status, 400, "{}", reply.error());
+        assert!(reply.error().contains(words), "{}", reply.error());
+    }
+    export_done(addr, &layers("layers.exr", "result"));
+    let layered = std::fs::read(dir.path().join("layers.exr")).unwrap();
+    let text = String::from_utf8_lossy(&layered);
+    assert!(text.contains("glare.bloom.R") && text.contains("glare.corona.R"));
 }
 
 #[test]

@@ -91,7 +91,7 @@ pub use image::{Image, Layout, Shape};
 pub use kernel::{Extent, Kernel};
 pub use optics::{Aperture, Bloom, Corona, Effect, Filter, Halation, Vos};
 pub use pipeline::{
-    Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, Method, Plan, ScaleSource, Session,
-    Stage,
+    Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, GlareLayer, Method, Plan, ScaleSource,
+    Session, Stage,
 };
 pub use units::{Length, Unit};

@@ -322,3 +322,104 @@ fn a_frame_too_large_for_a_full_kernel_is_told_from_its_shape_and_runs_capped() 
         other => panic!("{other:?}"),
     }
 }
+
+/// A chain of three effects, two of one type, as a config writes it.
+fn chain() -> Config {
+    let text = r#"
+[camera]
+sensor_width_mm = 36.0
+focal_length_mm = 50.0
+f_number = 8.0
+
+[[effect]]
+type = "bloom"
+epsilon = 0.05
+beta = 3.0
+radius = "2px"
+
+[[effect]]
+type = "halation"
+base_thickness = "3px"
+red_depth = "0.2px"
+green_depth = "0.4px"
+blue_depth = "0.6px"
+
+[[effect]]
+type = "bloom"
+epsilon = 0.02
+beta = 2.0
+radius = "6px"
+"#;
+    let mut config = Config::default();
+    config.apply(aureole::ConfigFile::parse(text, "the chain").unwrap());
+    config
+}
+
+#[test]
+fn glare_layers_hold_each_effects_light_and_sum_to_the_glare() {
+    let image = street(48, 20, Layout::Rgb);
+    let mut session = Session::new(chain());
+    let options = ApplyOptions::default();
+    let (applied, layers) = session
+        .apply_layers(&frame(image.clone()), &options, &mut |_, _| {})
+        .unwrap();
+    let names: Vec<&str> = layers.iter().map(|l| l.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["glare.bloom", "glare.halation", "glare.bloom2", "glare"]
+    );
+    // The beauty is what apply gives, and the layers sum to it less the
+    // input, within the round-off of f32 differences.
+    assert_eq!(
+        applied.image,
+        through(&mut Session::new(chain()), &image).image
+    );
+    let peak = image.planes[0].iter().fold(0f32, |m, v| m.max(*v));
+    for c in 0..3 {
+        for i in 0..48 * 20 {
+            let total = applied.image.planes[c][i] - image.planes[c][i];
+            let summed: f32 = layers[..3].iter().map(|l| l.image.planes[c][i]).sum();
+            assert!((summed - total).abs() <= 1e-6 * peak, "plane {c} pixel {i}");
+            assert_eq!(layers[3].image.planes[c][i], total);
+        }
+    }
+    // The first layer is the first effect alone; each moves light out of
+    // the lamps (negative there), and loses only what leaves the frame,
+    // less than it moved.
+    let mut first = chain();
+    first.effects.truncate(1);
+    let alone = through(&mut Session::new(first), &image).image;
+    assert_eq!(
+        layers[0].image.planes[0][10 * 48 + 5 + 27],
+        alone.planes[0][10 * 48 + 32] - 5e4
+    );
+    for layer in &layers {
+        let lamp = layer.image.planes[0][10 * 48 + 32];
+        let sum: f64 = layer.image.planes[0].iter().map(|&v| f64::from(v)).sum();
+        assert!(lamp < 0.0, "{}: {lamp}", layer.name);
+        assert!(
+            sum <= 0.0 && -sum < f64::from(-lamp),
+            "{}: {sum}",
+            layer.name
+        );
+    }
+}
+
+#[test]
+fn a_kernel_given_ready_made_has_the_total_glare_alone() {
+    let image = street(48, 20, Layout::Luminance);
+    let kernel = chain()
+        .kernel(&aureole::Extent::new(21, 21).unwrap())
+        .unwrap();
+    let mut session = Session::with_kernel(kernel);
+    let glare_only = ApplyOptions {
+        glare_only: true,
+        ..ApplyOptions::default()
+    };
+    let (applied, layers) = session
+        .apply_layers(&frame(image.clone()), &glare_only, &mut |_, _| {})
+        .unwrap();
+    assert_eq!(layers.len(), 1);
+    assert_eq!(layers[0].name, "glare");
+    assert_eq!(applied.image.planes, layers[0].image.planes);
+}

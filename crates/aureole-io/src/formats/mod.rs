@@ -98,6 +98,8 @@ pub(crate) struct Decoded {
 pub struct Original {
     pub(crate) exr: Option<Box<exr::Kept>>,
     pub(crate) radiance: Option<radiance::Header>,
+    /// Layers of glare to write beside the result (EXR only).
+    pub(crate) glare: Vec<aureole::GlareLayer>,
 }
 
 impl Original {
@@ -112,6 +114,15 @@ impl Original {
     /// an EXR result holds whatever they hold when written.
     pub fn views_mut(&mut self) -> impl Iterator<Item = (&str, &mut Image)> {
         self.exr.iter_mut().flat_map(|k| k.views_mut())
+    }
+
+    /// Writes `layers` beside the result, each under its name next to the
+    /// spread layer (`glare.bloom.R` beside `R`, `ViewLayer.glare.R`
+    /// beside `ViewLayer.Combined.R`), replacing channels of the same
+    /// names. Only EXR holds them ([`crate::job::check_output`] refuses
+    /// other formats).
+    pub fn add_glare_layers(&mut self, layers: Vec<aureole::GlareLayer>) {
+        self.glare = layers;
     }
 
     /// The image width a kernel file records ([`crate::kernel::write_kernel_for`]).

@@ -64,9 +64,13 @@ class Camera:
         glare_only: bool = False,
         method: Literal["auto", "fft", "splat"] = "auto",
         progress: Optional[Progress] = None,
-    ) -> npt.NDArray[np.float32]:
+        layers: bool = False,
+    ) -> Any:
         """The image the camera records: a new float32 array of the same
-        shape, alpha carried through. Frames of one size reuse the kernel."""
+        shape, alpha carried through. Frames of one size reuse the kernel.
+        With `layers=True`, (result, layers): a dict of the light each
+        effect adds ("glare.bloom", …) and the total ("glare"), which they
+        sum to, each of the image's shape without alpha."""
 
     def apply_file(
         self,
@@ -82,11 +86,13 @@ class Camera:
         layer: Optional[str] = None,
         part: Optional[str] = None,
         progress: Optional[Progress] = None,
+        layers: bool = False,
     ) -> dict[str, Any]:
         """`aureole apply INPUT -o OUTPUT` with this camera, the same bytes:
-        an EXR result keeps the input's layers, parts and attributes.
-        Returns energy_in, energy_out, spread_pixels, threshold, scale and
-        notes."""
+        an EXR result keeps the input's layers, parts and attributes, and
+        with `layers=True` holds the glare of each effect beside it
+        (`aureole apply --layers`). Returns energy_in, energy_out,
+        spread_pixels, threshold, scale and notes."""
 
 def read(
     path: Path, layer: Optional[str] = None, part: Optional[str] = None

@@ -4,6 +4,7 @@
 //! them.
 
 mod cost;
+mod layers;
 mod options;
 mod plan;
 mod precision;
@@ -11,6 +12,7 @@ mod session;
 mod splat;
 mod threshold;
 
+pub use layers::GlareLayer;
 pub use options::{Applied, ApplyOptions, Arithmetic, Method};
 pub use plan::Plan;
 pub use precision::f32_round_off;

@@ -326,6 +326,23 @@ impl Session {
         plan.apply_with(image, frame.scale(), options, recycled, &mut control)
     }
 
+    /// A session for the chain's first `effects` effects, with this one's
+    /// limits and cancellation, counting `held` more frames beside it.
+    pub(super) fn prefix(&self, effects: usize, held: usize) -> Result<Session> {
+        let Lens::Config(config) = &self.lens else {
+            return Err(Error::NoEffect);
+        };
+        let mut prefix = Session::new(Config {
+            effects: config.effects[..effects.min(config.effects.len())].to_vec(),
+            ..config.clone()
+        })
+        .with_max_extent(self.max_extent)
+        .with_frames_in_flight(self.in_flight + held);
+        prefix.memory_limit = self.memory_limit;
+        prefix.cancel = self.cancel.clone();
+        Ok(prefix)
+    }
+
     /// Refuses, before a file is decoded, a frame of `shape` whose run
     /// would need more than the memory limit, or whose kernel could not be
     /// built: what [`Session::apply`] would refuse, known from a file's

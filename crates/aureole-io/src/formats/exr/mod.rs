@@ -883,6 +883,7 @@ pub(crate) fn decode(
         notes,
         compression,
         original: super::Original {
+            glare: Vec::new(),
             radiance: None,
             exr: Some(Box::new(Kept {
                 image: kept,
@@ -1196,7 +1197,7 @@ fn put_back(
 /// Writes the planes to `path` atomically: into the file they were read
 /// from when it is given, else as a new file. With half samples, values
 /// beyond the half range are clamped to it (and counted).
-pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
+pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>> {
     let encode_error = |message: String| Error::Encode {
         path: path.to_path_buf(),
         format: "EXR",
@@ -1210,7 +1211,8 @@ pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
     }
     let mut notes = Vec::new();
     let mut clamped = 0;
-    let image = match planes.original.exr {
+    let glare = std::mem::take(&mut planes.original.glare);
+    let image = match planes.original.exr.take() {
         Some(kept) => {
             let Kept {
                 mut image,
@@ -1230,6 +1232,14 @@ pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
                 alpha: planes.alpha,
             };
             put_back(&mut image, &result, planes.samples, &mut clamped).map_err(encode_error)?;
+            let half = beauty_is_half(&taken, planes.samples);
+            add_glare(
+                &mut image.layer_data[part],
+                parent(&prefix),
+                &glare,
+                half,
+                &mut clamped,
+            );
             for view in &views {
                 let colour: Vec<&[f32]> = view.image.planes.iter().map(Vec::as_slice).collect();
                 let result = Layer {
@@ -1251,7 +1261,12 @@ pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
             }
             image
         }
-        None => new_image(&planes, &mut clamped),
+        None => {
+            let mut image = new_image(&planes, &mut clamped);
+            let half = planes.samples == Some(Samples::Half);
+            add_glare(&mut image.layer_data[0], "", &glare, half, &mut clamped);
+            image
+        }
     };
     if clamped > 0 {
         notes.push(Note::ClampedToHalf { count: clamped });
@@ -1276,6 +1291,55 @@ pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
         });
     }
     Ok(notes)
+}
+
+/// Whether the spread layer's colour is written as half floats.
+fn beauty_is_half(taken: &[Taken], samples: Option<Samples>) -> bool {
+    match samples {
+        Some(Samples::Half) => true,
+        Some(Samples::Float) => false,
+        None => taken.first().is_some_and(|t| t.kind == SampleType::F16),
+    }
+}
+
+/// The prefix of the layer that holds a channel prefix's layer
+/// (`ViewLayer.` of `ViewLayer.Combined.`), where glare layers go beside it.
+fn parent(prefix: &str) -> &str {
+    let trimmed = prefix.strip_suffix('.').unwrap_or(prefix);
+    trimmed.rfind('.').map_or("", |at| &prefix[..=at])
+}
+
+/// Adds each glare layer's planes to `layer` as `{parent}{name}.R/G/B` (or
+/// `.Y`), in the beauty's sample type, replacing channels of those names.
+fn add_glare(
+    layer: &mut x::Layer<x::AnyChannels<x::FlatSamples>>,
+    parent: &str,
+    glare: &[aureole::GlareLayer],
+    half: bool,
+    clamped: &mut usize,
+) {
+    if glare.is_empty() {
+        return;
+    }
+    let mut added = Vec::new();
+    for one in glare {
+        let names: &[&str] = if one.image.planes.len() == 3 {
+            &["R", "G", "B"]
+        } else {
+            &["Y"]
+        };
+        for (short, plane) in names.iter().zip(&one.image.planes) {
+            let name = format!("{parent}{}.{short}", one.name);
+            added.push(x::AnyChannel::new(
+                name.as_str(),
+                samples(plane, half, true, clamped),
+            ));
+        }
+    }
+    let mut list = std::mem::take(&mut layer.channel_data.list);
+    list.retain(|c| !added.iter().any(|a| a.name == c.name));
+    list.extend(added);
+    layer.channel_data = x::AnyChannels::sort(list);
 }
 
 /// A single-part file of the planes: `Y` or `R`, `G`, `B`, and `A`.

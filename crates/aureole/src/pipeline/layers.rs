@@ -1,0 +1,125 @@
+//! Glare in its own layers: the light each effect of the chain adds, for a
+//! compositor to keep beside the beauty and grade apart.
+//!
+//! Effects compose by convolution, so one effect's glare depends on those
+//! before it. Layer i is what the chain up to effect i gives less what the
+//! chain before it gives, O₁..ᵢ − O₁..ᵢ₋₁ (O₀ the input): the layers sum,
+//! telescoping, to the total glare O − I, and each holds the light its
+//! effect moved, negative where it took light away (the lamps' cores).
+
+use super::options::{Applied, ApplyOptions};
+use super::session::{Frame, Session, Stage};
+use crate::error::Result;
+use crate::image::Image;
+
+/// One layer of glare: its name (`glare.bloom`, `glare` for the total) and
+/// its planes, in the input's units and layout, without alpha.
+#[derive(Debug, Clone)]
+pub struct GlareLayer {
+    /// The layer's name, as an EXR channel prefix: `glare.<type>` for an
+    /// effect (a second of the same type `glare.<type>2`), `glare` for
+    /// the total.
+    pub name: String,
+    /// The light it adds (negative where it takes light away).
+    pub image: Image,
+}
+
+/// The name of each effect's layer: `glare.<type>`, numbered from the
+/// second of a type on.
+fn names<'a>(kinds: impl Iterator<Item = &'a str>) -> Vec<String> {
+    let mut seen: Vec<&str> = Vec::new();
+    kinds
+        .map(|kind| {
+            seen.push(kind);
+            match seen.iter().filter(|k| **k == kind).count() {
+                1 => format!("glare.{kind}"),
+                n => format!("glare.{kind}{n}"),
+            }
+        })
+        .collect()
+}
+
+/// `after − before`, plane by plane, without alpha.
+fn difference(after: &Image, before: &Image) -> Image {
+    let mut image = after.clone_without_planes();
+    image.alpha = None;
+    image.planes = after
+        .planes
+        .iter()
+        .zip(&before.planes)
+        .map(|(a, b)| a.iter().zip(b).map(|(a, b)| a - b).collect())
+        .collect();
+    image
+}
+
+impl Session {
+    /// [`Session::apply`], with the light each effect adds in a layer of
+    /// its own and the total glare last; a kernel given ready-made has the
+    /// total alone. Each effect but the last costs a kernel and a spread
+    /// more (the chain up to it, built for this call).
+    pub fn apply_layers(
+        &mut self,
+        frame: &Frame,
+        options: &ApplyOptions,
+        progress: &mut dyn FnMut(Stage, f64),
+    ) -> Result<(Applied, Vec<GlareLayer>)> {
+        let whole = ApplyOptions {
+            glare_only: false,
+            ..*options
+        };
+        let kinds: Vec<&'static str> = self
+            .config()
+            .map(|c| c.effects.iter().map(|e| e.kind()).collect())
+            .unwrap_or_default();
+        let names = names(kinds.into_iter());
+        let mut layers = Vec::new();
+        let mut before: Option<Image> = None;
+        for (count, name) in names.iter().take(names.len().saturating_sub(1)).enumerate() {
+            // The frames held beside each run: the input, the chain before
+            // and the layers so far.
+            let mut prefix = self.prefix(count + 1, 2 + layers.len())?;
+            let after = prefix.apply(frame, &whole, progress)?.image;
+            let base = before.as_ref().unwrap_or(frame.image());
+            layers.push(GlareLayer {
+                name: name.clone(),
+                image: difference(&after, base),
+            });
+            before = Some(after);
+        }
+        let mut applied = self.apply(frame, &whole, progress)?;
+        if let Some(name) = names.last() {
+            let base = before.as_ref().unwrap_or(frame.image());
+            layers.push(GlareLayer {
+                name: name.clone(),
+                image: difference(&applied.image, base),
+            });
+        }
+        layers.push(GlareLayer {
+            name: "glare".to_string(),
+            image: difference(&applied.image, frame.image()),
+        });
+        if options.glare_only {
+            applied.image = layers[layers.len() - 1].image.clone();
+            applied.image.alpha = frame.image().alpha.clone();
+        }
+        Ok((applied, layers))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::names;
+
+    #[test]
+    fn a_second_effect_of_a_type_is_numbered() {
+        assert_eq!(
+            names(["bloom", "aperture", "bloom", "bloom"].into_iter()),
+            [
+                "glare.bloom",
+                "glare.aperture",
+                "glare.bloom2",
+                "glare.bloom3"
+            ]
+        );
+    }
+}
