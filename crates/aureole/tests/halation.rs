@@ -4,6 +4,7 @@
 //! the base; the backing leaves a trace; the colour warms outward.
 
 use aureole::{Camera, Config, Effect, Extent, Halation, Kernel, Length};
+use proptest::prelude::*;
 
 fn halation(toml: &str) -> Halation {
     toml::from_str(toml).unwrap()
@@ -249,4 +250,48 @@ fn the_halo_is_neutral_at_its_core_and_warms_outward() {
         assert!(pair[1] > pair[0], "R/B by band: {bands:?}");
     }
     assert!(bands[2] > 5.0, "R/B by band: {bands:?}");
+}
+
+proptest! {
+    // A fixed seed: CI reruns the same cases on every machine.
+    #![proptest_config(ProptestConfig {
+        cases: 48,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x6861_6c61),
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn every_halation_kernel_sums_to_one_and_takes_its_share_from_the_core(
+        base in 0.05..40.0f64,
+        depths in (0.01..5.0f64, 0.01..5.0f64, 0.01..5.0f64),
+        transmissions in (0.0..=1.0f64, 0.0..=1.0f64, 0.0..=1.0f64),
+        reflectance in 0.001..=0.5f64,
+        remjet in any::<bool>(),
+        residual in 0.0..=1.0f64,
+        size in 1usize..90,
+    ) {
+        let h = Halation {
+            base_thickness: Length::px(base),
+            reflectance,
+            remjet,
+            remjet_residual: residual,
+            red_depth: Length::px(depths.0),
+            green_depth: Length::px(depths.1),
+            blue_depth: Length::px(depths.2),
+            red_transmission: transmissions.0,
+            green_transmission: transmissions.1,
+            blue_transmission: transmissions.2,
+        };
+        let k = kernel(&h, Camera::default(), size, size);
+        let shares = h.shares();
+        for (c, (share, centre)) in shares.iter().zip(k.centre_weights()).enumerate() {
+            prop_assert!((k.sum(c) - 1.0).abs() < 1e-5, "plane {c}: sum {}", k.sum(c));
+            prop_assert!(k.planes()[c].iter().all(|&v| v >= 0.0 && v.is_finite()));
+            // At most its share leaves the core (less where the halo's own
+            // centre pixel keeps some), and never more than all the light.
+            prop_assert!((0.0..=1.0).contains(share), "share {share}");
+            let lost = 1.0 - f64::from(centre);
+            prop_assert!(lost <= share + 1e-6, "plane {c}: lost {lost}, share {share}");
+        }
+    }
 }
