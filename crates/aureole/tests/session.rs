@@ -423,3 +423,35 @@ fn a_kernel_given_ready_made_has_the_total_glare_alone() {
     assert_eq!(layers[0].name, "glare");
     assert_eq!(applied.image.planes, layers[0].image.planes);
 }
+
+#[test]
+fn a_layered_sequence_builds_its_chains_once() {
+    let image = street(48, 20, Layout::Rgb);
+    let mut session = Session::new(chain());
+    let options = ApplyOptions::default();
+    let run = |session: &mut Session| {
+        let mut built = false;
+        let (_, layers) = session
+            .apply_layers(&frame(image.clone()), &options, &mut |stage, _| {
+                built |= stage == Stage::BuildingKernel;
+            })
+            .unwrap();
+        (built, layers)
+    };
+    let (first_built, first) = run(&mut session);
+    let (again_built, again) = run(&mut session);
+    assert!(first_built && !again_built);
+    for (a, b) in first.iter().zip(&again) {
+        assert_eq!(a.image.planes, b.image.planes, "{}", a.name);
+    }
+    // Under a limit that holds one run, the chains are built again.
+    let fits = |mb: u64| {
+        Session::new(chain())
+            .with_memory_limit(mb << 20)
+            .check_shape(Shape::of(&image))
+            .is_ok()
+    };
+    let one = (1..4096).find(|&mb| fits(mb)).unwrap();
+    let mut tight = Session::new(chain()).with_memory_limit((one + 1) << 20);
+    assert!(run(&mut tight).0 && run(&mut tight).0);
+}

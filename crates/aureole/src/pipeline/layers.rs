@@ -55,8 +55,10 @@ fn difference(after: &Image, before: &Image) -> Image {
 impl Session {
     /// [`Session::apply`], with the light each effect adds in a layer of
     /// its own and the total glare last; a kernel given ready-made has the
-    /// total alone. Each effect but the last costs a kernel and a spread
-    /// more (the chain up to it, built for this call).
+    /// total alone. Each effect but the last costs a spread more, and a
+    /// kernel more (the chain up to it) for the first frame of a size; the
+    /// chains' plans are kept for the next frame where the memory limit
+    /// holds them all, else built again.
     pub fn apply_layers(
         &mut self,
         frame: &Frame,
@@ -72,12 +74,21 @@ impl Session {
             .map(|c| c.effects.iter().map(|e| e.kind()).collect())
             .unwrap_or_default();
         let names = names(kinds.into_iter());
+        let before_last = names.len().saturating_sub(1);
+        // The chains before the last effect, kept from the last frame (their
+        // plans reused when the size is the same) or made: the frames held
+        // beside each run are the input, the chain before and the layers
+        // so far.
+        let mut chain = std::mem::take(&mut self.layer_chain);
+        if chain.len() != before_last {
+            chain = (0..before_last)
+                .map(|count| self.prefix(count + 1, 2 + count))
+                .collect::<Result<_>>()?;
+        }
         let mut layers = Vec::new();
         let mut before: Option<Image> = None;
-        for (count, name) in names.iter().take(names.len().saturating_sub(1)).enumerate() {
-            // The frames held beside each run: the input, the chain before
-            // and the layers so far.
-            let mut prefix = self.prefix(count + 1, 2 + layers.len())?;
+        for (prefix, name) in chain.iter_mut().zip(&names) {
+            prefix.set_cancel_token(self.cancel_token());
             let after = prefix.apply(frame, &whole, progress)?.image;
             let base = before.as_ref().unwrap_or(frame.image());
             layers.push(GlareLayer {
@@ -87,6 +98,9 @@ impl Session {
             before = Some(after);
         }
         let mut applied = self.apply(frame, &whole, progress)?;
+        if self.fits_beside(crate::image::Shape::of(frame.image()), chain.len()) {
+            self.layer_chain = chain;
+        }
         if let Some(name) = names.last() {
             let base = before.as_ref().unwrap_or(frame.image());
             layers.push(GlareLayer {

@@ -197,6 +197,9 @@ pub struct Session {
     /// Frames a front end holds beside the one applied (read ahead, being
     /// written), counted in the memory estimate.
     in_flight: usize,
+    /// The sessions of the chain's first effects, which glare layers
+    /// apply, kept for the next frame where memory allows.
+    pub(super) layer_chain: Vec<Session>,
 }
 
 impl Session {
@@ -219,6 +222,7 @@ impl Session {
             plan: None,
             recycled: Vec::new(),
             in_flight: 0,
+            layer_chain: Vec::new(),
         }
     }
 
@@ -341,6 +345,19 @@ impl Session {
         prefix.memory_limit = self.memory_limit;
         prefix.cancel = self.cancel.clone();
         Ok(prefix)
+    }
+
+    /// Whether `sessions` more sessions like this one, each holding a plan
+    /// for frames of `shape`, fit the memory limit beside it (each counted
+    /// at the most a run of this one needs).
+    pub(super) fn fits_beside(&self, shape: Shape, sessions: usize) -> bool {
+        let Some(limit) = self.memory_limit else {
+            return true;
+        };
+        self.workload(shape).is_ok_and(|(workload, effects)| {
+            let each = workload.estimate(effects).bytes;
+            each.saturating_mul(sessions as u64 + 1) <= limit
+        })
     }
 
     /// Refuses, before a file is decoded, a frame of `shape` whose run
