@@ -58,14 +58,13 @@ pub fn check_output(output: &Path, input: Option<&Path>) -> Result<()> {
 /// Refuses, before any work, glare layers for an output whose format
 /// cannot hold them: only OpenEXR has layers.
 pub fn check_layers_output(output: &Path) -> Result<()> {
-    let holds_layers = crate::formats::by_extension(output)
-        .is_some_and(|format| format.extensions.contains(&"exr"));
-    if holds_layers {
+    if crate::formats::by_extension(output).is_some_and(|format| format.layers) {
         return Ok(());
     }
+    let (names, extensions) = crate::formats::layered_outputs();
     Err(Error::Output {
         path: output.to_path_buf(),
-        reason: "glare layers are written only into OpenEXR; write to a .exr file".into(),
+        reason: format!("glare layers are written only into {names}; write to a {extensions} file"),
     })
 }
 

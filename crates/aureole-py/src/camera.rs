@@ -240,11 +240,7 @@ impl Camera {
         progress: Option<&Bound<'py, PyAny>>,
         layers: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        if layers && glare_only {
-            return Err(PyValueError::new_err(
-                "layers=True and glare_only=True: choose one (the layers hold the glare beside the result)",
-            ));
-        }
+        refuse_layers_with_glare_only(layers, glare_only)?;
         let options = ApplyOptions {
             threshold,
             knee,
@@ -318,12 +314,8 @@ impl Camera {
     ) -> PyResult<Bound<'py, PyDict>> {
         // The guards every front end keeps, before any work.
         aureole_io::job::check_output(&output, Some(&input)).map_err(file_error)?;
+        refuse_layers_with_glare_only(layers, glare_only)?;
         if layers {
-            if glare_only {
-                return Err(PyValueError::new_err(
-                    "layers=True and glare_only=True: choose one (the layers hold the glare beside the result)",
-                ));
-            }
             aureole_io::job::check_layers_output(&output).map_err(file_error)?;
         }
         let options = ApplyOptions {
@@ -410,4 +402,15 @@ impl Camera {
             self.config.threshold
         )
     }
+}
+
+/// Glare layers go beside the result; a glare-only result has nothing to
+/// put them beside.
+fn refuse_layers_with_glare_only(layers: bool, glare_only: bool) -> PyResult<()> {
+    if layers && glare_only {
+        return Err(PyValueError::new_err(
+            "layers=True and glare_only=True: choose one (the layers hold the glare beside the result)",
+        ));
+    }
+    Ok(())
 }

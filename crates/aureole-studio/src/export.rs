@@ -270,14 +270,7 @@ fn run(
             aureole_io::job::read(path, &choice, limits, &FrameOptions::default())?
         }
     };
-    let mut bytes = needs(&config, &input.frame, max_extent)?;
-    if request.layers {
-        // The layers, the chain before each effect and the result held
-        // beside the run.
-        let image = input.frame.image();
-        let frame = (image.width * image.height * image.planes.len() * 4) as u64;
-        bytes += (config.effects.len() as u64 + 2) * frame;
-    }
+    let bytes = needs(&config, &input.frame, max_extent, request.layers)?;
     let _lease = budget.lease(bytes, &job.cancel, None, || {
         locked(&job.progress).stage = "waiting for memory".into();
     })?;

@@ -155,6 +155,19 @@ impl Workload {
         }
     }
 
+    /// The peak memory of applying `effects` with each effect's glare in a
+    /// layer of its own ([`crate::Session::apply_layers`]): the plan of the
+    /// chain up to each effect held at once, each counted at the most its
+    /// own run needs, and the frames held beside the runs (a layer per
+    /// effect, the total, and the chain before).
+    pub fn estimate_layers(&self, effects: &[Effect]) -> u64 {
+        let colour = self.width as u64 * self.height as u64 * self.planes as u64 * 4;
+        let runs: u64 = (1..=effects.len())
+            .map(|n| self.estimate(&effects[..n]).bytes)
+            .sum();
+        runs + (effects.len() as u64 + 2) * colour
+    }
+
     /// What the f64 engine adds to [`Workload::estimate`] when a scene's
     /// range needs it: what it holds at its peak in place of the f32
     /// engine's whole (not split) kernel, with the same margin.

@@ -78,16 +78,29 @@ impl Parameter {
 }
 
 /// The fraction of the light an effect spreads, which every effect has.
-pub const EPSILON: Parameter = Parameter {
-    name: "epsilon",
-    kind: Kind::Number,
-    low: Some((0.0, true)),
-    high: Some((1.0, true)),
-    default: Default::Required,
-    unit: "",
-    allowed: "a fraction of the light from 0 to 1",
-    about: "the fraction of the light spread",
-};
+pub const EPSILON: Parameter = fraction(
+    "epsilon",
+    Default::Required,
+    "the fraction of the light spread",
+);
+
+/// A fraction of the light, 0 to 1.
+pub(crate) const fn fraction(
+    name: &'static str,
+    default: Default,
+    about: &'static str,
+) -> Parameter {
+    Parameter {
+        name,
+        kind: Kind::Number,
+        low: Some((0.0, true)),
+        high: Some((1.0, true)),
+        default,
+        unit: "",
+        allowed: "a fraction of the light from 0 to 1",
+        about,
+    }
+}
 
 /// An angle in degrees: any finite value.
 pub(crate) const fn angle(name: &'static str, about: &'static str) -> Parameter {
@@ -164,6 +177,32 @@ mod tests {
         };
         assert!(!p.admits(0.0) && p.admits(1e-9) && p.admits(1.0) && !p.admits(1.0 + 1e-9));
         assert!(!EPSILON.admits(f64::NAN) && EPSILON.admits(0.0));
+    }
+
+    #[test]
+    fn each_default_the_schema_shows_is_the_one_a_config_gets() {
+        // An example of each effect with every defaulted key written out
+        // as the schema gives it reads as the example without them.
+        for (kind, parameters) in crate::optics::EFFECT_PARAMETERS {
+            let example = crate::presets::example_of(kind)
+                .and_then(|name| crate::presets::find(name).ok())
+                .and_then(|preset| preset.config().ok())
+                .and_then(|config| config.effects.into_iter().find(|e| e.kind() == *kind))
+                .unwrap_or_else(|| panic!("no preset has a {kind}"));
+            let mut table = example.to_table();
+            for p in *parameters {
+                let value = match (p.default, p.kind) {
+                    (Default::Required, _) => continue,
+                    (Default::Number(v), Kind::Whole) => toml::Value::Integer(v as i64),
+                    (Default::Number(v), _) => toml::Value::Float(v),
+                    (Default::Length(text), _) => toml::Value::String(text.into()),
+                    (Default::Flag(flag), _) => toml::Value::Boolean(flag),
+                };
+                table.entry(p.name).or_insert(value);
+            }
+            let written = crate::optics::Effect::from_table(table).unwrap();
+            assert_eq!(written, example, "{kind}");
+        }
     }
 
     #[test]

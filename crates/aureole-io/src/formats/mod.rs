@@ -48,6 +48,8 @@ pub struct Format {
     pub kernels: KernelStorage,
     /// Whether it holds negative values (a glare-only result has them).
     pub signed: bool,
+    /// Whether it holds named layers beside the result (glare layers).
+    pub layers: bool,
     /// The sample depths a picture may have, the default first (none for
     /// linear formats).
     pub depths: &'static [Depth],
@@ -119,8 +121,8 @@ impl Original {
     /// Writes `layers` beside the result, each under its name next to the
     /// spread layer (`glare.bloom.R` beside `R`, `ViewLayer.glare.R`
     /// beside `ViewLayer.Combined.R`), replacing channels of the same
-    /// names. Only EXR holds them ([`crate::job::check_output`] refuses
-    /// other formats).
+    /// names. Only a format whose `layers` is set holds them
+    /// ([`crate::job::check_layers_output`] refuses the others).
     pub fn add_glare_layers(&mut self, layers: Vec<aureole::GlareLayer>) {
         self.glare = layers;
     }
@@ -229,6 +231,7 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "OpenEXR",
         signed: true,
+        layers: true,
         extensions: &["exr"],
         kernels: KernelStorage::Planes,
         depths: &[],
@@ -239,6 +242,7 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "Radiance HDR",
         signed: false,
+        layers: false,
         extensions: &["hdr"],
         kernels: KernelStorage::Unsupported,
         depths: &[],
@@ -249,6 +253,7 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "PFM",
         signed: true,
+        layers: false,
         extensions: &["pfm"],
         kernels: KernelStorage::Planes,
         depths: &[],
@@ -259,6 +264,7 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "PNG",
         signed: false,
+        layers: false,
         extensions: &["png"],
         kernels: KernelStorage::LogPicture,
         depths: &[Depth::Eight, Depth::Sixteen],
@@ -269,6 +275,7 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "JPEG",
         signed: false,
+        layers: false,
         extensions: &["jpg", "jpeg"],
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Eight],
@@ -279,6 +286,7 @@ pub static FORMATS: &[Format] = &[
     Format {
         name: "TIFF",
         signed: false,
+        layers: false,
         extensions: &["tif", "tiff"],
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Sixteen, Depth::Eight],
@@ -376,6 +384,15 @@ pub fn signed_outputs() -> String {
         .map(|f| format!(".{}", f.extensions[0]))
         .collect::<Vec<_>>()
         .join(" or ")
+}
+
+/// The formats that hold glare layers, for a message: their names and
+/// their extensions (`OpenEXR`, `.exr`).
+pub fn layered_outputs() -> (String, String) {
+    let layered = || FORMATS.iter().filter(|f| f.layers);
+    let names: Vec<&str> = layered().map(|f| f.name).collect();
+    let extensions: Vec<String> = layered().map(|f| format!(".{}", f.extensions[0])).collect();
+    (names.join(" or "), extensions.join(" or "))
 }
 
 /// The pictures that hold `depth`, for a message: `.png or .tif`.

@@ -133,18 +133,24 @@ pub(crate) fn max_extent(request: &RenderRequest) -> Result<Option<(usize, usize
 }
 
 /// The bytes a run of `config` on `frame` takes at its peak, the frame
-/// included, from the library's own estimate (as `--max-memory` judges).
+/// included, from the library's own estimate (as `--max-memory` judges);
+/// with `layers`, a run that keeps each effect's glare apart.
 pub(crate) fn needs(
     config: &Config,
     frame: &Frame,
     max_extent: Option<(usize, usize)>,
+    layers: bool,
 ) -> Result<u64, StudioError> {
     let image = frame.image();
     let planes = image.planes.len();
     let alpha = image.alpha.is_some();
     let workload =
         Workload::of_config(config, image.width, image.height, planes, alpha, max_extent)?;
-    Ok(workload.estimate(&config.effects).bytes)
+    Ok(if layers {
+        workload.estimate_layers(&config.effects)
+    } else {
+        workload.estimate(&config.effects).bytes
+    })
 }
 
 /// How a render is sent.
@@ -352,7 +358,7 @@ impl Renderer {
                     // The last session's memory back before this one's.
                     *kept = None;
                     let config = parse_config(&request.config)?.with_pixels_scaled(factor);
-                    let bytes = needs(&config, &preview, max_extent)?;
+                    let bytes = needs(&config, &preview, max_extent, false)?;
                     let lease = self.budget.lease(bytes, &cancel, Some(PATIENCE), || {})?;
                     *kept = Some(KeptSession {
                         key,

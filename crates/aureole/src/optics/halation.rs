@@ -23,7 +23,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::schema::{length, Default, Kind, Parameter};
+use crate::schema::{fraction, length, Default, Kind, Parameter};
 
 use super::shape::{SpreadShape, Supersampling};
 use super::{Context, Model, Source};
@@ -129,16 +129,11 @@ const REMJET: Parameter = Parameter {
     about: "the anti-halation backing: on, only a trace of halo; off, a red halo",
 };
 
-const REMJET_RESIDUAL: Parameter = Parameter {
-    name: "remjet_residual",
-    kind: Kind::Number,
-    low: Some((0.0, true)),
-    high: Some((1.0, true)),
-    default: Default::Number(0.005),
-    unit: "",
-    allowed: "a fraction of the light from 0 to 1",
-    about: "the share of the light the backing returns, when remjet is on",
-};
+const REMJET_RESIDUAL: Parameter = fraction(
+    "remjet_residual",
+    Default::Number(0.005),
+    "the share of the light the backing returns, when remjet is on",
+);
 
 const RED_DEPTH: Parameter = length(
     "red_depth",
@@ -156,32 +151,19 @@ const BLUE_DEPTH: Parameter = length(
     "z: the blue-sensitive layer's height above the base (the farthest)",
 );
 
-const fn transmission(name: &'static str, default: f64, about: &'static str) -> Parameter {
-    Parameter {
-        name,
-        kind: Kind::Number,
-        low: Some((0.0, true)),
-        high: Some((1.0, true)),
-        default: Default::Number(default),
-        unit: "",
-        allowed: "a fraction of the light from 0 to 1",
-        about,
-    }
-}
-
-const RED_TRANSMISSION: Parameter = transmission(
+const RED_TRANSMISSION: Parameter = fraction(
     "red_transmission",
-    0.5,
+    Default::Number(0.5),
     "T: the share of red light scattered to the base and back to its layer",
 );
-const GREEN_TRANSMISSION: Parameter = transmission(
+const GREEN_TRANSMISSION: Parameter = fraction(
     "green_transmission",
-    0.3,
+    Default::Number(0.3),
     "T: the share of green light scattered to the base and back to its layer",
 );
-const BLUE_TRANSMISSION: Parameter = transmission(
+const BLUE_TRANSMISSION: Parameter = fraction(
     "blue_transmission",
-    0.2,
+    Default::Number(0.2),
     "T: the share of blue light scattered to the base and back (yellow filter twice)",
 );
 
@@ -245,7 +227,7 @@ impl Model for Halation {
                 shape.path >= 1e-3,
                 "with the layer's depth, at least 0.0005 px once converted to pixels",
             )?;
-            planes.push((shape.share(), Box::new(shape)));
+            planes.push((share(shape.back, transmission), Box::new(shape)));
         }
         Ok(Source::Shapes(planes))
     }
@@ -277,14 +259,7 @@ impl Halation {
             self.green_transmission,
             self.blue_transmission,
         ]
-        .map(|transmission| {
-            HaloShape {
-                path: 1.0,
-                back: self.back(),
-                transmission,
-            }
-            .share()
-        })
+        .map(|transmission| share(self.back(), transmission))
     }
 
     fn back(&self) -> Back {
@@ -334,6 +309,32 @@ impl Back {
     }
 }
 
+/// The share ε of a layer's light that `back` returns to it with the
+/// emulsion's transmission T (the same for any path length):
+/// ∫₀¹ 2u R(u) T^(1/u) du with u = cos θ, by Simpson's rule on each side of
+/// the critical angle, where R jumps to 1.
+fn share(back: Back, transmission: f64) -> f64 {
+    let integrand = |u: f64| {
+        if u <= 0.0 {
+            0.0
+        } else {
+            2.0 * u * back.reflectance(u) * transmission.powf(1.0 / u)
+        }
+    };
+    let simpson = |a: f64, b: f64| {
+        const N: usize = 4096;
+        let h = (b - a) / N as f64;
+        let inner: f64 = (1..N)
+            .map(|i| integrand(a + i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 })
+            .sum();
+        (integrand(a) + integrand(b) + inner) * h / 3.0
+    };
+    match back.critical_cos() {
+        Some(c) => simpson(0.0, c) + simpson(c, 1.0),
+        None => simpson(0.0, 1.0),
+    }
+}
+
 /// One layer's halo in pixels.
 struct HaloShape {
     /// L = 2(d + z) in pixels: a ray at θ returns L tan θ away.
@@ -349,30 +350,6 @@ impl HaloShape {
         let cos = 1.0 / (1.0 + q * q).sqrt();
         let cos2 = cos * cos;
         self.back.reflectance(cos) * self.transmission.powf(1.0 / cos) * cos2 * cos2
-    }
-
-    /// ε = ∫₀¹ 2u R(u) T^(1/u) du with u = cos θ, by Simpson's rule on each
-    /// side of the critical angle, where R jumps to 1.
-    fn share(&self) -> f64 {
-        let integrand = |u: f64| {
-            if u <= 0.0 {
-                0.0
-            } else {
-                2.0 * u * self.back.reflectance(u) * self.transmission.powf(1.0 / u)
-            }
-        };
-        let simpson = |a: f64, b: f64| {
-            const N: usize = 4096;
-            let h = (b - a) / N as f64;
-            let inner: f64 = (1..N)
-                .map(|i| integrand(a + i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 })
-                .sum();
-            (integrand(a) + integrand(b) + inner) * h / 3.0
-        };
-        match self.back.critical_cos() {
-            Some(c) => simpson(0.0, c) + simpson(c, 1.0),
-            None => simpson(0.0, 1.0),
-        }
     }
 
     /// The radius of the total-reflection ring in pixels, if there is one.
@@ -433,13 +410,8 @@ mod tests {
         // the sub-critical Fresnel part is compared separately): the
         // Lambertian share beyond θc is 1 − sin²θc = 1 − 1/n².
         let n: f64 = 1.5;
-        let shape = HaloShape {
-            path: 1.0,
-            back: Back::Air(n),
-            transmission: 1.0,
-        };
         let beyond = 1.0 - 1.0 / (n * n);
-        let below = shape.share() - beyond;
+        let below = share(Back::Air(n), 1.0) - beyond;
         assert!(
             below > 0.04 * (1.0 / (n * n)) && below < 0.2 / (n * n),
             "{below}"

@@ -7,6 +7,8 @@
 //! telescoping, to the total glare O − I, and each holds the light its
 //! effect moved, negative where it took light away (the lamps' cores).
 
+use rayon::prelude::*;
+
 use super::options::{Applied, ApplyOptions};
 use super::session::{Frame, Session, Stage};
 use crate::error::Result;
@@ -47,7 +49,7 @@ fn difference(after: &Image, before: &Image) -> Image {
         .planes
         .iter()
         .zip(&before.planes)
-        .map(|(a, b)| a.iter().zip(b).map(|(a, b)| a - b).collect())
+        .map(|(a, b)| a.par_iter().zip(b).map(|(a, b)| a - b).collect())
         .collect();
     image
 }
@@ -98,7 +100,7 @@ impl Session {
             before = Some(after);
         }
         let mut applied = self.apply(frame, &whole, progress)?;
-        if self.fits_beside(crate::image::Shape::of(frame.image()), chain.len()) {
+        if self.holds_layer_chains(crate::image::Shape::of(frame.image())) {
             self.layer_chain = chain;
         }
         if let Some(name) = names.last() {

@@ -347,17 +347,15 @@ impl Session {
         Ok(prefix)
     }
 
-    /// Whether `sessions` more sessions like this one, each holding a plan
-    /// for frames of `shape`, fit the memory limit beside it (each counted
-    /// at the most a run of this one needs).
-    pub(super) fn fits_beside(&self, shape: Shape, sessions: usize) -> bool {
+    /// Whether the plans of every chain glare layers apply on frames of
+    /// `shape` fit the memory limit together
+    /// ([`Workload::estimate_layers`]).
+    pub(super) fn holds_layer_chains(&self, shape: Shape) -> bool {
         let Some(limit) = self.memory_limit else {
             return true;
         };
-        self.workload(shape).is_ok_and(|(workload, effects)| {
-            let each = workload.estimate(effects).bytes;
-            each.saturating_mul(sessions as u64 + 1) <= limit
-        })
+        self.workload(shape)
+            .is_ok_and(|(workload, effects)| workload.estimate_layers(effects) <= limit)
     }
 
     /// Refuses, before a file is decoded, a frame of `shape` whose run

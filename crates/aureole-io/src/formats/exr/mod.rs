@@ -1169,11 +1169,7 @@ fn put_back(
         .cloned()
         .unwrap_or_else(|| like("A"));
     let channel = |id: &Taken, plane: &[f32], clamp: bool, clamped: &mut usize| {
-        let half = match samples {
-            Some(Samples::Half) => true,
-            Some(Samples::Float) => false,
-            None => id.kind == SampleType::F16,
-        };
+        let half = is_half(id.kind, samples);
         x::AnyChannel {
             name: id.name.as_str().into(),
             sample_data: self::samples(plane, half, clamp, clamped),
@@ -1232,7 +1228,9 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
                 alpha: planes.alpha,
             };
             put_back(&mut image, &result, planes.samples, &mut clamped).map_err(encode_error)?;
-            let half = beauty_is_half(&taken, planes.samples);
+            // The glare in the spread layer's sample type.
+            let kind = taken.first().map_or(SampleType::F32, |t| t.kind);
+            let half = is_half(kind, planes.samples);
             add_glare(
                 &mut image.layer_data[part],
                 parent(&prefix),
@@ -1293,12 +1291,13 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
     Ok(notes)
 }
 
-/// Whether the spread layer's colour is written as half floats.
-fn beauty_is_half(taken: &[Taken], samples: Option<Samples>) -> bool {
+/// Whether a channel read as `kind` is written as half floats: as read,
+/// unless `samples` says.
+fn is_half(kind: SampleType, samples: Option<Samples>) -> bool {
     match samples {
         Some(Samples::Half) => true,
         Some(Samples::Float) => false,
-        None => taken.first().is_some_and(|t| t.kind == SampleType::F16),
+        None => kind == SampleType::F16,
     }
 }
 
