@@ -214,6 +214,18 @@ done
 "$montage" "$out/guide-halation-kernels.png" \
   "$work/film-35mm-no-remjet.png=no remjet" \
   "$work/film-35mm-remjet.png=remjet"
+stop clean 4 7 0.0
+cp "$work/clean.toml" "$work/dirty.toml"
+cat >>"$work/dirty.toml" <<EOF
+dust = 60
+scratches = 3
+scratch_width_um = 30
+grease = 0.3
+EOF
+kernel "$work/clean.png" 301 3840 --config "$work/clean.toml"
+kernel "$work/dirty.png" 301 3840 --config "$work/dirty.toml" --pupil "$work/pupil.png"
+"$montage" "$out/guide-dirt.png" --width 400 \
+  "$work/clean.png=clean" "$work/dirty.png=dust, scratches, grease" "$work/pupil.png=its pupil"
 for e in 0.002 0.01 0.05; do
   bloom "bloom$e" "$e"
   "$aureole" apply -q "$work/street.exr" --config "$work/bloom$e.toml" --white 6 -o "$work/bloom$e.png"

@@ -46,8 +46,9 @@ impl ChainArgs {
         }
         for (path, index) in self.config.iter().zip(indices("config")) {
             // Any failure to read the config is the user's to fix: exit 2.
-            let file = ConfigFile::load(path)
+            let mut file = ConfigFile::load(path)
                 .map_err(|e| Failure::Usage(anyhow::anyhow!(crate::words::library(&e))))?;
+            aureole_io::measured::resolve(&mut file, aureole_io::atomic::folder_of(path));
             sources.push((index, file));
         }
         sources.sort_by_key(|(index, _)| *index);
@@ -58,6 +59,10 @@ impl ChainArgs {
         if let Some(seed) = self.seed {
             config.seed = seed;
         }
+        let limits = aureole_io::limits::Limits {
+            max_bytes: aureole_io::limits::default_memory_limit(),
+        };
+        aureole_io::measured::load(&mut config.effects, limits)?;
         Ok(config)
     }
 

@@ -45,11 +45,31 @@ pub struct Args {
     #[arg(long, value_name = "PLOT.png")]
     profile: Option<PathBuf>,
 
+    /// A measured PSF (a photographed star or pinhole, a design program's
+    /// PSF) to add to the chain, as `[[effect]] type = "image"`; its pixel
+    /// pitch is --pitch-um. Says what it found: its centre, background and
+    /// noise, and the light kept above the floor.
+    #[arg(long, value_name = "FILE", requires = "pitch_um")]
+    from_image: Option<PathBuf>,
+
+    /// The pixel pitch of --from-image on the sensor, µm.
+    #[arg(long, value_name = "UM", requires = "from_image", value_parser = parse_positive)]
+    pitch_um: Option<f64>,
+
+    /// Also draw the first aperture's pupil into this PNG, 512 px square:
+    /// the light each point passes, white on black, dust, scratches and
+    /// grease included.
+    #[arg(long, value_name = "PUPIL.png")]
+    pupil: Option<PathBuf>,
+
     /// Radius in pixels of the angular profile (default: a quarter of the
     /// kernel's smaller half-size).
     #[arg(long, value_name = "PX", requires = "profile", value_parser = parse_positive, allow_negative_numbers = true)]
     profile_radius: Option<f64>,
 }
+
+/// The side of a pupil picture, px.
+const PUPIL_SIDE: u32 = 512;
 
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
     let holds_kernels =
@@ -58,10 +78,35 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     if let Some(plot) = &args.profile {
         check_output(plot, extension(plot) == "png", ".png".into())?;
     }
-    let config = args.chain.compose(matches)?;
+    if let Some(picture) = &args.pupil {
+        check_output(picture, extension(picture) == "png", ".png".into())?;
+    }
+    let mut config = args.chain.compose(matches)?;
+    if let (Some(file), Some(pitch)) = (&args.from_image, args.pitch_um) {
+        let mut measured = aureole::Measured::new(file.to_string_lossy().into_owned(), pitch);
+        let limits = aureole_io::limits::Limits {
+            max_bytes: aureole_io::limits::default_memory_limit(),
+        };
+        let mut effects = vec![aureole::Effect::Image(measured.clone())];
+        aureole_io::measured::load(&mut effects, limits)?;
+        if let Some(aureole::Effect::Image(loaded)) = effects.pop() {
+            measured = loaded;
+        }
+        let survey = measured.survey()?;
+        if !quiet {
+            eprintln!("{}", describe(file, &measured, &survey));
+        }
+        config.effects.push(aureole::Effect::Image(measured));
+    }
     if config.effects.is_empty() {
         return Err(aureole::Error::NoEffect.into());
     }
+    let optics = match &args.pupil {
+        Some(_) => Some(
+            aureole::optics::aperture::first_optics(&config)?.ok_or(aureole::Error::NoAperture)?,
+        ),
+        None => None,
+    };
     let (width, height) = args.size;
     let mut extent = Extent::new(width, height)?;
     if let Some(n) = args.image_width {
@@ -86,6 +131,11 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             .unwrap_or_else(|| (cx.min(cy) as f64 / 4.0).max(1.0));
         crate::interrupt::writing(|| aureole_io::plot::write_profile_plot(plot, &kernel, radius))?;
     }
+    if let (Some(picture), Some(optics)) = (&args.pupil, &optics) {
+        crate::interrupt::writing(|| {
+            aureole_io::plot::write_pupil_picture(picture, optics, PUPIL_SIDE)
+        })?;
+    }
     progress.finish();
     if !quiet {
         let sums: Vec<String> = (0..kernel.planes().len())
@@ -106,6 +156,34 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         );
     }
     Ok(())
+}
+
+/// What `psf --from-image` found in its picture, in a line.
+fn describe(
+    file: &Path,
+    measured: &aureole::Measured,
+    survey: &aureole::optics::measured::Survey,
+) -> String {
+    let (w, h) = measured
+        .picture
+        .as_ref()
+        .map_or((0, 0), |p| (p.width, p.height));
+    let planes: Vec<String> = survey
+        .background
+        .iter()
+        .zip(&survey.kept)
+        .map(|((black, sigma), kept)| {
+            format!("black {black:.4} ± {sigma:.4}, {:.1} % kept", 100.0 * kept)
+        })
+        .collect();
+    format!(
+        "{}: {w}x{h}, centre at ({:.2}, {:.2}); {} (floor {} σ)",
+        file.display(),
+        survey.centre[0],
+        survey.centre[1],
+        planes.join("; "),
+        measured.floor
+    )
 }
 
 /// Refuses an output whose extension we do not write before any work is

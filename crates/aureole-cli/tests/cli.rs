@@ -130,6 +130,144 @@ fn psf_writes_exr_and_png_pictures_with_a_profile_plot() {
 }
 
 #[test]
+fn psf_draws_the_pupil_with_its_dirt_and_refuses_a_chain_without_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let dusty = dir.path().join("dusty.toml");
+    std::fs::write(&dusty, "[camera]\nsensor_width_mm = 36\nfocal_length_mm = 50\nf_number = 8\n\n[[effect]]\ntype = \"aperture\"\nblades = 7\ndust = 50\ndust_min_um = 100\ndust_max_um = 200\n").unwrap();
+    let (kernel, pupil) = (dir.path().join("k.pfm"), dir.path().join("pupil.png"));
+    aureole()
+        .args(["psf", "--config"])
+        .arg(&dusty)
+        .args(["--size", "65", "-o"])
+        .arg(&kernel)
+        .arg("--pupil")
+        .arg(&pupil)
+        .assert()
+        .success();
+    let picture = read_image(&pupil, Limits::NONE).unwrap().image;
+    assert_eq!((picture.width, picture.height), (512, 512));
+    // The stop is black about the picture's edge; inside, the clear glass
+    // is white and the specks dark.
+    let grey = &picture.planes[0];
+    assert_eq!(grey[0], 0.0);
+    let centre_row = &grey[256 * 512 + 128..256 * 512 + 384];
+    assert!(centre_row.iter().filter(|&&v| v == 1.0).count() > 200);
+    let dark_inside = (150..362)
+        .flat_map(|j| (150..362).map(move |i| (i, j)))
+        .filter(|&(i, j)| grey[j * 512 + i] < 0.5)
+        .count();
+    assert!(
+        dark_inside > 20,
+        "{dark_inside} dark pixels inside the stop"
+    );
+
+    let out = dir.path().join("k2.pfm");
+    aureole()
+        .args(["psf", "--preset", "paper-fig4-bloom", "--size", "11", "-o"])
+        .arg(&out)
+        .arg("--pupil")
+        .arg(dir.path().join("p.png"))
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("no pupil to draw"));
+    assert!(!out.exists());
+}
+
+#[test]
+fn psf_from_image_reads_a_kernel_written_at_another_pitch() {
+    // A 7-blade stop written as an EXR at 7680 px across the sensor, read
+    // back as a measured PSF at 1920: the stop's own kernel at 1920, its
+    // light within 2, 4 and 8 px within 2 %.
+    let dir = tempfile::tempdir().unwrap();
+    let (fine, coarse, direct) = (
+        dir.path().join("fine.exr"),
+        dir.path().join("coarse.pfm"),
+        dir.path().join("direct.pfm"),
+    );
+    aureole()
+        .args([
+            "psf",
+            "--preset",
+            "camera-f8-7blade",
+            "--size",
+            "401",
+            "--image-width",
+            "7680",
+            "-o",
+        ])
+        .arg(&fine)
+        .assert()
+        .success();
+    let sensor = dir.path().join("sensor.toml");
+    std::fs::write(&sensor, "[camera]\nsensor_width_mm = 36\n").unwrap();
+    aureole()
+        .args(["psf", "--config"])
+        .arg(&sensor)
+        .arg("--from-image")
+        .arg(&fine)
+        .args([
+            "--pitch-um",
+            "4.6875",
+            "--size",
+            "81",
+            "--image-width",
+            "1920",
+            "-o",
+        ])
+        .arg(&coarse)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("centre at (200.00, 200.00)"));
+    aureole()
+        .args([
+            "psf",
+            "--preset",
+            "camera-f8-7blade",
+            "--size",
+            "81",
+            "--image-width",
+            "1920",
+            "-o",
+        ])
+        .arg(&direct)
+        .assert()
+        .success();
+    let (a, b) = (read_pfm(&coarse), read_pfm(&direct));
+    let within = |image: &aureole::Image, c: usize, r: f64| -> f64 {
+        (0..81 * 81)
+            .filter(|i| ((i % 81) as f64 - 40.0).hypot((i / 81) as f64 - 40.0) <= r)
+            .map(|i| f64::from(image.planes[c][i]))
+            .sum()
+    };
+    for c in 0..3 {
+        for r in [2.0, 4.0, 8.0] {
+            let (x, y) = (within(&a, c, r), within(&b, c, r));
+            assert!(
+                (x / y - 1.0).abs() < 0.02,
+                "plane {c}, r = {r}: {x} against {y}"
+            );
+        }
+    }
+    // A missing file is named.
+    aureole()
+        .args(["psf", "--config"])
+        .arg(&sensor)
+        .args([
+            "--from-image",
+            "nowhere.exr",
+            "--pitch-um",
+            "4",
+            "--size",
+            "11",
+            "-o",
+        ])
+        .arg(dir.path().join("x.pfm"))
+        .assert()
+        .failure()
+        .stderr(predicate::str::contains("nowhere.exr"));
+}
+
+#[test]
 fn presets_and_configs_compose_in_command_line_order() {
     let dir = tempfile::tempdir().unwrap();
     let lens85 = dir.path().join("85mm.toml");

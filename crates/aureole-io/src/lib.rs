@@ -44,6 +44,7 @@ pub mod fuzzing;
 pub mod job;
 pub mod kernel;
 pub mod limits;
+pub mod measured;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod read;

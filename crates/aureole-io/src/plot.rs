@@ -1,15 +1,18 @@
 //! The profile plot of a kernel: the radial profile (mean over rings, log
 //! scale, as the paper's Fig. 4/5 "filter profile") and the angular profile
-//! at a chosen radius, where the rays of a corona show as peaks.
+//! at a chosen radius, where the rays of a corona show as peaks; and the
+//! picture of a pupil, dirt and all.
 
 use std::path::Path;
 use std::sync::Once;
 
 use aureole::kernel::profile::{angular_profile, radial_profile};
+use aureole::optics::aperture::Optics;
 use aureole::Kernel;
 use image::{ImageFormat, RgbImage};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
+use rayon::prelude::*;
 
 use crate::atomic::write_atomic;
 use crate::error::{Error, Result};
@@ -41,6 +44,48 @@ pub fn write_profile_plot(path: &Path, kernel: &Kernel, radius: f64) -> Result<(
     draw(&mut pixels, kernel, radius).map_err(|e| encode_error(e.to_string()))?;
     let picture = RgbImage::from_raw(SIZE.0, SIZE.1, pixels)
         .ok_or_else(|| encode_error("plot buffer has the wrong size".into()))?;
+    write_atomic(path, |out| {
+        picture
+            .write_to(out, ImageFormat::Png)
+            .map_err(|e| encode_error(e.to_string()))
+    })
+}
+
+/// Samples per pixel side of a pupil picture: dust a few µm across still
+/// shows as a grey dot.
+const PUPIL_SAMPLES: usize = 4;
+
+/// Draws the pupil of `optics` into a `side`-pixel square PNG at `path`:
+/// the share of the light each point passes, |t|², white on black,
+/// across the stop's diameter.
+pub fn write_pupil_picture(path: &Path, optics: &Optics, side: u32) -> Result<()> {
+    let half = 0.51 * optics.diameter_mm;
+    let n = side as usize;
+    let step = 2.0 * half / (n * PUPIL_SAMPLES) as f64;
+    let pixels: Vec<u8> = (0..n * n)
+        .into_par_iter()
+        .map(|at| {
+            let (i, j) = (at % n, at / n);
+            let mut light = 0.0;
+            for a in 0..PUPIL_SAMPLES {
+                for b in 0..PUPIL_SAMPLES {
+                    let x = -half + ((i * PUPIL_SAMPLES + b) as f64 + 0.5) * step;
+                    let y = half - ((j * PUPIL_SAMPLES + a) as f64 + 0.5) * step;
+                    let [re, im] = optics.pupil.transmission([x, y]);
+                    light += re * re + im * im;
+                }
+            }
+            let mean = light / (PUPIL_SAMPLES * PUPIL_SAMPLES) as f64;
+            (255.0 * mean.clamp(0.0, 1.0)).round() as u8
+        })
+        .collect();
+    let encode_error = |message: String| Error::Encode {
+        path: path.to_path_buf(),
+        format: "pupil PNG",
+        message,
+    };
+    let picture = image::GrayImage::from_raw(side, side, pixels)
+        .ok_or_else(|| encode_error("pupil buffer has the wrong size".into()))?;
     write_atomic(path, |out| {
         picture
             .write_to(out, ImageFormat::Png)

@@ -16,6 +16,7 @@ use aureole_io::limits::{default_memory_limit, Limits};
 use aureole_io::read::Choice;
 use aureole_io::write::{LinearOptions, WriteOptions, Written};
 use pyo3::types::{PyDict, PyDictMethods};
+use rayon::prelude::*;
 
 use crate::arrays::{float32, to_array, to_image, ArrayShape};
 use crate::run::file_error;
@@ -47,8 +48,15 @@ impl Camera {
         }
     }
 
-    fn parse(text: &str, source_name: &str) -> PyResult<Camera> {
-        let file = ConfigFile::parse(text, source_name).map_err(value_error)?;
+    /// The camera `text` describes; the measured PSFs it names are read
+    /// now, relative paths from `folder`.
+    fn parse(text: &str, source_name: &str, folder: &std::path::Path) -> PyResult<Camera> {
+        let mut file = ConfigFile::parse(text, source_name).map_err(value_error)?;
+        aureole_io::measured::resolve(&mut file, folder);
+        let limits = Limits {
+            max_bytes: default_memory_limit(),
+        };
+        aureole_io::measured::load(&mut file.effects, limits).map_err(file_error)?;
         Ok(Camera::new(file))
     }
 
@@ -118,7 +126,11 @@ impl Camera {
     #[staticmethod]
     fn preset(name: &str) -> PyResult<Camera> {
         let preset = aureole::presets::find(name).map_err(value_error)?;
-        Camera::parse(preset.toml, &format!("preset {name}"))
+        Camera::parse(
+            preset.toml,
+            &format!("preset {name}"),
+            std::path::Path::new(""),
+        )
     }
 
     /// A camera from TOML text, as in a config file; `name` starts its error
@@ -126,7 +138,7 @@ impl Camera {
     #[staticmethod]
     #[pyo3(signature = (text, name = "<string>"))]
     fn from_toml(text: &str, name: &str) -> PyResult<Camera> {
-        Camera::parse(text, name)
+        Camera::parse(text, name, std::path::Path::new(""))
     }
 
     /// A camera from a TOML config file.
@@ -139,7 +151,11 @@ impl Camera {
                 aureole::error::describe_io(&e)
             ))
         })?;
-        Camera::parse(&text, &path.display().to_string())
+        Camera::parse(
+            &text,
+            &path.display().to_string(),
+            aureole_io::atomic::folder_of(&path),
+        )
     }
 
     /// The cameras composed in order: later settings replace earlier ones,
@@ -213,6 +229,43 @@ impl Camera {
             vec![h, w]
         };
         Ok(PyArray1::from_vec(py, data).reshape(dims)?.into_any())
+    }
+
+    /// What the pupil of the camera's first aperture transmits at the
+    /// points (`x`, `y`), mm from its centre (arrays of one shape): a
+    /// complex array, 1 on clear glass, 0 on the stop, the obstruction,
+    /// vanes, dust and scratches, and the smudge's a·e^(iφ) under grease,
+    /// the dirt drawn from the camera's seed as for its kernel.
+    fn pupil<'py>(
+        &self,
+        py: Python<'py>,
+        x: numpy::PyReadonlyArrayDyn<'py, f64>,
+        y: numpy::PyReadonlyArrayDyn<'py, f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let pupil = aureole::optics::aperture::first_optics(&self.config)
+            .map_err(value_error)?
+            .map(|optics| optics.pupil)
+            .ok_or_else(|| value_error(aureole::Error::NoAperture))?;
+        let (x, y) = (x.as_array(), y.as_array());
+        if x.shape() != y.shape() {
+            return Err(PyValueError::new_err(format!(
+                "x and y must have one shape; they have {:?} and {:?}",
+                x.shape(),
+                y.shape()
+            )));
+        }
+        let shape = x.shape().to_vec();
+        let points: Vec<[f64; 2]> = x.iter().zip(y.iter()).map(|(&x, &y)| [x, y]).collect();
+        let values: Vec<numpy::Complex64> = py.detach(|| {
+            points
+                .par_iter()
+                .map(|&point| {
+                    let [re, im] = pupil.transmission(point);
+                    numpy::Complex64::new(re, im)
+                })
+                .collect()
+        });
+        Ok(PyArray1::from_vec(py, values).reshape(shape)?.into_any())
     }
 
     /// The image the camera records of `image` (luminance in cd/m² ×

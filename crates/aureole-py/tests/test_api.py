@@ -268,3 +268,35 @@ def test_two_threads_apply_one_camera_at_once_with_the_same_result():
         t.join()
     assert np.array_equal(results[0], camera.apply(images[0]))
     assert np.array_equal(results[1], camera.apply(images[1]))
+
+
+def test_a_measured_psf_is_read_relative_to_its_config_file(tmp_path):
+    # A 6-blade stop's kernel written as an EXR, named by a config file in
+    # the same folder: the camera applies it like the stop itself (its
+    # faint border, taken for the background, aside).
+    stop = aureole.Camera.from_toml("""
+[camera]
+sensor_width_mm = 36
+focal_length_mm = 50
+f_number = 8
+
+[[effect]]
+type = "aperture"
+blades = 6
+""")
+    star = stop.kernel(101, 101, image_width=1920)
+    aureole.write(str(tmp_path / "star.exr"), star)
+    (tmp_path / "measured.toml").write_text("""
+[camera]
+sensor_width_mm = 36
+
+[[effect]]
+type = "image"
+file = "star.exr"
+pitch_um = 18.75
+""")
+    measured = aureole.Camera.from_file(str(tmp_path / "measured.toml"))
+    ours = measured.kernel(101, 101, image_width=1920)
+    assert np.abs(ours - star).max() < 1e-4 * star.max()
+    with pytest.raises(OSError, match="nowhere.exr"):
+        aureole.Camera.from_toml('[[effect]]\ntype = "image"\nfile = "nowhere.exr"\npitch_um = 4')

@@ -40,7 +40,7 @@ function control(parameter, table, changed) {
     input.type = "checkbox";
     input.checked = value === undefined ? Boolean(parameter.default) : value;
     input.addEventListener("change", () => { table[parameter.name] = input.checked; changed(); });
-  } else if (parameter.kind === "length") {
+  } else if (parameter.kind === "length" || parameter.kind === "text") {
     input.type = "text";
     input.value = value === undefined ? "" : value;
     input.placeholder = fallback;

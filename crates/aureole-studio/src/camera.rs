@@ -17,6 +17,7 @@ fn parameter(p: &Parameter) -> Value {
             Kind::Angle => "angle",
             Kind::Length => "length",
             Kind::Flag => "flag",
+            Kind::Text => "text",
         },
         "low": bound(p.low),
         "high": bound(p.high),
@@ -25,6 +26,7 @@ fn parameter(p: &Parameter) -> Value {
             Default::Number(v) => json!(v),
             Default::Length(text) => json!(text),
             Default::Flag(flag) => json!(flag),
+            Default::Text(text) => json!(text),
         },
         "unit": p.unit,
         "allowed": p.allowed,
@@ -38,6 +40,9 @@ fn parameter(p: &Parameter) -> Value {
 pub fn schema() -> Value {
     let effects: Vec<Value> = aureole::optics::EFFECT_PARAMETERS
         .iter()
+        // A measured PSF names a file of its own, which the studio does
+        // not read (render::parse_config refuses it): no panel offers it.
+        .filter(|(kind, _)| *kind != aureole::optics::measured::KIND)
         .map(|(kind, parameters)| {
             // The aperture's star-filter families are tables of their own.
             let tables = if *kind == "aperture" {

@@ -592,7 +592,13 @@ fn the_camera_panels_come_from_the_library_schema_and_round_trip_the_toml() {
         .iter()
         .map(|e| e["type"].as_str().unwrap())
         .collect();
-    assert_eq!(types, aureole::optics::EFFECT_TYPES);
+    // Every effect but a measured PSF, whose file the studio does not read.
+    let offered: Vec<&str> = aureole::optics::EFFECT_TYPES
+        .iter()
+        .copied()
+        .filter(|t| *t != aureole::optics::measured::KIND)
+        .collect();
+    assert_eq!(types, offered);
     let aperture = effects.iter().find(|e| e["type"] == "aperture").unwrap();
     let blades = aperture["parameters"]
         .as_array()

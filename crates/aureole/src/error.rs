@@ -86,6 +86,19 @@ pub enum Error {
     )]
     NoEffect,
 
+    /// A measured PSF that cannot be used.
+    #[error("image {file:?}: {why}")]
+    MeasuredPsf {
+        /// Its file, as the config names it.
+        file: String,
+        /// What is wrong with it.
+        why: String,
+    },
+
+    /// A pupil was asked of a chain without an aperture.
+    #[error("no pupil to draw: the chain has no [[effect]] type = \"aperture\"")]
+    NoAperture,
+
     /// An image whose size differs from the one a plan was built for.
     #[error("image is {}x{} but the plan was built for {}x{}", found.0, found.1, expected.0, expected.1)]
     SizeMismatch {

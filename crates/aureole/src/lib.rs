@@ -89,7 +89,7 @@ pub use control::{Cancel, Control};
 pub use error::{Error, Result};
 pub use image::{Image, Layout, Shape};
 pub use kernel::{Extent, Kernel};
-pub use optics::{Aperture, Bloom, Corona, Effect, Filter, Halation, Vos};
+pub use optics::{Aperture, Bloom, Corona, Effect, Filter, Halation, Measured, Vos};
 pub use pipeline::{
     Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, GlareLayer, Method, Plan, ScaleSource,
     Session, Stage,

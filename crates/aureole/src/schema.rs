@@ -18,6 +18,8 @@ pub enum Kind {
     Length,
     /// true or false.
     Flag,
+    /// Words: a file's name, a choice.
+    Text,
 }
 
 /// A parameter's value when a config leaves it out.
@@ -31,6 +33,8 @@ pub enum Default {
     Length(&'static str),
     /// This flag.
     Flag(bool),
+    /// These words.
+    Text(&'static str),
 }
 
 /// One parameter of an effect or of the camera.
@@ -188,6 +192,15 @@ mod tests {
                 .and_then(|name| crate::presets::find(name).ok())
                 .and_then(|preset| preset.config().ok())
                 .and_then(|config| config.effects.into_iter().find(|e| e.kind() == *kind))
+                .or_else(|| {
+                    // A measured PSF needs a file: no preset can hold one.
+                    let table: toml::Table =
+                        toml::from_str("type = \"image\"\nfile = \"star.exr\"\npitch_um = 4.0")
+                            .ok()?;
+                    crate::optics::Effect::from_table(table)
+                        .ok()
+                        .filter(|e| e.kind() == *kind)
+                })
                 .unwrap_or_else(|| panic!("no preset has a {kind}"));
             let mut table = example.to_table();
             for p in *parameters {
@@ -195,7 +208,9 @@ mod tests {
                     (Default::Required, _) => continue,
                     (Default::Number(v), Kind::Whole) => toml::Value::Integer(v as i64),
                     (Default::Number(v), _) => toml::Value::Float(v),
-                    (Default::Length(text), _) => toml::Value::String(text.into()),
+                    (Default::Length(text) | Default::Text(text), _) => {
+                        toml::Value::String(text.into())
+                    }
                     (Default::Flag(flag), _) => toml::Value::Boolean(flag),
                 };
                 table.entry(p.name).or_insert(value);

@@ -25,15 +25,9 @@ fn optics(pupil: Pupil, diameter_mm: f64) -> Optics {
 /// A stop of `blades` blades on the tests' 50 mm f/8 full-frame camera.
 fn lens(blades: u32, spectral: bool) -> Aperture {
     Aperture {
-        blades,
-        rotation_deg: 0.0,
-        roundness: 0.0,
         spectral,
         wavelength_nm: GREEN,
-        obstruction: 0.0,
-        vanes: 0,
-        vane_width: 0.02,
-        filters: Vec::new(),
+        ..Aperture::new(blades)
     }
 }
 

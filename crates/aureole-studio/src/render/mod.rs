@@ -449,6 +449,17 @@ pub fn parse_config(text: &str) -> Result<Config, StudioError> {
     if config.effects.is_empty() {
         return Err(aureole::Error::NoEffect.into());
     }
+    // The studio reads only the image the user opened; a measured PSF's
+    // file is another, which the command line and Python read.
+    if config
+        .effects
+        .iter()
+        .any(|e| matches!(e, aureole::Effect::Image(_)))
+    {
+        return Err(StudioError::BadRequest(
+            "config: the studio does not read measured PSFs (type = \"image\"); apply them with `aureole apply` or Python".into(),
+        ));
+    }
     Ok(config)
 }
 

@@ -286,6 +286,7 @@ pub fn build(
                 SplitKernel::from_shape(epsilon, shape.as_ref(), extent, &mut rasterising)?
             }
             Source::Shapes(planes) => SplitKernel::from_shapes(&planes, extent, &mut rasterising)?,
+            Source::Pattern(planes) => SplitKernel::from_pattern(planes, extent),
             Source::Diffraction {
                 optics,
                 light,

@@ -224,8 +224,7 @@ impl Corona {
     /// φ₀ + 2πm/k). The same `seed` and `corona_index` (the number of coronas
     /// before this one in the chain) give the same factors on every machine.
     pub fn ray_factors(&self, seed: u64, corona_index: usize) -> Vec<RayFactors> {
-        let stream = seed.wrapping_add((corona_index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        let mut rng = Pcg64::seed_from_u64(stream);
+        let mut rng = Pcg64::seed_from_u64(super::stream(seed, corona_index));
         let jittered = |jitter: f64, xi: f64| (1.0 + jitter * xi).max(JITTER_FLOOR);
         (0..self.rays)
             .map(|_| {

@@ -16,6 +16,7 @@ pub mod aperture;
 pub mod bloom;
 pub mod corona;
 pub mod halation;
+pub mod measured;
 pub(crate) mod shape;
 pub mod vos;
 
@@ -23,6 +24,7 @@ pub use aperture::{Aperture, Filter};
 pub use bloom::Bloom;
 pub use corona::{Corona, RayFactors};
 pub use halation::Halation;
+pub use measured::Measured;
 pub use vos::Vos;
 
 use serde::de::Error as _;
@@ -49,12 +51,21 @@ pub(crate) struct Context<'a> {
     pub kernel_size: (usize, usize),
 }
 
+/// The random stream of the `index`-th effect of one type in a chain: each
+/// draws its own numbers from the config's one seed.
+pub(crate) fn stream(seed: u64, index: usize) -> u64 {
+    seed.wrapping_add((index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
 /// An effect ready to rasterise.
 pub(crate) enum Source {
     /// ε and the shape of f: K = (1 − ε)·δ + ε·F/ΣF.
     Shape(f64, Box<dyn SpreadShape>),
     /// One ε and shape per colour plane (R, G, B).
     Shapes(Vec<(f64, Box<dyn SpreadShape>)>),
+    /// All of K, one plane per colour, rasterised at the kernel's extent
+    /// and normalised.
+    Pattern(Vec<Vec<f64>>),
     /// A diffraction pattern, all of K, from the pupil and filter in
     /// `optics`, integrated over `light`, at `pitch_mm` per pixel.
     Diffraction {
@@ -240,4 +251,6 @@ effects! {
     Aperture(Aperture),
     /// Light reflected from the film base back into the emulsion.
     Halation(Halation),
+    /// A measured or external PSF, from a picture a front end reads.
+    Image(Measured),
 }

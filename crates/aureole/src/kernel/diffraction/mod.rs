@@ -62,7 +62,8 @@ fn pattern_with(
         .map(|c| spectrum.iter().map(|(_, w)| w[c]).sum::<f64>())
         .collect();
     let near = NearField::new(optics, spectrum, pitch_mm);
-    let far = FarField::new(optics, spectrum, &weights_total, pitch_mm);
+    let reach = pitch_mm * (width as f64).hypot(height as f64) / 2.0;
+    let far = FarField::new(optics, spectrum, &weights_total, pitch_mm, reach);
     let filtered = optics.orders.len() > 1;
 
     let far2 = far_from * far_from;
@@ -129,7 +130,13 @@ fn pattern_with(
     // A real pupil's pattern is centrosymmetric, PSF(−x) = PSF(x), and so
     // are the near field's quadrature and the far field's terms: the rows
     // down to the centre are computed, the rest are their mirror images.
-    let computed = (cy + 1).min(height);
+    // Grease that delays the light breaks the symmetry: every row is
+    // computed.
+    let computed = if optics.pupil.is_real() {
+        (cy + 1).min(height)
+    } else {
+        height
+    };
     let mut rasterising = control.part(0.0, if filtered { 0.8 } else { 1.0 });
     // The near field's rows, about the centre, cost the most.
     for_each_interleaved(
@@ -153,7 +160,7 @@ fn pattern_with(
     }
     // An even width leaves the first column below the centre unmirrored.
     let alone = (2 * cx + 1).saturating_sub(width).min(width);
-    if alone > 0 {
+    if alone > 0 && computed < height {
         plane_rows(&mut result, width, computed..height)
             .par_iter_mut()
             .enumerate()
@@ -243,7 +250,7 @@ mod tests {
             focal_length_mm: Some(50.0),
             f_number: Some(f_number),
         };
-        aperture.optics(&camera, 1.0).unwrap()
+        aperture.optics(&camera, 1.0, 0).unwrap()
     }
 
     /// A stop's parameters: straight blades turned by 5°, no obstruction.
@@ -257,7 +264,7 @@ mod tests {
             obstruction: 0.0,
             vanes: 0,
             vane_width: 0.02,
-            filters: Vec::new(),
+            ..Aperture::new(7)
         }
     }
 
@@ -563,7 +570,7 @@ mod tests {
             .map(|c| spectrum.iter().map(|(_, w)| w[c]).sum())
             .collect();
         let near = NearField::new(optics, &spectrum, pitch);
-        let far = FarField::new(optics, &spectrum, &totals, pitch);
+        let far = FarField::new(optics, &spectrum, &totals, pitch, (r + 2.0) * pitch);
         let mut scratch = far::Row::default();
         let (mut fast, mut exact) = (vec![vec![0.0; bins]; planes], vec![vec![0.0; bins]; planes]);
         for (dx, dy, bin) in ring_pixels(r, bins) {

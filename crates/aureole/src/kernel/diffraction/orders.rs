@@ -296,10 +296,15 @@ impl Cores {
         let reach = ((12.0 * lambda_n_px).ceil() as usize).clamp(3, 24);
         let side = 2 * reach + 2;
         let places = (PHASES + 1) * (PHASES + 1);
-        // The pattern is centrosymmetric: the place (1 − fx, 1 − fy) sees
-        // the block of (fx, fy) turned by half a turn, so only the first
-        // half of the places is evaluated.
-        let evaluated = places / 2 + 1;
+        // A pupil that delays no part of the light gives a centrosymmetric
+        // pattern: the place (1 − fx, 1 − fy) sees the block of (fx, fy)
+        // turned by half a turn, so only the first half of the places is
+        // evaluated.
+        let evaluated = if optics.pupil.is_real() {
+            places / 2 + 1
+        } else {
+            places
+        };
         let singles: Vec<Spectrum> = spectrum
             .iter()
             .map(|(lambda_nm, _)| vec![(*lambda_nm, vec![1.0])])

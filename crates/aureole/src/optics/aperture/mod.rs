@@ -6,6 +6,7 @@
 //! kernel's near field, far field and filter orders in
 //! [`crate::kernel::diffraction`].
 
+mod dirt;
 pub mod pupil;
 pub mod spectrum;
 
@@ -60,6 +61,39 @@ pub struct Aperture {
     /// Width of each vane, as a fraction of the diameter.
     #[serde(default = "vane_width")]
     pub vane_width: f64,
+    /// Specks of dust in the beam on the front element.
+    #[serde(default)]
+    pub dust: u32,
+    /// The smallest specks' diameter, µm.
+    #[serde(default = "dust_min")]
+    pub dust_min_um: f64,
+    /// The largest specks' diameter, µm.
+    #[serde(default = "dust_max")]
+    pub dust_max_um: f64,
+    /// Scratches on the front element.
+    #[serde(default)]
+    pub scratches: u32,
+    /// Their length, mm, cut by the beam's edge.
+    #[serde(default = "scratch_length")]
+    pub scratch_length_mm: f64,
+    /// Their width, µm.
+    #[serde(default = "scratch_width")]
+    pub scratch_width_um: f64,
+    /// Their mean direction, degrees from +x.
+    #[serde(default)]
+    pub scratch_angle_deg: f64,
+    /// How far their directions spread about it, degrees (180: any).
+    #[serde(default = "scratch_spread")]
+    pub scratch_spread_deg: f64,
+    /// A smudge of grease: its diameter, as a fraction of the pupil's.
+    #[serde(default)]
+    pub grease: f64,
+    /// The share of the light the smudge passes.
+    #[serde(default = "grease_transmission")]
+    pub grease_transmission: f64,
+    /// The delay of the light through it, degrees of phase.
+    #[serde(default = "grease_phase")]
+    pub grease_phase_deg: f64,
     /// Star filter or grating: one family of parallel lines per entry.
     #[serde(default, rename = "filter")]
     pub filters: Vec<Filter>,
@@ -87,6 +121,27 @@ fn green() -> f64 {
 }
 fn vane_width() -> f64 {
     0.02
+}
+fn dust_min() -> f64 {
+    20.0
+}
+fn dust_max() -> f64 {
+    150.0
+}
+fn scratch_length() -> f64 {
+    10.0
+}
+fn scratch_width() -> f64 {
+    20.0
+}
+fn scratch_spread() -> f64 {
+    180.0
+}
+fn grease_transmission() -> f64 {
+    0.8
+}
+fn grease_phase() -> f64 {
+    90.0
 }
 
 /// The optics an aperture kernel needs: the pupil, the focal length and
@@ -185,6 +240,113 @@ const VANE_WIDTH: Parameter = fraction(
     "a fraction of the diameter above 0 and at most 0.2",
     "each vane's width, of the diameter",
 );
+const DUST: Parameter = Parameter {
+    name: "dust",
+    kind: Kind::Whole,
+    low: Some((0.0, true)),
+    high: Some((2000.0, true)),
+    default: Default::Number(0.0),
+    unit: "",
+    allowed: "0 to 2000 specks",
+    about: "specks of dust in the beam on the front element",
+};
+const fn micrometres(
+    name: &'static str,
+    (low, high): (f64, f64),
+    default: f64,
+    allowed: &'static str,
+    about: &'static str,
+) -> Parameter {
+    Parameter {
+        name,
+        kind: Kind::Number,
+        low: Some((low, true)),
+        high: Some((high, true)),
+        default: Default::Number(default),
+        unit: "µm",
+        allowed,
+        about,
+    }
+}
+const DUST_MIN: Parameter = micrometres(
+    "dust_min_um",
+    (1.0, 2000.0),
+    20.0,
+    "a diameter from 1 to 2000 µm",
+    "the smallest specks' diameter",
+);
+const DUST_MAX: Parameter = micrometres(
+    "dust_max_um",
+    (1.0, 2000.0),
+    150.0,
+    "a diameter from 1 to 2000 µm, at least dust_min_um",
+    "the largest specks' diameter; sizes are spread evenly in their logarithm",
+);
+const SCRATCHES: Parameter = Parameter {
+    name: "scratches",
+    kind: Kind::Whole,
+    low: Some((0.0, true)),
+    high: Some((32.0, true)),
+    default: Default::Number(0.0),
+    unit: "",
+    allowed: "0 to 32 scratches",
+    about: "scratches on the front element; each sends a streak across itself",
+};
+const SCRATCH_LENGTH: Parameter = Parameter {
+    name: "scratch_length_mm",
+    kind: Kind::Number,
+    low: Some((0.1, true)),
+    high: Some((200.0, true)),
+    default: Default::Number(10.0),
+    unit: "mm",
+    allowed: "a length from 0.1 to 200 mm",
+    about: "each scratch's length, cut where it leaves the beam",
+};
+const SCRATCH_WIDTH: Parameter = micrometres(
+    "scratch_width_um",
+    (1.0, 1000.0),
+    20.0,
+    "a width from 1 to 1000 µm",
+    "each scratch's width",
+);
+const SCRATCH_ANGLE: Parameter = crate::schema::angle(
+    "scratch_angle_deg",
+    "the scratches' mean direction; their streaks run across it",
+);
+const SCRATCH_SPREAD: Parameter = Parameter {
+    name: "scratch_spread_deg",
+    kind: Kind::Number,
+    low: Some((0.0, true)),
+    high: Some((180.0, true)),
+    default: Default::Number(180.0),
+    unit: "°",
+    allowed: "a spread from 0 to 180°",
+    about: "how far their directions spread about it; 180: any direction",
+};
+const GREASE: Parameter = fraction(
+    "grease",
+    ((0.0, true), (0.9, true)),
+    0.0,
+    "a fraction of the pupil's diameter from 0 to 0.9",
+    "a smudge of grease, its diameter of the pupil's; 0 for none",
+);
+const GREASE_TRANSMISSION: Parameter = fraction(
+    "grease_transmission",
+    ((0.0, true), (1.0, true)),
+    0.8,
+    "a fraction of the light from 0 to 1",
+    "the share of the light the smudge passes",
+);
+const GREASE_PHASE: Parameter = Parameter {
+    name: "grease_phase_deg",
+    kind: Kind::Angle,
+    low: None,
+    high: None,
+    default: Default::Number(90.0),
+    unit: "°",
+    allowed: "a finite angle in degrees",
+    about: "the delay of the light through the smudge, in degrees of phase",
+};
 const ROTATION: Parameter = crate::schema::angle(
     "rotation_deg",
     "the stop's rotation; at 0 a blade tip points along +x",
@@ -229,6 +391,17 @@ impl Model for Aperture {
         OBSTRUCTION,
         VANES,
         VANE_WIDTH,
+        DUST,
+        DUST_MIN,
+        DUST_MAX,
+        SCRATCHES,
+        SCRATCH_LENGTH,
+        SCRATCH_WIDTH,
+        SCRATCH_ANGLE,
+        SCRATCH_SPREAD,
+        GREASE,
+        GREASE_TRANSMISSION,
+        GREASE_PHASE,
     ];
 
     /// Checks every parameter.
@@ -254,6 +427,31 @@ impl Model for Aperture {
             VANES.admits(f64::from(self.vanes)),
             VANES.allowed,
         )?;
+        for (count, parameter) in [(self.dust, &DUST), (self.scratches, &SCRATCHES)] {
+            check::count(
+                NAME,
+                parameter.name,
+                count,
+                parameter.admits(f64::from(count)),
+                parameter.allowed,
+            )?;
+        }
+        DUST_MIN.check(NAME, self.dust_min_um)?;
+        // The largest specks are bounded by the smallest too.
+        check::range(
+            NAME,
+            DUST_MAX.name,
+            self.dust_max_um,
+            DUST_MAX.admits(self.dust_max_um) && self.dust_max_um >= self.dust_min_um,
+            DUST_MAX.allowed,
+        )?;
+        SCRATCH_LENGTH.check(NAME, self.scratch_length_mm)?;
+        SCRATCH_WIDTH.check(NAME, self.scratch_width_um)?;
+        SCRATCH_ANGLE.check(NAME, self.scratch_angle_deg)?;
+        SCRATCH_SPREAD.check(NAME, self.scratch_spread_deg)?;
+        GREASE.check(NAME, self.grease)?;
+        GREASE_TRANSMISSION.check(NAME, self.grease_transmission)?;
+        GREASE_PHASE.check(NAME, self.grease_phase_deg)?;
         check::count(
             NAME,
             "filter",
@@ -294,8 +492,9 @@ impl Model for Aperture {
         let (width, height) = context.kernel_size;
         // Orders are kept as far out as the kernel's corners reach.
         let reach = pitch_mm * ((width * width + height * height) as f64).sqrt() / 2.0;
+        let seed = super::stream(context.seed, context.index_of_kind);
         Ok(Source::Diffraction {
-            optics: self.optics(context.camera, reach)?,
+            optics: self.optics(context.camera, reach, seed)?,
             light: self.light(),
             pitch_mm,
         })
@@ -322,7 +521,47 @@ impl Model for Aperture {
     }
 }
 
+/// The optics of the first aperture in `config`'s chain, its dirt drawn
+/// from the config's seed as for its kernel (without a filter's orders);
+/// `None` without an aperture.
+pub fn first_optics(config: &crate::Config) -> Result<Option<Optics>> {
+    let first = config.effects.iter().find_map(|e| match e {
+        super::Effect::Aperture(a) => Some(a),
+        _ => None,
+    });
+    first
+        .map(|a| a.optics(&config.camera, 0.0, super::stream(config.seed, 0)))
+        .transpose()
+}
+
 impl Aperture {
+    /// A stop of `blades` (0: round) with every other parameter at its
+    /// default: spectral, unturned, clean, without filter.
+    pub fn new(blades: u32) -> Aperture {
+        Aperture {
+            blades,
+            rotation_deg: 0.0,
+            roundness: 0.0,
+            spectral: yes(),
+            wavelength_nm: green(),
+            obstruction: 0.0,
+            vanes: 0,
+            vane_width: vane_width(),
+            dust: 0,
+            dust_min_um: dust_min(),
+            dust_max_um: dust_max(),
+            scratches: 0,
+            scratch_length_mm: scratch_length(),
+            scratch_width_um: scratch_width(),
+            scratch_angle_deg: 0.0,
+            scratch_spread_deg: scratch_spread(),
+            grease: 0.0,
+            grease_transmission: grease_transmission(),
+            grease_phase_deg: grease_phase(),
+            filters: Vec::new(),
+        }
+    }
+
     /// The light the pattern integrates: the spectrum into R, G, B, or one
     /// wavelength.
     pub fn light(&self) -> Light {
@@ -334,8 +573,9 @@ impl Aperture {
     }
 
     /// The pupil and orders for `camera`, with the orders that land within
-    /// `reach_mm` of the centre at 380 nm or longer.
-    pub fn optics(&self, camera: &Camera, reach_mm: f64) -> Result<Optics> {
+    /// `reach_mm` of the centre at 380 nm or longer, and the dirt drawn
+    /// from `seed`.
+    pub fn optics(&self, camera: &Camera, reach_mm: f64, seed: u64) -> Result<Optics> {
         self.validate()?;
         let need = |field, why| Error::NeedsCamera {
             what: "aperture diffraction".into(),
@@ -353,15 +593,16 @@ impl Aperture {
             .ok_or_else(|| need("f_number", "the pupil's diameter is f/N"))?;
         let diameter = focal / n;
         Ok(Optics {
-            pupil: self.pupil(diameter / 2.0),
+            pupil: self.pupil(diameter / 2.0, seed)?,
             diameter_mm: diameter,
             focal_mm: focal,
             orders: self.orders(focal, reach_mm),
         })
     }
 
-    /// The stop of circumradius `radius` mm, with obstruction and vanes.
-    fn pupil(&self, radius: f64) -> Pupil {
+    /// The stop of circumradius `radius` mm, with obstruction, vanes and
+    /// dirt drawn from `seed`.
+    fn pupil(&self, radius: f64, seed: u64) -> Result<Pupil> {
         let mut pupil = Pupil::new();
         let rotation = self.rotation_deg.to_radians();
         let inner_radius = if self.blades == 0 {
@@ -397,6 +638,7 @@ impl Aperture {
         // Vanes run from the obstruction (or near the centre, where they
         // would overlap) to the inscribed circle, within the open pupil.
         let start = obstruction.max(2.0 * half_width);
+        let mut vanes = Vec::new();
         for v in 0..self.vanes {
             let angle = rotation + TAU * v as f64 / self.vanes as f64;
             let (s, c) = angle.sin_cos();
@@ -411,9 +653,39 @@ impl Aperture {
                     ],
                     false,
                 );
+                vanes.push(dirt::Strip {
+                    start: corner(start, 0.0),
+                    end: corner(inner_radius, 0.0),
+                    half: half_width,
+                });
             }
         }
-        pupil
+        let clearance = dirt::Clearance {
+            // Rounded blades are sampled by chords, which cut inside the
+            // curve's inscribed circle by at most 4·10⁻⁴ of the radius.
+            inner: inner_radius * (1.0 - 1e-3),
+            obstruction,
+            vanes,
+        };
+        dirt::add(&self.dirt(), radius, &clearance, seed, &mut pupil)?;
+        Ok(pupil)
+    }
+
+    /// The dirt, in mm and radians.
+    fn dirt(&self) -> dirt::Dirt {
+        let amplitude = self.grease_transmission.sqrt();
+        let phase = self.grease_phase_deg.to_radians();
+        dirt::Dirt {
+            dust: self.dust,
+            dust_diameters: [self.dust_min_um * 1e-3, self.dust_max_um * 1e-3],
+            scratches: self.scratches,
+            scratch_length: self.scratch_length_mm,
+            scratch_width: self.scratch_width_um * 1e-3,
+            scratch_angle: self.scratch_angle_deg.to_radians(),
+            scratch_spread: self.scratch_spread_deg.to_radians(),
+            grease: self.grease,
+            grease_amplitude: [amplitude * libm::cos(phase), amplitude * libm::sin(phase)],
+        }
     }
 
     /// Diffraction orders of the filter families: a family of opaque lines

@@ -6,16 +6,19 @@
 //! ray; each disc adds its ⟨J₁²⟩ term R λ f / (2π²|x|³·area) with its
 //! fringes and their beats with concentric discs and with the edges that
 //! end on its rim, and each piece of a curved side fans its light over the
-//! turn of its normal (docs/physics.md §6).
+//! turn of its normal, and each spot of dirt adds its whole pattern
+//! (docs/physics.md §6).
 //!
 //! The edges and the pairs of parallel edges are summed here, the rims in
-//! [`rims`], the curved sides in [`fans`].
+//! [`rims`], the curved sides in [`fans`], the spots in [`spots`].
 
 mod fans;
 mod rims;
+mod spots;
 
 use fans::Fans;
 use rims::{FringeRow, Fringes};
+use spots::Spots;
 
 use super::Spectrum;
 use crate::optics::aperture::pupil::{sinc, EdgeTerm};
@@ -50,6 +53,8 @@ pub(super) struct FarField {
     discs: f64,
     /// The discs' fringes about that mean.
     fringes: Fringes,
+    /// Spots of dirt.
+    spots: Spots,
     /// The planes' spectrum-averaged ∫₀ᵘ sinc²(πu'/λ) du' and its integral.
     table: Cumulative,
     /// Each wavelength of the light, for the pairs' cross terms, which are
@@ -294,13 +299,16 @@ impl Cumulative {
 }
 
 impl FarField {
+    /// The far field of `optics` in `spectrum`, at `pitch` mm per pixel
+    /// out to `reach` mm from the centre.
     pub fn new(
         optics: &Optics,
         spectrum: &Spectrum,
         weights_total: &[f64],
         pitch: f64,
+        reach: f64,
     ) -> FarField {
-        let (edges, discs) = optics.pupil.far_field_terms();
+        let (edges, discs, spots) = optics.pupil.far_field_terms();
         let f = optics.focal_mm;
         let planes = weights_total.len();
         let light = |c: usize| -> Vec<(f64, f64)> {
@@ -361,6 +369,7 @@ impl FarField {
             })),
             discs: 2.0 * discs.iter().map(|d| d.radius).sum::<f64>(),
             fringes,
+            spots: Spots::new(&spots, &lines, planes, f, pitch, reach + pitch),
             table: Cumulative::new(&(0..planes).map(light).collect::<Vec<_>>()),
             longest: lines.iter().map(|l| l.lambda).fold(0.0, f64::max),
             lines,
@@ -421,10 +430,15 @@ impl FarField {
             }
             curved += self.discs;
             let per_r3 = self.focal / (r2 * r);
+            let mut spots = [0.0; PLANES];
+            if !self.spots.is_empty() {
+                self.spots.add(r, pitch, &mut spots);
+            }
             for (c, value) in pixel.iter_mut().enumerate() {
                 let straight = scratch.sums[i * planes + c] + self.table.tail[c] * scratch.tails[i];
                 let curved = curved * self.mean_lambda[c] + Fringes::at(&scratch.fringes, i, c);
-                *value = weights[c] * norm * (straight / (r2 * r2) + curved * per_r3);
+                *value = weights[c] * norm * (straight / (r2 * r2) + curved * per_r3)
+                    + weights[c] * spots[c] * pitch * pitch / self.area;
             }
         }
     }
@@ -798,14 +812,14 @@ mod tests {
             obstruction: 0.0,
             vanes,
             vane_width: 0.02,
-            filters: Vec::new(),
+            ..Aperture::new(7)
         };
         let camera = crate::Camera {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: Some(8.0),
         };
-        aperture.optics(&camera, 1.0).unwrap()
+        aperture.optics(&camera, 1.0, 0).unwrap()
     }
 
     #[test]
@@ -834,7 +848,7 @@ mod tests {
     fn parallel_edges_pair_with_the_sign_of_their_fields() {
         // An even stop's opposite blades: fields F and −F·e^(iq·d).
         let o = optics(8, 0);
-        let (edges, _) = o.pupil.far_field_terms();
+        let (edges, _, _) = o.pupil.far_field_terms();
         let pairs = parallel_pairs(&edges, o.diameter_mm);
         assert_eq!(pairs.len(), 4);
         assert!(pairs
@@ -845,14 +859,14 @@ mod tests {
         // both opaque) and one facing (−1); the vanes' ends, 2 % of D, are
         // left out, and perpendicular vanes do not pair.
         let o = optics(0, 4);
-        let (edges, _) = o.pupil.far_field_terms();
+        let (edges, _, _) = o.pupil.far_field_terms();
         let pairs = parallel_pairs(&edges, o.diameter_mm);
         let count = |s: f64| pairs.iter().filter(|p| p.2 == s).count();
         assert_eq!((pairs.len(), count(1.0), count(-1.0)), (12, 4, 8));
         // Three vanes in a hexagon run to its corners: each vane's sides
         // lie parallel to the two blades across the vane, longer than them.
         let o = optics(6, 3);
-        let (edges, _) = o.pupil.far_field_terms();
+        let (edges, _, _) = o.pupil.far_field_terms();
         let pairs = parallel_pairs(&edges, o.diameter_mm);
         let unequal: Vec<_> = pairs.iter().filter(|p| p.3 < 1.0).collect();
         assert_eq!((pairs.len(), unequal.len()), (18, 12));
