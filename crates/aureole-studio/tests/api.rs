@@ -647,6 +647,20 @@ fn the_camera_panels_come_from_the_library_schema_and_round_trip_the_toml() {
     );
     assert_eq!(refused.status, 400);
     assert!(refused.error().contains("epsilon"), "{}", refused.error());
+    // A measured PSF names a file the studio does not read: refused before
+    // anything is opened.
+    let measured = http(
+        addr,
+        "POST",
+        "/api/config/read",
+        "[[effect]]\ntype = \"image\"\nfile = \"/etc/passwd\"\npitch_um = 4\n",
+    );
+    assert_eq!(measured.status, 400);
+    assert!(
+        measured.error().contains("does not read measured PSFs"),
+        "{}",
+        measured.error()
+    );
 }
 
 #[test]
