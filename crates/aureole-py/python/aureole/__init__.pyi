@@ -55,6 +55,12 @@ class Camera:
         """The kernel (PSF) of the chain, float32 (H, W) or (H, W, 3),
         each channel summing to 1, its centre at (height // 2, width // 2).
         `image_width` sets the pixel pitch (sensor width / image width)."""
+    def pupil(
+        self, x: npt.NDArray[np.float64], y: npt.NDArray[np.float64]
+    ) -> npt.NDArray[np.complex128]:
+        """What the first aperture's pupil transmits at (x, y), mm from its
+        centre: 1 on clear glass, 0 on the stop, dust and scratches, the
+        smudge's amplitude under grease; the dirt drawn from the seed."""
     def apply(
         self,
         image: ImageLike,

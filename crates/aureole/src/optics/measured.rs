@@ -189,7 +189,7 @@ impl Model for Measured {
                     why: "the angle its width spans is a width on the sensor at f",
                 })?;
                 let half = angle.unwrap_or_default().to_radians() / 2.0;
-                2.0 * focal * half.tan() / picture.width as f64
+                2.0 * focal * libm::tan(half) / picture.width as f64
             }
         };
         let (planes, survey) = self.cleaned(picture)?;

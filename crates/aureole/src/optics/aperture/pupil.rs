@@ -386,7 +386,7 @@ impl Pupil {
         let reach = dnu_x
             .iter()
             .zip(&dnu_y)
-            .map(|(x, y)| TAU * x.hypot(*y))
+            .map(|(x, y)| TAU * (x * x + y * y).sqrt())
             .fold(0.0, f64::max);
         // The small spots first, then the large ones ([`Pupil::add_spots`]).
         let centres: Vec<[f64; 2]> = self
@@ -558,7 +558,7 @@ impl Pupil {
         let mut sample_q = vec![0.0; count];
         for (i, &x) in nu_x.iter().enumerate() {
             let nu = [TAU * x, TAU * nu_y];
-            let centre_q = nu[0].hypot(nu[1]);
+            let centre_q = (nu[0] * nu[0] + nu[1] * nu[1]).sqrt();
             let row = i * count..(i + 1) * count;
             for ((q, &a), &b) in sample_q
                 .iter_mut()

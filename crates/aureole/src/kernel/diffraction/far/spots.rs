@@ -47,7 +47,8 @@ impl Spots {
         let shortest = lines.iter().map(|l| l.lambda).fold(f64::INFINITY, f64::min);
         let mut octaves: Vec<(i32, Vec<SpotTerm>)> = Vec::new();
         for spot in spots.iter().filter(|s| s.radius > 0.0 && s.power > 0.0) {
-            let octave = spot.radius.log2().floor() as i32;
+            // libm's, so that the groups are the same on every machine.
+            let octave = libm::log2(spot.radius).floor() as i32;
             match octaves.iter_mut().find(|(o, _)| *o == octave) {
                 Some((_, group)) => group.push(*spot),
                 None => octaves.push((octave, vec![*spot])),
