@@ -59,9 +59,7 @@ impl ChainArgs {
         if let Some(seed) = self.seed {
             config.seed = seed;
         }
-        let limits = aureole_io::limits::Limits {
-            max_bytes: aureole_io::limits::default_memory_limit(),
-        };
+        let limits = aureole_io::limits::Limits::default_for_machine();
         aureole_io::measured::load(&mut config.effects, limits)?;
         Ok(config)
     }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use aureole::FrameOptions;
-use aureole_io::limits::{default_memory_limit, Limits};
+use aureole_io::limits::Limits;
 
 use crate::input::SourceArgs;
 use crate::{input, Failure};
@@ -27,9 +27,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         input_scale: args.source.input_scale,
         sanitize: false,
     };
-    let limits = Limits {
-        max_bytes: default_memory_limit(),
-    };
+    let limits = Limits::default_for_machine();
     let choice = args.source.choice();
     let mut loaded = match aureole_io::read::read_image_with(&args.input, limits, &choice) {
         Ok(loaded) => loaded,

@@ -84,14 +84,8 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     let mut config = args.chain.compose(matches)?;
     if let (Some(file), Some(pitch)) = (&args.from_image, args.pitch_um) {
         let mut measured = aureole::Measured::new(file.to_string_lossy().into_owned(), pitch);
-        let limits = aureole_io::limits::Limits {
-            max_bytes: aureole_io::limits::default_memory_limit(),
-        };
-        let mut effects = vec![aureole::Effect::Image(measured.clone())];
-        aureole_io::measured::load(&mut effects, limits)?;
-        if let Some(aureole::Effect::Image(loaded)) = effects.pop() {
-            measured = loaded;
-        }
+        let limits = aureole_io::limits::Limits::default_for_machine();
+        measured.load(aureole_io::measured::read_picture(file, limits)?);
         let survey = measured.survey()?;
         if !quiet {
             eprintln!("{}", describe(file, &measured, &survey));

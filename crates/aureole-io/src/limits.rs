@@ -25,6 +25,15 @@ pub fn available_memory() -> Option<u64> {
     Some(kib * 1024)
 }
 
+impl Limits {
+    /// [`default_memory_limit`] as a decoder's bound.
+    pub fn default_for_machine() -> Limits {
+        Limits {
+            max_bytes: default_memory_limit(),
+        }
+    }
+}
+
 /// The default memory limit: three quarters of what the system can give
 /// now (leaving room for the rest of the machine), or 8 GiB where that is
 /// unknown.

@@ -29,25 +29,27 @@ pub fn resolve(file: &mut ConfigFile, folder: &Path) {
 pub fn load(effects: &mut [Effect], limits: Limits) -> Result<()> {
     for effect in effects {
         if let Effect::Image(measured) = effect {
-            if measured.picture.is_some() {
-                continue;
+            if measured.picture.is_none() {
+                measured.load(read_picture(Path::new(&measured.file), limits)?);
             }
-            let image = read_image(Path::new(&measured.file), limits)?.image;
-            // A picture's luminance is its colour's weighted sum; a
-            // grey one is a luminance PSF.
-            let planes = match image.layout {
-                Layout::Luminance => image.planes,
-                Layout::Rgb if image.planes.windows(2).all(|p| p[0] == p[1]) => {
-                    image.planes.into_iter().take(1).collect()
-                }
-                Layout::Rgb => image.planes,
-            };
-            measured.load(Picture {
-                width: image.width,
-                height: image.height,
-                planes,
-            });
         }
     }
     Ok(())
+}
+
+/// The PSF picture at `path`, within `limits`: one plane, or R, G and B
+/// where they differ (a grey picture is a luminance PSF).
+pub fn read_picture(path: &Path, limits: Limits) -> Result<Picture> {
+    let image = read_image(path, limits)?.image;
+    let planes = match image.layout {
+        Layout::Rgb if image.planes.windows(2).all(|p| p[0] == p[1]) => {
+            image.planes.into_iter().take(1).collect()
+        }
+        Layout::Luminance | Layout::Rgb => image.planes,
+    };
+    Ok(Picture {
+        width: image.width,
+        height: image.height,
+        planes,
+    })
 }

@@ -53,10 +53,8 @@ impl Camera {
     fn parse(text: &str, source_name: &str, folder: &std::path::Path) -> PyResult<Camera> {
         let mut file = ConfigFile::parse(text, source_name).map_err(value_error)?;
         aureole_io::measured::resolve(&mut file, folder);
-        let limits = Limits {
-            max_bytes: default_memory_limit(),
-        };
-        aureole_io::measured::load(&mut file.effects, limits).map_err(file_error)?;
+        aureole_io::measured::load(&mut file.effects, Limits::default_for_machine())
+            .map_err(file_error)?;
         Ok(Camera::new(file))
     }
 
@@ -390,9 +388,7 @@ impl Camera {
             depth: None,
         };
         let choice = Choice { layer, part };
-        let limits = Limits {
-            max_bytes: default_memory_limit(),
-        };
+        let limits = Limits::default_for_machine();
         let frame_options = FrameOptions {
             input_scale,
             sanitize: false,

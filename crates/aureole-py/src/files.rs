@@ -7,7 +7,7 @@ use aureole::image::Primaries;
 use aureole_io::compression::Compression;
 use aureole_io::display::{render as display, DisplayOptions, Exposure, ToneCurve};
 use aureole_io::formats::Samples;
-use aureole_io::limits::{default_memory_limit, Limits};
+use aureole_io::limits::Limits;
 use aureole_io::read::{read_image_with, Choice};
 use aureole_io::write::{write_image, LinearOptions, WriteOptions, Written};
 use numpy::{PyArray1, PyArrayMethods};
@@ -36,9 +36,7 @@ pub fn read<'py>(
     part: Option<String>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     let choice = Choice { layer, part };
-    let limits = Limits {
-        max_bytes: default_memory_limit(),
-    };
+    let limits = Limits::default_for_machine();
     let loaded = py
         .detach(|| read_image_with(&path, limits, &choice))
         .map_err(file_error)?;

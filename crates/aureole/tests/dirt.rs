@@ -204,7 +204,7 @@ fn the_dirt_is_drawn_from_the_seed_and_kept_clear_of_the_vanes() {
     // nothing lies on top of anything else.
     let pupil = first_pupil(&with_seed(7)).unwrap();
     let radius = F / 8.0 / 2.0;
-    let smudge = [0.8f64.sqrt() * 0.0, 0.8f64.sqrt()];
+    let smudge = [0.0, 0.8f64.sqrt()];
     for j in 0..400 {
         for i in 0..400 {
             let point = [

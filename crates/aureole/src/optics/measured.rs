@@ -116,6 +116,14 @@ const FLOOR: Parameter = Parameter {
     about: "light below this many σ of the border's noise stays dark",
 };
 
+/// Where a picture's point of light lies.
+enum Centre {
+    Brightest,
+    Centroid,
+    /// In its pixels, (0, 0) the top-left pixel's centre.
+    At([f64; 2]),
+}
+
 /// The border's share of each side that measures the background.
 const BORDER: usize = 16;
 
@@ -163,8 +171,7 @@ impl Model for Measured {
             NAME,
             CENTRE.name,
             format!("{:?}", self.centre),
-            self.given_centre().is_some()
-                || ["brightest", "centroid"].contains(&self.centre.as_str()),
+            self.centre_rule().is_some(),
             CENTRE.allowed,
         )?;
         FLOOR.check(NAME, self.floor)
@@ -207,21 +214,16 @@ impl Model for Measured {
                 )
             })
             .collect::<Vec<_>>();
-        for plane in &planes {
-            if plane.iter().sum::<f64>() <= 0.0 {
+        let mut normalised = Vec::with_capacity(planes.len());
+        for mut plane in planes {
+            let total: f64 = plane.iter().sum();
+            if total <= 0.0 {
                 return Err(self.refuse("no light of it falls within the kernel"));
             }
+            plane.iter_mut().for_each(|v| *v /= total);
+            normalised.push(plane);
         }
-        Ok(Source::Pattern(
-            planes
-                .into_iter()
-                .map(|mut plane| {
-                    let total: f64 = plane.iter().sum();
-                    plane.iter_mut().for_each(|v| *v /= total);
-                    plane
-                })
-                .collect(),
-        ))
+        Ok(Source::Pattern(normalised))
     }
 }
 
@@ -264,10 +266,18 @@ impl Measured {
         }
     }
 
-    fn given_centre(&self) -> Option<[f64; 2]> {
-        let (x, y) = self.centre.split_once(',')?;
-        let (x, y) = (x.trim().parse::<f64>().ok()?, y.trim().parse::<f64>().ok()?);
-        (x.is_finite() && y.is_finite()).then_some([x, y])
+    /// How `centre` finds the point of light; `None` for words it does not
+    /// know.
+    fn centre_rule(&self) -> Option<Centre> {
+        match self.centre.as_str() {
+            "brightest" => Some(Centre::Brightest),
+            "centroid" => Some(Centre::Centroid),
+            given => {
+                let (x, y) = given.split_once(',')?;
+                let (x, y) = (x.trim().parse::<f64>().ok()?, y.trim().parse::<f64>().ok()?);
+                (x.is_finite() && y.is_finite()).then_some(Centre::At([x, y]))
+            }
+        }
     }
 
     /// The planes less their black level, dark below the floor, in f64,
@@ -286,7 +296,6 @@ impl Measured {
             x < bw || y < bh || x >= w - bw || y >= h - bh
         };
         let mut background = Vec::new();
-        let mut kept = Vec::new();
         let mut above_black = Vec::new();
         let mut planes = Vec::new();
         for plane in &picture.planes {
@@ -298,18 +307,14 @@ impl Measured {
             let mut deviations: Vec<f64> = edge.iter().map(|v| (v - black).abs()).collect();
             let sigma = 1.4826 * median(&mut deviations);
             let line = self.floor * sigma;
-            let above: Vec<f64> = plane
-                .iter()
-                .map(|&v| (f64::from(v) - black).max(0.0))
-                .collect();
-            let cleaned: Vec<f64> = above
-                .iter()
-                .map(|&v| if v > line { v } else { 0.0 })
-                .collect();
-            above_black.push(above.iter().sum::<f64>());
-            kept.push(0.0);
+            let above = plane.iter().map(|&v| (f64::from(v) - black).max(0.0));
+            above_black.push(above.clone().sum::<f64>());
+            planes.push(
+                above
+                    .map(|v| if v > line { v } else { 0.0 })
+                    .collect::<Vec<_>>(),
+            );
             background.push((black, sigma));
-            planes.push(cleaned);
         }
         let mut light: Vec<f64> = (0..w * h)
             .map(|i| planes.iter().map(|p| p[i]).sum())
@@ -328,17 +333,21 @@ impl Measured {
                 }
             }
         }
-        for ((share, all), plane) in kept.iter_mut().zip(&above_black).zip(&planes) {
-            *share = if *all > 0.0 {
-                plane.iter().sum::<f64>() / all
-            } else {
-                0.0
-            };
-        }
-        let total: f64 = light.iter().sum();
-        let centre = match self.centre.as_str() {
-            "brightest" => [(brightest % w) as f64, (brightest / w) as f64],
-            "centroid" => {
+        let kept = planes
+            .iter()
+            .zip(&above_black)
+            .map(|(plane, all)| {
+                if *all > 0.0 {
+                    plane.iter().sum::<f64>() / all
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let centre = match self.centre_rule() {
+            Some(Centre::At(point)) => point,
+            Some(Centre::Centroid) => {
+                let total: f64 = light.iter().sum();
                 let (mut x, mut y) = (0.0, 0.0);
                 for (i, v) in light.iter().enumerate() {
                     x += v * (i % w) as f64;
@@ -346,7 +355,8 @@ impl Measured {
                 }
                 [x / total, y / total]
             }
-            _ => self.given_centre().unwrap_or_default(),
+            // Validation has refused any other words.
+            Some(Centre::Brightest) | None => [(brightest % w) as f64, (brightest / w) as f64],
         };
         Ok((
             planes,

@@ -15,6 +15,7 @@ use rand_core::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
 use super::pupil::Pupil;
+use crate::check;
 use crate::error::Result;
 
 /// How many places are tried for one piece before the dirt is refused.
@@ -113,13 +114,13 @@ pub(crate) fn add(
     pupil: &mut Pupil,
 ) -> Result<()> {
     let mut rng = Pcg64::seed_from_u64(seed);
+    // The obstruction is a disc at the centre (of radius 0 without one:
+    // no piece covers the centre).
     let mut placed: Vec<Piece> = clearance.vanes.iter().map(|v| Piece::Strip(*v)).collect();
+    placed.push(Piece::Disc([0.0, 0.0], clearance.obstruction));
     let inner = clearance.inner;
     let clear_disc = |placed: &[Piece], c: [f64; 2], r: f64| {
-        let from_centre = libm::hypot(c[0], c[1]);
-        from_centre + r < inner
-            && from_centre - r > clearance.obstruction
-            && placed.iter().all(|p| p.clear_of_disc(c, r))
+        libm::hypot(c[0], c[1]) + r < inner && placed.iter().all(|p| p.clear_of_disc(c, r))
     };
     // A point uniformly in the disc of radius `within`.
     let point = |rng: &mut Pcg64, within: f64| {
@@ -129,47 +130,49 @@ pub(crate) fn add(
     };
     if dirt.grease > 0.0 {
         let r = dirt.grease * radius;
-        let centre = (0..TRIES)
+        let found = (0..TRIES)
             .map(|_| point(&mut rng, (inner - r).max(0.0)))
-            .find(|&c| clear_disc(&placed, c, r))
-            .ok_or_else(|| refuse("grease", dirt.grease, GREASE_FITS))?;
+            .find(|&c| clear_disc(&placed, c, r));
+        let Some(centre) = found else {
+            return check::count(NAME, "grease", dirt.grease, false, GREASE_FITS);
+        };
         pupil.add_spot(centre, r, dirt.grease_amplitude);
         placed.push(Piece::Disc(centre, r));
     }
     let half = dirt.scratch_width / 2.0;
     for _ in 0..dirt.scratches {
-        let strip = (0..TRIES)
-            .find_map(|_| {
-                let centre = point(&mut rng, inner);
-                let angle = dirt.scratch_angle + dirt.scratch_spread * (uniform(&mut rng) - 0.5);
-                let direction = [libm::cos(angle), libm::sin(angle)];
-                // A scratch longer than the beam is cut by its edge.
-                let along = chord(centre, direction, inner - half)?;
-                let reach = dirt.scratch_length / 2.0;
-                let (a, b) = (along[0].max(-reach), along[1].min(reach));
-                let at = |t: f64| [centre[0] + t * direction[0], centre[1] + t * direction[1]];
-                let strip = Strip {
-                    start: at(a),
-                    end: at(b),
-                    half,
-                };
-                let clear = b - a > 2.0 * half
-                    && to_segment([0.0, 0.0], strip.start, strip.end)
-                        > clearance.obstruction + half
-                    && placed.iter().all(|p| p.clear_of_strip(&strip));
-                clear.then_some(strip)
-            })
-            .ok_or_else(|| refuse("scratches", f64::from(dirt.scratches), SCRATCHES_FIT))?;
+        let strip = (0..TRIES).find_map(|_| {
+            let centre = point(&mut rng, inner);
+            let angle = dirt.scratch_angle + dirt.scratch_spread * (uniform(&mut rng) - 0.5);
+            let direction = [libm::cos(angle), libm::sin(angle)];
+            // A scratch longer than the beam is cut by its edge.
+            let along = chord(centre, direction, inner - half)?;
+            let reach = dirt.scratch_length / 2.0;
+            let (a, b) = (along[0].max(-reach), along[1].min(reach));
+            let at = |t: f64| [centre[0] + t * direction[0], centre[1] + t * direction[1]];
+            let strip = Strip {
+                start: at(a),
+                end: at(b),
+                half,
+            };
+            let clear = b - a > 2.0 * half && placed.iter().all(|p| p.clear_of_strip(&strip));
+            clear.then_some(strip)
+        });
+        let Some(strip) = strip else {
+            return check::count(NAME, "scratches", dirt.scratches, false, SCRATCHES_FIT);
+        };
         pupil.add_polygon(&strip.corners(), false);
         placed.push(Piece::Strip(strip));
     }
     let [small, large] = dirt.dust_diameters;
     for _ in 0..dirt.dust {
         let r = small * libm::pow(large / small, uniform(&mut rng)) / 2.0;
-        let centre = (0..TRIES)
+        let found = (0..TRIES)
             .map(|_| point(&mut rng, inner - r))
-            .find(|&c| clear_disc(&placed, c, r))
-            .ok_or_else(|| refuse("dust", f64::from(dirt.dust), DUST_FITS))?;
+            .find(|&c| clear_disc(&placed, c, r));
+        let Some(centre) = found else {
+            return check::count(NAME, "dust", dirt.dust, false, DUST_FITS);
+        };
         pupil.add_spot(centre, r, [0.0, 0.0]);
         placed.push(Piece::Disc(centre, r));
     }
@@ -183,14 +186,8 @@ const SCRATCHES_FIT: &str =
 const DUST_FITS: &str =
     "specks that fit in the stop without touching each other or the other dirt: fewer or smaller";
 
-fn refuse(name: &'static str, value: f64, allowed: &'static str) -> crate::error::Error {
-    crate::error::Error::Parameter {
-        effect: "aperture".into(),
-        name,
-        value: value.to_string(),
-        allowed,
-    }
-}
+/// The effect whose dirt is refused.
+const NAME: &str = "aperture";
 
 /// The part of the line `centre` + t·`direction` inside the circle of
 /// `radius` about the origin, as [t₀, t₁].

@@ -2,7 +2,8 @@
 //!
 //! A pupil is a sum of transmitting and opaque polygons and discs, in mm,
 //! and of spots (dust, grease) that change what the glass under them
-//! transmits, amplitude and phase. Its transform Â(ν) = ∫ A(s) e^(−2πi ν·s) ds is exact at any spatial
+//! transmits, amplitude and phase. Its transform
+//! Â(ν) = ∫ A(s) e^(−2πi ν·s) ds is exact at any spatial
 //! frequency ν (cycles/mm): for a polygon, by the divergence theorem,
 //! Â = (i/|q|²) Σ_edges L (q·n̂) e^(−iq·m) sinc(q·e/2) with q = 2πν; for a
 //! disc of radius R, 2πR² J₁(qR)/(qR). No sampling grid, so no aliasing.
@@ -388,20 +389,16 @@ impl Pupil {
             .zip(&dnu_y)
             .map(|(x, y)| TAU * (x * x + y * y).sqrt())
             .fold(0.0, f64::max);
+        let spots = self.spots(reach);
         // The small spots first, then the large ones ([`Pupil::add_spots`]).
-        let centres: Vec<[f64; 2]> = self
-            .spots(reach)
-            .into_iter()
-            .flatten()
-            .map(|(_, centre, _)| centre)
-            .collect();
         let spot_phases = dnu_x
             .iter()
             .zip(&dnu_y)
             .map(|(&x, &y)| {
-                centres
+                spots
                     .iter()
-                    .map(|&c| phase(1.0, [TAU * x, TAU * y], c))
+                    .flatten()
+                    .map(|s| phase(1.0, [TAU * x, TAU * y], s.centre))
                     .collect()
             })
             .collect();
@@ -411,24 +408,25 @@ impl Pupil {
             weights,
             phases,
             spot_phases,
-            reach,
+            spots,
         }
     }
 
-    /// The spots as (weight × area, centre, radius): those small enough
-    /// for [`Pupil::add_spots`]'s Taylor series over offsets reaching
-    /// `reach` (rad/mm), and the others.
-    fn spots(&self, reach: f64) -> [Vec<(Amplitude, [f64; 2], f64)>; 2] {
+    /// The spots: those small enough for [`Pupil::add_spots`]'s Taylor
+    /// series over offsets reaching `reach` (rad/mm), and the others.
+    fn spots(&self, reach: f64) -> [Vec<SpotSum>; 2] {
         let (small, large) = self
             .elements
             .iter()
             .filter_map(|e| match e.shape {
-                Outline::Spot { centre, radius } => {
-                    Some((e.weight.map(|w| w * e.area), centre, radius))
-                }
+                Outline::Spot { centre, radius } => Some(SpotSum {
+                    weight: e.weight.map(|w| w * e.area),
+                    centre,
+                    radius,
+                }),
                 _ => None,
             })
-            .partition(|s| s.2 * reach < jinc::TAYLOR_REACH);
+            .partition(|s| s.radius * reach < jinc::TAYLOR_REACH);
         [small, large]
     }
 
@@ -545,7 +543,7 @@ impl Pupil {
         qy: &[f64],
         total: &mut [Amplitude],
     ) {
-        let [small, large] = self.spots(offsets.reach);
+        let [small, large] = &offsets.spots;
         if small.is_empty() && large.is_empty() {
             return;
         }
@@ -567,11 +565,11 @@ impl Pupil {
             {
                 *q = (a * a + b * b).sqrt();
             }
-            for (term, (weight, centre, radius)) in terms.iter_mut().zip(&small) {
-                let mut p = [0.0, 0.0];
-                add_product(&mut p, *weight, phase(1.0, nu, *centre));
-                let [value, first, second] = table.taylor(centre_q * radius);
-                let (d1, d2) = (first * radius, 0.5 * second * radius * radius);
+            for (term, spot) in terms.iter_mut().zip(small) {
+                let p = product(spot.weight, phase(1.0, nu, spot.centre));
+                let r = spot.radius;
+                let [value, first, second] = table.taylor(centre_q * r);
+                let (d1, d2) = (first * r, 0.5 * second * r * r);
                 *term = [
                     p[0] * value,
                     p[1] * value,
@@ -581,9 +579,8 @@ impl Pupil {
                     p[1] * d2,
                 ];
             }
-            for (p, (weight, centre, _)) in points.iter_mut().zip(&large) {
-                *p = [0.0, 0.0];
-                add_product(p, *weight, phase(1.0, nu, *centre));
+            for (p, spot) in points.iter_mut().zip(large) {
+                *p = product(spot.weight, phase(1.0, nu, spot.centre));
             }
             for (k, (&q, t)) in sample_q.iter().zip(&mut total[row]).enumerate() {
                 let dq = q - centre_q;
@@ -595,8 +592,8 @@ impl Pupil {
                     sum[0] += re * b[0] - im * b[1];
                     sum[1] += re * b[1] + im * b[0];
                 }
-                for ((p, (_, _, radius)), b) in points.iter().zip(&large).zip(by_large) {
-                    let magnitude = table.value(q * radius);
+                for ((p, spot), b) in points.iter().zip(large).zip(by_large) {
+                    let magnitude = table.value(q * spot.radius);
                     sum[0] += magnitude * (p[0] * b[0] - p[1] * b[1]);
                     sum[1] += magnitude * (p[0] * b[1] + p[1] * b[0]);
                 }
@@ -619,8 +616,18 @@ pub struct Offsets {
     phases: Vec<Vec<EdgePhases>>,
     /// Per offset, per spot, e^(−iδ·c), c its centre.
     spot_phases: Vec<Vec<Amplitude>>,
-    /// The largest |2πδ|, rad/mm.
-    reach: f64,
+    /// The spots, small and large ([`Pupil::spots`]), in the order of
+    /// `spot_phases`.
+    spots: [Vec<SpotSum>; 2],
+}
+
+/// A spot as the near field sums it.
+#[derive(Debug, Clone)]
+struct SpotSum {
+    /// Its weight times its area: its amplitude at q = 0.
+    weight: Amplitude,
+    centre: [f64; 2],
+    radius: f64,
 }
 
 impl Offsets {
@@ -732,7 +739,7 @@ mod jinc {
         /// matches the values and slopes at the nodes either side.
         pub(super) fn value(&self, z: f64) -> f64 {
             if z >= END {
-                return 2.0 * libm::j1(z) / z;
+                return super::jinc(z);
             }
             let position = z * PER_UNIT;
             let k = position as usize;
@@ -788,10 +795,25 @@ mod jinc {
     }
 }
 
+/// w·a, complex.
+fn product(w: Amplitude, a: Amplitude) -> Amplitude {
+    [w[0] * a[0] - w[1] * a[1], w[0] * a[1] + w[1] * a[0]]
+}
+
 /// sum += w·a, complex.
 fn add_product(sum: &mut Amplitude, w: Amplitude, a: Amplitude) {
-    sum[0] += w[0] * a[0] - w[1] * a[1];
-    sum[1] += w[0] * a[1] + w[1] * a[0];
+    let [re, im] = product(w, a);
+    sum[0] += re;
+    sum[1] += im;
+}
+
+/// 2J₁(z)/z.
+pub(crate) fn jinc(z: f64) -> f64 {
+    if z.abs() < 1e-6 {
+        1.0
+    } else {
+        2.0 * libm::j1(z) / z
+    }
 }
 
 /// magnitude · e^(−i q·c).
@@ -940,7 +962,7 @@ mod tests {
             }
         }
         let offsets = pupil.offsets(dx.clone(), dy.clone(), w.clone());
-        let [small, large] = pupil.spots(offsets.reach);
+        let [small, large] = &offsets.spots;
         assert_eq!((small.len(), large.len()), (40, 1));
         let nu_x: Vec<f64> = (0..24).map(|i| (i as f64 * 0.013 - 0.1) * scale).collect();
         for nu_y in [0.0, 0.031 * scale, 0.2 * scale] {

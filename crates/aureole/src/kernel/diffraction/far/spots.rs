@@ -11,8 +11,10 @@
 //! its width across the radius. Spots are grouped by size in octaves,
 //! each group on a grid fine enough for its largest spot's fringes.
 
+use std::collections::BTreeMap;
+
 use super::{Line, PLANES};
-use crate::optics::aperture::pupil::SpotTerm;
+use crate::optics::aperture::pupil::{jinc, SpotTerm};
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
@@ -45,20 +47,16 @@ impl Spots {
         reach: f64,
     ) -> Spots {
         let shortest = lines.iter().map(|l| l.lambda).fold(f64::INFINITY, f64::min);
-        let mut octaves: Vec<(i32, Vec<SpotTerm>)> = Vec::new();
+        // By octave, in order: the same groups on every run.
+        let mut octaves: BTreeMap<i32, Vec<SpotTerm>> = BTreeMap::new();
         for spot in spots.iter().filter(|s| s.radius > 0.0 && s.power > 0.0) {
             // libm's, so that the groups are the same on every machine.
             let octave = libm::log2(spot.radius).floor() as i32;
-            match octaves.iter_mut().find(|(o, _)| *o == octave) {
-                Some((_, group)) => group.push(*spot),
-                None => octaves.push((octave, vec![*spot])),
-            }
+            octaves.entry(octave).or_default().push(*spot);
         }
-        // The same groups in the same order on every run.
-        octaves.sort_by_key(|(o, _)| *o);
         let groups = octaves
-            .into_iter()
-            .map(|(_, group)| {
+            .into_values()
+            .map(|group| {
                 let largest = group.iter().map(|s| s.radius).fold(0.0, f64::max);
                 let fringe = shortest * f / (2.0 * largest);
                 let step = (pitch / 4.0).min(fringe / STEPS_PER_FRINGE);
@@ -124,14 +122,5 @@ impl Spots {
                 *value += (at(r + width / 2.0, c) - at(r - width / 2.0, c)) / width;
             }
         }
-    }
-}
-
-/// 2J₁(z)/z.
-fn jinc(z: f64) -> f64 {
-    if z.abs() < 1e-6 {
-        1.0
-    } else {
-        2.0 * libm::j1(z) / z
     }
 }
