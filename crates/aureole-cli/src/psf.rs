@@ -3,10 +3,10 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use aureole::{Cancel, Control, Extent};
+use aureole::{Cancel, Control, Extent, Sending};
 use aureole_io::formats::{by_extension, extension, kernel_outputs, KernelStorage};
 use aureole_io::kernel::write_kernel_for;
-use clap::ArgMatches;
+use clap::{ArgMatches, ValueEnum};
 
 use crate::chain::ChainArgs;
 use crate::progress::Progress;
@@ -62,10 +62,25 @@ pub struct Args {
     #[arg(long, value_name = "PUPIL.png")]
     pupil: Option<PathBuf>,
 
+    /// What sends the light: `pixel`, a pixel of an image, whose light
+    /// leaves its whole square (the kernel `apply` convolves with; a 4K
+    /// frame reduced to 1080p then looks as the 1080p frame), or `point`,
+    /// a point of light (the PSF as an optics program computes it or a
+    /// photographed star shows it).
+    #[arg(long, value_name = "FROM", value_enum, default_value_t = SentBy::Pixel)]
+    sent_by: SentBy,
+
     /// Radius in pixels of the angular profile (default: a quarter of the
     /// kernel's smaller half-size).
     #[arg(long, value_name = "PX", requires = "profile", value_parser = parse_positive, allow_negative_numbers = true)]
     profile_radius: Option<f64>,
+}
+
+/// What sends the light a kernel spreads.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SentBy {
+    Pixel,
+    Point,
 }
 
 /// The side of a pupil picture, px.
@@ -102,7 +117,10 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         None => None,
     };
     let (width, height) = args.size;
-    let mut extent = Extent::new(width, height)?;
+    let mut extent = Extent::new(width, height)?.sent_by(match args.sent_by {
+        SentBy::Pixel => Sending::Pixel,
+        SentBy::Point => Sending::Point,
+    });
     if let Some(n) = args.image_width {
         extent = extent.with_image_width(n as usize);
     }

@@ -175,9 +175,10 @@ fn psf_draws_the_pupil_with_its_dirt_and_refuses_a_chain_without_one() {
 
 #[test]
 fn psf_from_image_reads_a_kernel_written_at_another_pitch() {
-    // A 7-blade stop written as an EXR at 7680 px across the sensor, read
-    // back as a measured PSF at 1920: the stop's own kernel at 1920, its
-    // light within 2, 4 and 8 px within 2 %.
+    // A 7-blade stop's PSF of a point (a photographed star) written as an
+    // EXR at 7680 px across the sensor, read back as a measured PSF at
+    // 1920: the stop's own kernel at 1920, its light within 2, 4 and 8 px
+    // within 2 %.
     let dir = tempfile::tempdir().unwrap();
     let (fine, coarse, direct) = (
         dir.path().join("fine.exr"),
@@ -193,6 +194,8 @@ fn psf_from_image_reads_a_kernel_written_at_another_pitch() {
             "401",
             "--image-width",
             "7680",
+            "--sent-by",
+            "point",
             "-o",
         ])
         .arg(&fine)

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use aureole::{ApplyOptions, Cancel, Config, ConfigFile, Control, Extent, Frame, FrameOptions};
-use aureole::{Method, Session, Stage};
+use aureole::{Method, Sending, Session, Stage};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -191,8 +191,10 @@ impl Camera {
     /// width // 2): float32 (H, W), or (H, W, 3) where it differs by
     /// colour. `image_width` sets the pixel pitch (sensor width / image
     /// width) that turns µm and mm into pixels; by default the kernel's
-    /// width.
-    #[pyo3(signature = (width, height, image_width = None, progress = None))]
+    /// width. `sent_by` is "pixel" (the kernel an image is convolved with:
+    /// each pixel's light leaves its whole square) or "point" (the PSF of
+    /// a point of light, as an optics program gives it).
+    #[pyo3(signature = (width, height, image_width = None, progress = None, sent_by = "pixel"))]
     fn kernel<'py>(
         &self,
         py: Python<'py>,
@@ -200,8 +202,20 @@ impl Camera {
         height: usize,
         image_width: Option<usize>,
         progress: Option<&Bound<'py, PyAny>>,
+        sent_by: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let mut extent = Extent::new(width, height).map_err(value_error)?;
+        let sending = match sent_by {
+            "pixel" => Sending::Pixel,
+            "point" => Sending::Point,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "sent_by {other:?}: allowed are \"pixel\" and \"point\""
+                )))
+            }
+        };
+        let mut extent = Extent::new(width, height)
+            .map_err(value_error)?
+            .sent_by(sending);
         if let Some(n) = image_width {
             extent = extent.with_image_width(n);
         }

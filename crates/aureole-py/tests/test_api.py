@@ -284,7 +284,9 @@ f_number = 8
 type = "aperture"
 blades = 6
 """)
-    star = stop.kernel(101, 101, image_width=1920)
+    # A photographed star is the PSF of a point; at its own pitch it is
+    # the kernel of a point.
+    star = stop.kernel(101, 101, image_width=1920, sent_by="point")
     aureole.write(str(tmp_path / "star.exr"), star)
     (tmp_path / "measured.toml").write_text("""
 [camera]
@@ -296,7 +298,9 @@ file = "star.exr"
 pitch_um = 18.75
 """)
     measured = aureole.Camera.from_file(str(tmp_path / "measured.toml"))
-    ours = measured.kernel(101, 101, image_width=1920)
+    ours = measured.kernel(101, 101, image_width=1920, sent_by="point")
     assert np.abs(ours - star).max() < 1e-4 * star.max()
+    with pytest.raises(ValueError, match="sent_by"):
+        measured.kernel(11, 11, sent_by="area")
     with pytest.raises(OSError, match="nowhere.exr"):
         aureole.Camera.from_toml('[[effect]]\ntype = "image"\nfile = "nowhere.exr"\npitch_um = 4')

@@ -220,7 +220,7 @@ def test_rounded_blades_match_hcipy(blades, roundness, f_number):
 
 def check(blades, f_number, pitch_um, roundness):
     ours = camera(blades, f_number, roundness).kernel(
-        SIZE, SIZE, image_width=round(36000 / pitch_um))
+        SIZE, SIZE, image_width=round(36000 / pitch_um), sent_by="point")
     theirs = reference(blades, f_number, pitch_um, roundness)
     finer = reference(blades, f_number, pitch_um, roundness, pupil_samples=384, sub_pixels=9)
     compare(ours, theirs, finer, (12, 30, 60), blades)
@@ -243,7 +243,7 @@ def test_the_far_field_matches_hcipy(blades, rotation, obstruction, vanes, spect
     size = 161
     extra = f"obstruction = {obstruction}\nvanes = {vanes}"
     ours = camera(blades, 8.0, rotation=rotation, spectral=spectral, extra=extra).kernel(
-        size, size, image_width=3840)
+        size, size, image_width=3840, sent_by="point")
     mask = lambda radius: stop_mask(blades, radius, 0.0, rotation, obstruction, vanes)  # noqa: E731
     light = sensitivities() if spectral else None
     theirs, finer = (
@@ -261,7 +261,8 @@ def test_a_spectral_kernel_matches_hcipy(blades, extra):
     # 17 wavelengths into R, G, B at a 1 µm pitch and f/8 (λN 3–6 px), each
     # plane against hcipy's patterns summed with the same weights.
     obstruction, vanes = (0.3, 4) if extra else (0.0, 0)
-    ours = camera(blades, 8.0, spectral=True, extra=extra).kernel(SIZE, SIZE, image_width=36000)
+    ours = camera(blades, 8.0, spectral=True, extra=extra).kernel(
+        SIZE, SIZE, image_width=36000, sent_by="point")
     mask = lambda radius: stop_mask(blades, radius, 0.0, ROTATION_DEG, obstruction, vanes)  # noqa: E731
     theirs, finer = (
         reference(blades, 8.0, 1.0, mask=mask, light=sensitivities(), pupil_samples=n,
@@ -274,7 +275,7 @@ def test_an_obstruction_with_vanes_matches_hcipy():
     # A mirror lens: a round stop, an obstruction of 0.3 and 4 vanes 2 % of
     # the diameter wide, in 550 nm at f/8 on 1 µm pixels.
     ours = camera(0, 8.0, extra="obstruction = 0.3\nvanes = 4").kernel(
-        SIZE, SIZE, image_width=36000)
+        SIZE, SIZE, image_width=36000, sent_by="point")
     mask = lambda radius: stop_mask(0, radius, 0.0, ROTATION_DEG, 0.3, 4)  # noqa: E731
     theirs, finer = (reference(0, 8.0, 1.0, mask=mask, pupil_samples=n, sub_pixels=k)
                      for n, k in ((256, 6), (384, 9)))
@@ -300,7 +301,8 @@ spacing_um = 200.0
 width_um = 10.0
 """ for angle in (0.0, 90.0))
     size = 161 if spectral else SIZE
-    ours = camera(0, 8.0, spectral=spectral, extra=families).kernel(size, size, image_width=7200)
+    ours = camera(0, 8.0, spectral=spectral, extra=families).kernel(
+        size, size, image_width=7200, sent_by="point")
     spacing, width = 200e-6, 10e-6
 
     def clear(s, step, offset):
@@ -357,8 +359,8 @@ def test_dirt_in_the_pupil_matches_hcipy(dirt, f_number):
     # are held to the same criteria as a clean stop's.
     size = 161
     dirty = camera(7, f_number, extra=dirt)
-    ours = dirty.kernel(size, size, image_width=3840)
-    clean = camera(7, f_number).kernel(size, size, image_width=3840)
+    ours = dirty.kernel(size, size, image_width=3840, sent_by="point")
+    clean = camera(7, f_number).kernel(size, size, image_width=3840, sent_by="point")
 
     def mask(radius):
         def transmission(grid):

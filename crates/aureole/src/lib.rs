@@ -81,6 +81,7 @@ pub mod optics;
 pub mod pipeline;
 pub mod presets;
 pub mod schema;
+pub mod sending;
 pub mod units;
 
 pub use camera::Camera;
@@ -88,7 +89,7 @@ pub use config::{Config, ConfigFile};
 pub use control::{Cancel, Control};
 pub use error::{Error, Result};
 pub use image::{Image, Layout, Shape};
-pub use kernel::{Extent, Kernel};
+pub use kernel::{Extent, Kernel, Sending};
 pub use optics::{Aperture, Bloom, Corona, Effect, Filter, Halation, Measured, Vos};
 pub use pipeline::{
     Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, GlareLayer, Method, Plan, ScaleSource,

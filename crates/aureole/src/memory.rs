@@ -70,6 +70,7 @@ impl Workload {
                     .filter(|e| e.kind() == effect.kind())
                     .count(),
                 kernel_size: (extent.width, extent.height),
+                sending: extent.sending,
             };
             if let Some(px) = effect.reach_px(&context).filter(|r| r.is_finite()) {
                 *reach = px.ceil().clamp(0.0, f64::from(u32::MAX - 1)) as u32;

@@ -8,7 +8,7 @@ use aureole::kernel::profile::{bilinear, radial_profile};
 use aureole::optics::aperture::pupil::Pupil;
 use aureole::optics::aperture::spectrum::{mean_wavelengths, Light};
 use aureole::optics::aperture::Optics;
-use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel};
+use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel, Sending};
 
 const F: f64 = 50.0; // focal length, mm
 const GREEN: f64 = 550.0; // nm
@@ -80,7 +80,7 @@ fn circular_stop_has_its_first_dark_ring_at_1_22_lambda_n() {
     let kernel = diffraction_kernel(
         &optics(pupil, F / n),
         Light::Monochrome(GREEN),
-        &Extent::new(81, 81).unwrap(),
+        &Extent::new(81, 81).unwrap().sent_by(Sending::Point),
         pitch,
     )
     .unwrap();
@@ -105,7 +105,7 @@ fn single_slit_has_sinc_squared_zeros_at_m_lambda_f_over_e() {
     let kernel = diffraction_kernel(
         &optics(pupil, 4.0),
         Light::Monochrome(GREEN),
-        &Extent::new(101, 9).unwrap(),
+        &Extent::new(101, 9).unwrap().sent_by(Sending::Point),
         pitch,
     )
     .unwrap();
@@ -130,7 +130,7 @@ fn n_slits_have_principal_maxima_at_m_lambda_f_over_d_and_n_minus_2_between() {
     let kernel = diffraction_kernel(
         &optics(pupil, 2.0),
         Light::Monochrome(GREEN),
-        &Extent::new(451, 5).unwrap(),
+        &Extent::new(451, 5).unwrap().sent_by(Sending::Point),
         pitch,
     )
     .unwrap();
@@ -164,7 +164,7 @@ fn many_random_equal_holes_give_the_single_hole_pattern() {
         many.add_disc([2.0 * uniform() - 1.0, 2.0 * uniform() - 1.0], radius, true);
     }
     // The Airy zero of one hole: 1.22 λ f / 2a = 0.335 mm, 16.8 px.
-    let (pitch, extent) = (0.02, Extent::new(81, 81).unwrap());
+    let (pitch, extent) = (0.02, Extent::new(81, 81).unwrap().sent_by(Sending::Point));
     let single = radial_profile(
         &diffraction_kernel(&optics(one, 2.0 * radius), Light::Spectral, &extent, pitch).unwrap(),
         1,
@@ -234,7 +234,12 @@ fn aperture_kernel(blades: u32, rotation_deg: f64) -> Kernel {
     });
     // 36 mm over 8182 px: a 4.4 µm pitch, λN at 550 nm and f/8.
     config
-        .kernel(&Extent::new(121, 121).unwrap().with_image_width(8182))
+        .kernel(
+            &Extent::new(121, 121)
+                .unwrap()
+                .sent_by(Sending::Point)
+                .with_image_width(8182),
+        )
         .unwrap()
 }
 
@@ -286,7 +291,7 @@ fn a_slit_network_follows_the_same_rule_babinet() {
         let kernel = diffraction_kernel(
             &optics(pupil, 2.0 * radius),
             Light::Monochrome(GREEN),
-            &Extent::new(121, 121).unwrap(),
+            &Extent::new(121, 121).unwrap().sent_by(Sending::Point),
             2e-3,
         )
         .unwrap();
@@ -303,7 +308,7 @@ fn red_spreads_wider_than_blue_by_the_ratio_of_their_wavelengths() {
     let kernel = diffraction_kernel(
         &optics(pupil, F / n),
         Light::Spectral,
-        &Extent::new(161, 161).unwrap(),
+        &Extent::new(161, 161).unwrap().sent_by(Sending::Point),
         0.25e-3,
     )
     .unwrap();
@@ -345,7 +350,12 @@ fn rays_reach_far_and_fade_as_the_inverse_square_of_the_distance() {
     // Along a straight edge's ray |F|² ∝ L²/q²: the light per pixel of
     // radius falls as r⁻². A 4K frame on full frame, f/8, 7 blades.
     let kernel = camera_config(lens(7, true))
-        .kernel(&Extent::new(1601, 1601).unwrap().with_image_width(3840))
+        .kernel(
+            &Extent::new(1601, 1601)
+                .unwrap()
+                .sent_by(Sending::Point)
+                .with_image_width(3840),
+        )
         .unwrap();
     let mut rings = vec![0.0; 801];
     let (cx, cy) = kernel.centre();
@@ -391,6 +401,7 @@ fn filter_lines_diffract_into_orders_at_m_lambda_f_over_d() {
         .kernel(
             &Extent::new(141, 41)
                 .unwrap()
+                .sent_by(Sending::Point)
                 .with_image_width((36.0 / 0.006875) as usize),
         )
         .unwrap();
@@ -424,7 +435,12 @@ fn star_filters_give_two_rays_per_family_of_lines() {
         (&[0.0, 45.0, 90.0, 135.0][..], 8),
     ] {
         let kernel = star_config(families, 200.0, 10.0, true)
-            .kernel(&Extent::new(161, 161).unwrap().with_image_width(3840))
+            .kernel(
+                &Extent::new(161, 161)
+                    .unwrap()
+                    .sent_by(Sending::Point)
+                    .with_image_width(3840),
+            )
             .unwrap();
         assert_eq!(
             ray_count(&kernel, 20.0, 78.0),

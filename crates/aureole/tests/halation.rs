@@ -3,7 +3,7 @@
 //! is what rays traced through the base one by one give; its radius follows
 //! the base; the backing leaves a trace; the colour warms outward.
 
-use aureole::{Camera, Config, Effect, Extent, Halation, Kernel, Length};
+use aureole::{Camera, Config, Effect, Extent, Halation, Kernel, Length, Sending};
 use proptest::prelude::*;
 
 fn halation(toml: &str) -> Halation {
@@ -17,9 +17,11 @@ fn kernel(halation: &Halation, camera: Camera, size: usize, image_width: usize) 
         effects: vec![Effect::Halation(halation.clone())],
         ..Config::default()
     };
+    // The halo as the ray tracing below gives it: from a point of light.
     let extent = Extent::new(size, size)
         .unwrap()
-        .with_image_width(image_width);
+        .with_image_width(image_width)
+        .sent_by(Sending::Point);
     config.kernel(&extent).unwrap()
 }
 

@@ -3,7 +3,7 @@
 //! and noise removed.
 
 use aureole::optics::measured::Picture;
-use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel, Measured};
+use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel, Measured, Sending};
 
 const SENSOR: f64 = 36.0;
 
@@ -19,14 +19,22 @@ fn config(effects: Vec<Effect>) -> Config {
     }
 }
 
+/// The kernel of an image `image_width` wide.
 fn kernel(config: &Config, side: usize, image_width: usize) -> Kernel {
-    config
-        .kernel(
-            &Extent::new(side, side)
-                .unwrap()
-                .with_image_width(image_width),
-        )
+    kernel_of(config, side, image_width, Sending::Pixel)
+}
+
+/// The PSF of a point of light, as a photograph of a star gives it.
+fn star(config: &Config, side: usize, image_width: usize) -> Kernel {
+    kernel_of(config, side, image_width, Sending::Point)
+}
+
+fn kernel_of(config: &Config, side: usize, image_width: usize, sending: Sending) -> Kernel {
+    let extent = Extent::new(side, side)
         .unwrap()
+        .with_image_width(image_width)
+        .sent_by(sending);
+    config.kernel(&extent).unwrap()
 }
 
 fn picture(kernel: &Kernel) -> Picture {
@@ -84,16 +92,19 @@ fn a_psf_taken_at_one_pitch_gives_the_kernel_built_at_another() {
     // µm pixels), read back as a picture and resampled to 1920 px (4×)
     // and 2700 px (2.84×): the kernel aureole builds there directly, its
     // encircled energy within 1 % from 4 px out and 2 % at 2 px, within
-    // 5 % (relative L2) over the whole kernel. A pixel's light is the
+    // 8.5 % (relative L2) over the whole kernel. A pixel's light is the
     // PSF integrated over it, so the sums of whole pixels are exact; what
-    // differs is how a fine pixel's light splits between two coarse ones,
-    // taken uniform across it (5 % at 2.84×, where the grids never meet).
+    // differs is where within a fine pixel its light lies, taken uniform
+    // across it. The coarse pixels' tents weigh that place (a square
+    // weighed it only where it straddled two pixels): the 7-blade core at
+    // f/8 is λN = 0.23 px at 1920 px, 0.35 px of it in one picture pixel
+    // at 2.84×. Measured: 4.2 to 5.4 % at 4×, 6.1 to 7.9 % at 2.84×.
     let stop = Effect::Aperture(Aperture {
         rotation_deg: 5.0,
         ..Aperture::new(7)
     });
     let fine_width = 7680;
-    let fine = kernel(&config(vec![stop.clone()]), 801, fine_width);
+    let fine = star(&config(vec![stop.clone()]), 801, fine_width);
     let pitch_um = SENSOR / fine_width as f64 * 1e3;
     for width in [1920, 2700] {
         let direct = kernel(&config(vec![stop.clone()]), 161, width);
@@ -116,7 +127,8 @@ fn a_psf_taken_at_one_pitch_gives_the_kernel_built_at_another() {
         }
         for (c, (a, b)) in resampled.planes().iter().zip(direct.planes()).enumerate() {
             let l2 = relative_l2(a, b);
-            assert!(l2 < 0.05, "{width} px, plane {c}: relative L2 {l2}");
+            eprintln!("{width} px, plane {c}: relative L2 {l2:.4}");
+            assert!(l2 < 0.085, "{width} px, plane {c}: relative L2 {l2}");
         }
     }
 }
@@ -211,7 +223,7 @@ fn a_photographed_psfs_background_and_noise_become_no_veil() {
 #[test]
 fn a_measured_psf_composes_with_the_other_effects_and_is_refused_unread() {
     let stop = Effect::Aperture(Aperture::new(6));
-    let star = kernel(&config(vec![stop.clone()]), 101, 1920);
+    let shot = star(&config(vec![stop.clone()]), 101, 1920);
     let pitch = SENSOR / 1920.0 * 1e3;
     let bloom: Effect = aureole::presets::find("paper-fig4-bloom")
         .unwrap()
@@ -219,13 +231,14 @@ fn a_measured_psf_composes_with_the_other_effects_and_is_refused_unread() {
         .unwrap()
         .effects
         .remove(0);
-    // The measured stop followed by a bloom is the stop followed by it.
-    let a = kernel(
-        &config(vec![measured(picture(&star), pitch, 0.0), bloom.clone()]),
+    // The measured stop followed by a bloom is the stop followed by it: at
+    // the same pitch and for a point of light, the picture is the kernel.
+    let a = star(
+        &config(vec![measured(picture(&shot), pitch, 0.0), bloom.clone()]),
         101,
         1920,
     );
-    let b = kernel(&config(vec![stop, bloom]), 101, 1920);
+    let b = star(&config(vec![stop, bloom]), 101, 1920);
     for (x, y) in a.planes().iter().zip(b.planes()) {
         assert!(relative_l2(x, y) < 1e-5);
     }

@@ -4,7 +4,9 @@
 use std::f64::consts::PI;
 
 use aureole::kernel::profile::angular_profile;
-use aureole::{Bloom, Camera, Config, ConfigFile, Corona, Effect, Extent, Kernel, Length, Vos};
+use aureole::{
+    Bloom, Camera, Config, ConfigFile, Corona, Effect, Extent, Kernel, Length, Sending, Vos,
+};
 use proptest::prelude::*;
 
 fn kernel(effects: Vec<Effect>, camera: Camera, seed: u64, size: usize) -> Kernel {
@@ -14,7 +16,9 @@ fn kernel(effects: Vec<Effect>, camera: Camera, seed: u64, size: usize) -> Kerne
         effects,
         ..Config::default()
     };
-    config.kernel(&Extent::new(size, size).unwrap()).unwrap()
+    // The PSF of a point of light, as the formulas below give it.
+    let extent = Extent::new(size, size).unwrap().sent_by(Sending::Point);
+    config.kernel(&extent).unwrap()
 }
 
 fn bloom(epsilon: f64, beta: f64, radius_px: f64) -> Effect {
@@ -153,7 +157,10 @@ fn bloom_radius_on_the_film_goes_through_the_pixel_pitch() {
         effects: vec![effect],
         ..Config::default()
     };
-    let extent = Extent::new(257, 257).unwrap().with_image_width(3600);
+    let extent = Extent::new(257, 257)
+        .unwrap()
+        .with_image_width(3600)
+        .sent_by(Sending::Point);
     let from_um = config.kernel(&extent).unwrap();
     let from_px = kernel(vec![bloom(0.005, 3.5, 6.0)], Camera::default(), 1, 257);
     for (a, b) in from_um.planes()[0].iter().zip(&from_px.planes()[0]) {

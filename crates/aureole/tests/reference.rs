@@ -15,7 +15,7 @@
 use std::path::PathBuf;
 
 use aureole::{presets, ApplyOptions, Config, ConfigFile, Extent, Frame, FrameOptions};
-use aureole::{Image, Layout, Session};
+use aureole::{Image, Layout, Sending, Session};
 
 /// (blades, f-number, pixel pitch µm, [(radius px, encircled energy)]), a
 /// 550 nm stop turned 5° behind a 50 mm lens, the kernel 201×201 px.
@@ -43,7 +43,11 @@ fn kernel(blades: u32, f_number: f64, pitch_um: f64) -> Vec<f32> {
     );
     let config = Config::compose([ConfigFile::parse(&text, "hcipy case").unwrap()]);
     let width = (36000.0 / pitch_um).round() as usize;
-    let extent = Extent::new(SIZE, SIZE).unwrap().with_image_width(width);
+    // hcipy propagates a point of light.
+    let extent = Extent::new(SIZE, SIZE)
+        .unwrap()
+        .with_image_width(width)
+        .sent_by(Sending::Point);
     config.kernel(&extent).unwrap().planes()[0].clone()
 }
 

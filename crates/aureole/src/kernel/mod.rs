@@ -18,6 +18,7 @@ use crate::control::{Cancel, Control};
 use crate::error::{Error, Result};
 use crate::image::sum_f64;
 use crate::optics::{Context, Effect, Source};
+pub use crate::sending::Sending;
 use raster::plane_sum;
 use split::SplitKernel;
 
@@ -35,6 +36,8 @@ pub struct Extent {
     pub height: usize,
     /// Width in pixels of the image the kernel is for.
     pub image_width: usize,
+    /// What sends the light the kernel spreads.
+    pub sending: Sending,
 }
 
 impl Extent {
@@ -55,6 +58,7 @@ impl Extent {
             width,
             height,
             image_width: width,
+            sending: Sending::Pixel,
         })
     }
 
@@ -94,6 +98,11 @@ impl Extent {
             image_width: image_width.max(1),
             ..self
         }
+    }
+
+    /// The same kernel for light that `sending` sends.
+    pub fn sent_by(self, sending: Sending) -> Extent {
+        Extent { sending, ..self }
     }
 
     /// At most `max_width`×`max_height`, keeping the centre in the middle.
@@ -277,6 +286,7 @@ pub fn build(
                 .filter(|e| e.kind() == effect.kind())
                 .count(),
             kernel_size: (extent.width, extent.height),
+            sending: extent.sending,
         };
         let start = index as f64 * share;
         // Rasterising takes most of an effect's time, composing the rest.

@@ -20,6 +20,7 @@ use super::{Context, Model, Source};
 use crate::check;
 use crate::error::{Error, Result};
 use crate::schema::{Default, Kind, Parameter};
+use crate::sending::Sending;
 
 /// A PSF picture as a front end read it: planes of width × height, top row
 /// first, one (luminance) or three (R, G, B).
@@ -211,6 +212,7 @@ impl Model for Measured {
                     from,
                     (width, height),
                     to,
+                    context.sending,
                 )
             })
             .collect::<Vec<_>>();
@@ -416,9 +418,10 @@ fn median(values: &mut [f64]) -> f64 {
 
 /// `plane` (`size`, pixels `from` mm wide, its point of light at `centre`)
 /// on a kernel of `extent` with pixels `to` mm wide, its centre at
-/// (⌊W/2⌋, ⌊H/2⌋): each picture pixel a uniform square of light, split
-/// among the kernel pixels it overlaps by area, so that no light is made
-/// or lost where both hold it.
+/// (⌊W/2⌋, ⌊H/2⌋): each picture pixel a uniform square of light, which
+/// the kernel pixels take over their squares (a point `sending`) or under
+/// their tents (a pixel, docs/physics.md §2). Either sums to 1 everywhere,
+/// so no light is made or lost where both hold it.
 fn resample(
     plane: &[f64],
     size: (usize, usize),
@@ -426,9 +429,10 @@ fn resample(
     from: f64,
     extent: (usize, usize),
     to: f64,
+    sending: Sending,
 ) -> Vec<f64> {
-    let columns = overlaps(size.0, centre[0], from, extent.0, to);
-    let rows = overlaps(size.1, centre[1], from, extent.1, to);
+    let columns = overlaps(size.0, centre[0], from, extent.0, to, sending);
+    let rows = overlaps(size.1, centre[1], from, extent.1, to, sending);
     // Along x first: each picture row onto the kernel's columns.
     let mut across = vec![0.0; size.1 * extent.0];
     for t in 0..size.1 {
@@ -456,32 +460,57 @@ fn resample(
     result
 }
 
-/// Per picture pixel along one axis, the kernel pixels it overlaps and the
-/// share of its width in each.
+/// Per picture pixel along one axis, the kernel pixels whose squares or
+/// tents it meets and the share of its light in each.
 fn overlaps(
     count: usize,
     centre: f64,
     from: f64,
     extent: usize,
     to: f64,
+    sending: Sending,
 ) -> Vec<Vec<(usize, f64)>> {
+    let under = match sending {
+        Sending::Point => under_square,
+        Sending::Pixel => under_tent,
+    };
     let middle = (extent / 2) as f64;
     (0..count)
         .map(|s| {
             // The picture pixel's edges in kernel pixels, the kernel's
-            // centre pixel spanning [middle − ½, middle + ½].
+            // pixel i centred at i + ½ and its tent spanning i − ½ to
+            // i + 1½.
             let a = (s as f64 - 0.5 - centre) * from / to + middle + 0.5;
             let b = (s as f64 + 0.5 - centre) * from / to + middle + 0.5;
-            let first = a.floor().max(0.0) as usize;
-            let last = (b.ceil().max(0.0) as usize).min(extent);
+            let first = (a - 0.5).floor().max(0.0) as usize;
+            let last = ((b + 0.5).ceil().max(0.0) as usize).min(extent);
             (first..last)
                 .filter_map(|i| {
-                    let overlap = b.min(i as f64 + 1.0) - a.max(i as f64);
-                    (overlap > 0.0).then(|| (i, overlap / (b - a)))
+                    let c = i as f64 + 0.5;
+                    let share = (under(b - c) - under(a - c)) / (b - a);
+                    (share > 0.0).then_some((i, share))
                 })
                 .collect()
         })
         .collect()
+}
+
+/// ∫ of the unit square [−½, ½] from −∞ to v.
+fn under_square(v: f64) -> f64 {
+    (v + 0.5).clamp(0.0, 1.0)
+}
+
+/// ∫ of the tent max(0, 1 − |u|) from −∞ to v.
+fn under_tent(v: f64) -> f64 {
+    if v <= -1.0 {
+        0.0
+    } else if v <= 0.0 {
+        0.5 * (1.0 + v) * (1.0 + v)
+    } else if v < 1.0 {
+        1.0 - 0.5 * (1.0 - v) * (1.0 - v)
+    } else {
+        1.0
+    }
 }
 
 #[cfg(test)]
@@ -492,15 +521,26 @@ mod tests {
     fn resampling_keeps_the_light_that_falls_on_the_kernel() {
         let plane: Vec<f64> = (0..35).map(|i| (i % 7) as f64 + 1.0).collect();
         let total: f64 = plane.iter().sum();
-        for to in [0.3, 1.0, 1.7, 4.0] {
-            let out = resample(&plane, (7, 5), [3.0, 2.0], 1.0, (41, 41), to);
-            let sum: f64 = out.iter().sum();
-            assert!((sum - total).abs() < 1e-9 * total, "{to}: {sum}");
+        for sending in [Sending::Point, Sending::Pixel] {
+            for to in [0.3, 1.0, 1.7, 4.0] {
+                let out = resample(&plane, (7, 5), [3.0, 2.0], 1.0, (41, 41), to, sending);
+                let sum: f64 = out.iter().sum();
+                assert!((sum - total).abs() < 1e-9 * total, "{to}: {sum}");
+            }
         }
-        // At the same pitch, centred, it is the picture itself.
-        let same = resample(&plane, (7, 5), [3.0, 2.0], 1.0, (7, 5), 1.0);
+        // At the same pitch, centred, a point is the picture itself; a
+        // pixel's lone point of light keeps ¾ per axis and gives ⅛ to each
+        // side: its square under the tents.
+        let same = resample(&plane, (7, 5), [3.0, 2.0], 1.0, (7, 5), 1.0, Sending::Point);
         for (a, b) in same.iter().zip(&plane) {
             assert!((a - b).abs() < 1e-12);
+        }
+        let mut point = vec![0.0; 25];
+        point[12] = 1.0;
+        let same = resample(&point, (5, 5), [2.0, 2.0], 1.0, (5, 5), 1.0, Sending::Pixel);
+        let axis = [0.0, 0.125, 0.75, 0.125, 0.0];
+        for (k, v) in same.iter().enumerate() {
+            assert!((v - axis[k % 5] * axis[k / 5]).abs() < 1e-12, "{k}: {v}");
         }
     }
 }

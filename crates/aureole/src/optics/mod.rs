@@ -32,6 +32,7 @@ use serde::Deserialize;
 
 use crate::camera::Camera;
 use crate::error::Result;
+use crate::sending::Sending;
 use aperture::{spectrum::Light, Optics};
 use shape::SpreadShape;
 
@@ -49,6 +50,8 @@ pub(crate) struct Context<'a> {
     pub index_of_kind: usize,
     /// The size of the kernel being built, width × height in pixels.
     pub kernel_size: (usize, usize),
+    /// What sends the light the kernel spreads.
+    pub sending: Sending,
 }
 
 /// The random stream of the `index`-th effect of one type in a chain: each

@@ -1,6 +1,8 @@
 //! The near field of a diffraction pattern: |Â(x/(λf))|² evaluated exactly
-//! from the pupil's closed-form transform and integrated over each pixel by
-//! Gauss–Legendre quadrature, for every wavelength (docs/physics.md §6).
+//! from the pupil's closed-form transform and integrated over each pixel
+//! (and, for a kernel of an image, under its tent: the sending pixel's area
+//! too, docs/physics.md §2) by Gauss–Legendre quadrature, for every
+//! wavelength (§6).
 //!
 //! The pattern is band-limited: |Â|² holds spatial frequencies up to
 //! D/(λf) = 1/(λN) in the focal plane, so over a pixel p wide it is an
@@ -10,6 +12,7 @@
 //! where the pixel is a small part of a fringe, more where it holds many.
 
 use super::Spectrum;
+use crate::kernel::Sending;
 use crate::optics::aperture::pupil::Offsets;
 use crate::optics::aperture::Optics;
 
@@ -34,11 +37,32 @@ pub(super) struct NearField<'a> {
     offsets: Vec<Offsets>,
     /// Those of the centre pixel and its eight neighbours.
     core_offsets: Vec<Offsets>,
+    /// For light sent by a pixel: the unit squares between four pixel
+    /// centres, per wavelength ([`NearField::add_squares`]).
+    squares: Vec<Squares>,
+    /// Those of the sixteen squares within 2 px of the centre.
+    core_squares: Vec<Squares>,
 }
 
+/// A unit square between four pixel centres, sampled once for the four
+/// pixels whose tents cover it: a pixel's Gauss–Legendre points, and per
+/// corner pixel (top left, top right, bottom left, bottom right) the
+/// weights that carry its tent over the square.
+struct Squares {
+    offsets: Offsets,
+    corners: [Vec<f64>; 4],
+}
+
+/// The corners of a square in [`Squares::corners`] order.
+pub(super) const CORNERS: usize = 4;
+
 impl<'a> NearField<'a> {
-    pub fn new(optics: &'a Optics, spectrum: &'a Spectrum, pitch_mm: f64) -> NearField<'a> {
-        NearField::with_points(optics, spectrum, pitch_mm, |c| {
+    pub fn new(
+        optics: &'a Optics,
+        spectrum: &'a Spectrum,
+        (pitch_mm, sending): (f64, Sending),
+    ) -> NearField<'a> {
+        NearField::with_points(optics, spectrum, pitch_mm, sending, |c| {
             points_per_axis(c).min(MOST_POINTS)
         })
     }
@@ -49,16 +73,25 @@ impl<'a> NearField<'a> {
         optics: &'a Optics,
         spectrum: &'a Spectrum,
         pitch_mm: f64,
+        sending: Sending,
         points: fn(f64) -> usize,
     ) -> NearField<'a> {
+        let core_points = |c| points(c).max(points_per_axis(c));
+        let (squares, core_squares) = match sending {
+            Sending::Pixel => (
+                squares(optics, spectrum, pitch_mm, points),
+                squares(optics, spectrum, pitch_mm, core_points),
+            ),
+            Sending::Point => (Vec::new(), Vec::new()),
+        };
         NearField {
             optics,
             spectrum,
             pitch_mm,
-            offsets: quadrature(optics, spectrum, pitch_mm, points),
-            core_offsets: quadrature(optics, spectrum, pitch_mm, |c| {
-                points(c).max(points_per_axis(c))
-            }),
+            offsets: quadrature(optics, spectrum, pitch_mm, sending, points),
+            core_offsets: quadrature(optics, spectrum, pitch_mm, sending, core_points),
+            squares,
+            core_squares,
         }
     }
 }
@@ -70,42 +103,134 @@ impl<'a> NearField<'a> {
     pub(super) fn exact(
         optics: &'a Optics,
         spectrum: &'a Spectrum,
-        pitch_mm: f64,
+        (pitch_mm, sending): (f64, Sending),
     ) -> NearField<'a> {
-        NearField::with_points(optics, spectrum, pitch_mm, |c| 2 * points_per_axis(c) + 8)
+        NearField::with_points(optics, spectrum, pitch_mm, sending, |c| {
+            2 * points_per_axis(c) + 8
+        })
     }
 }
 
-/// The offsets and weights of `points`(p/(λN))² Gauss–Legendre points over
-/// a pixel, per wavelength of `spectrum`.
+/// The offsets and weights of a pixel's `points`(p/(λN))² points, or its
+/// tent's (2 `points`)² for light sent by a pixel, per wavelength of
+/// `spectrum`.
 fn quadrature(
     optics: &Optics,
     spectrum: &Spectrum,
     pitch_mm: f64,
+    sending: Sending,
     points: impl Fn(f64) -> usize,
 ) -> Vec<Offsets> {
+    per_line(optics, spectrum, pitch_mm, points, |n| {
+        let (nodes, weights) = match sending {
+            Sending::Pixel => tent(n),
+            Sending::Point => square(n),
+        };
+        tensor(&nodes, &weights)
+    })
+    .into_iter()
+    .map(|(grid, scale)| {
+        let (dx, dy) = grid
+            .iter()
+            .map(|&(s, t, _)| (pitch_mm * s * scale, pitch_mm * t * scale))
+            .unzip();
+        optics
+            .pupil
+            .offsets(dx, dy, grid.iter().map(|&(_, _, w)| w).collect())
+    })
+    .collect()
+}
+
+/// The [`Squares`] of `points`(p/(λN))² points, per wavelength.
+fn squares(
+    optics: &Optics,
+    spectrum: &Spectrum,
+    pitch_mm: f64,
+    points: impl Fn(f64) -> usize,
+) -> Vec<Squares> {
+    per_line(optics, spectrum, pitch_mm, points, |n| {
+        let (nodes, weights) = square(n);
+        tensor(&nodes, &weights)
+    })
+    .into_iter()
+    .map(|(grid, scale)| {
+        let mut corners: [Vec<f64>; 4] = Default::default();
+        for &(s, t, w) in &grid {
+            // A corner pixel's tent is 1 at its centre and 0 at the far
+            // side: s, t in [−½, ½], y up.
+            let (left, right, top, bottom) = (0.5 - s, 0.5 + s, 0.5 + t, 0.5 - t);
+            let shares = [left * top, right * top, left * bottom, right * bottom];
+            for (corner, share) in corners.iter_mut().zip(shares) {
+                corner.push(w * share);
+            }
+        }
+        let (dx, dy) = grid
+            .iter()
+            .map(|&(s, t, _)| (pitch_mm * s * scale, pitch_mm * t * scale))
+            .unzip();
+        let w = grid.iter().map(|&(_, _, w)| w).collect();
+        Squares {
+            offsets: optics.pupil.offsets(dx, dy, w),
+            corners,
+        }
+    })
+    .collect()
+}
+
+/// Per wavelength of `spectrum`, `build`(`points`(p/(λN))) and the scale
+/// 1/(λf) from mm on the sensor to the pupil's frequencies.
+fn per_line<T>(
+    optics: &Optics,
+    spectrum: &Spectrum,
+    pitch_mm: f64,
+    points: impl Fn(f64) -> usize,
+    build: impl Fn(usize) -> T,
+) -> Vec<(T, f64)> {
     spectrum
         .iter()
         .map(|(lambda_nm, _)| {
             let lambda_n = lambda_nm * 1e-6 * optics.focal_mm / optics.diameter_mm;
             let scale = 1.0 / (lambda_nm * 1e-6 * optics.focal_mm);
-            let (nodes, weights) = gauss_legendre(points(pitch_mm / lambda_n));
-            let n = nodes.len();
-            let (mut dx, mut dy, mut w) = (Vec::new(), Vec::new(), Vec::new());
-            for a in 0..n {
-                for b in 0..n {
-                    dx.push(0.5 * pitch_mm * nodes[b] * scale);
-                    dy.push(0.5 * pitch_mm * nodes[a] * scale);
-                    // The weights on [−1, 1] sum to 2 per axis.
-                    w.push(0.25 * weights[a] * weights[b]);
-                }
-            }
-            optics.pupil.offsets(dx, dy, w)
+            (build(points(pitch_mm / lambda_n)), scale)
+        })
+        .collect()
+}
+
+/// The tensor grid of `nodes` along both axes: (s, t, weight) with t, the
+/// offset up, the slower.
+fn tensor(nodes: &[f64], weights: &[f64]) -> Vec<(f64, f64, f64)> {
+    nodes
+        .iter()
+        .zip(weights)
+        .flat_map(|(&t, &wt)| {
+            nodes
+                .iter()
+                .zip(weights)
+                .map(move |(&s, &ws)| (s, t, ws * wt))
         })
         .collect()
 }
 
 impl NearField<'_> {
+    /// For light sent by a pixel: the energy of the pattern in unit
+    /// squares of one row, centred at (`xs`[i], y) mm, all within 2 px of
+    /// the centre or none, weighed by each corner pixel's tent, added into
+    /// `out`: per square its [`CORNERS`] corners, per corner `planes`
+    /// values. A pixel's light is the sum over the four squares about it,
+    /// so every point of the pattern is evaluated once for four pixels.
+    pub fn add_squares(&self, xs: &[f64], y: f64, core: bool, out: &mut [f64]) {
+        let squares = if core {
+            &self.core_squares
+        } else {
+            &self.squares
+        };
+        let grids = squares.iter().map(|squares| {
+            let sets = squares.corners.iter().map(Vec::as_slice).collect();
+            (&squares.offsets, sets)
+        });
+        self.add_weighed(xs, y, grids, out);
+    }
+
     /// The energy of the pattern in pixels of one row, centred at
     /// (`xs`[i], y) mm, all in the core (the centre pixel and its
     /// neighbours) or none, added into `out`, their values side by side
@@ -114,25 +239,43 @@ impl NearField<'_> {
     ///
     /// [`Pupil::intensity_sums`]: crate::optics::aperture::pupil::Pupil::intensity_sums
     pub fn add_many(&self, xs: &[f64], y: f64, core: bool, out: &mut [f64]) {
-        let (f, pitch_mm) = (self.optics.focal_mm, self.pitch_mm);
-        let area = self.optics.pupil.area();
-        let planes = out.len() / xs.len().max(1);
-        let mut sums = vec![0.0; xs.len()];
         let offsets = if core {
             &self.core_offsets
         } else {
             &self.offsets
         };
-        for ((lambda_nm, weights), offsets) in self.spectrum.iter().zip(offsets) {
+        let grids = offsets
+            .iter()
+            .map(|offsets| (offsets, vec![offsets.weights()]));
+        self.add_weighed(xs, y, grids, out);
+    }
+
+    /// The energy of the pattern at the points (`xs`[i], y) mm under each
+    /// set of weights of each wavelength's grid in `grids` (offsets and
+    /// sets), added into `out`: per point its sets, per set `planes`
+    /// values.
+    fn add_weighed<'g>(
+        &self,
+        xs: &[f64],
+        y: f64,
+        grids: impl Iterator<Item = (&'g Offsets, Vec<&'g [f64]>)>,
+        out: &mut [f64],
+    ) {
+        let (f, pitch_mm) = (self.optics.focal_mm, self.pitch_mm);
+        let area = self.optics.pupil.area();
+        let mut sums = Vec::new();
+        for ((lambda_nm, weights), (offsets, sets)) in self.spectrum.iter().zip(grids) {
             let scale = 1.0 / (lambda_nm * 1e-6 * f);
             let nu_x: Vec<f64> = xs.iter().map(|x| x * scale).collect();
+            sums.resize(xs.len() * sets.len(), 0.0);
             self.optics
                 .pupil
-                .intensity_sums(&nu_x, y * scale, offsets, &mut sums);
-            for (pixel, mean) in out.chunks_mut(planes).zip(&sums) {
+                .intensity_moments(&nu_x, y * scale, offsets, &sets, &mut sums);
+            let planes = out.len() / sums.len().max(1);
+            for (value_set, mean) in out.chunks_mut(planes).zip(&sums) {
                 // Energy in the pixel: mean PSF × pixel area.
                 let energy = mean * scale * scale / area * pitch_mm * pitch_mm;
-                for (value, weight) in pixel.iter_mut().zip(weights) {
+                for (value, weight) in value_set.iter_mut().zip(weights) {
                     *value += weight * energy;
                 }
             }
@@ -146,6 +289,30 @@ impl NearField<'_> {
 /// 20 px).
 fn points_per_axis(cycles: f64) -> usize {
     ((2.2 * cycles + 2.0).ceil() as usize).clamp(2, MOST_CORE_POINTS)
+}
+
+/// Nodes in pixels and weights (Σ = 1) for the mean over a pixel: `n`
+/// Gauss–Legendre points.
+fn square(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let (nodes, weights) = gauss_legendre(n);
+    (
+        nodes.iter().map(|t| 0.5 * t).collect(),
+        weights.iter().map(|w| 0.5 * w).collect(),
+    )
+}
+
+/// Nodes in pixels and weights (Σ = 1) for the mean under the tent
+/// 1 − |s| on [−1, 1], the light a pixel receives from a pixel beside it
+/// (docs/physics.md §2): `n` Gauss–Legendre points on each half, whose
+/// weights take the tent's linear factor, so that a pixel's worth of the
+/// pattern still meets `n` points.
+fn tent(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let (nodes, weights) = gauss_legendre(n);
+    let half = nodes.iter().zip(&weights).map(|(t, w)| {
+        let s = 0.5 * (1.0 + t);
+        (s, 0.5 * w * (1.0 - s))
+    });
+    half.clone().map(|(s, w)| (-s, w)).chain(half).unzip()
 }
 
 /// The `n` Gauss–Legendre nodes on [−1, 1] and their weights (Σ = 2):
@@ -211,12 +378,17 @@ mod tests {
         // λN from 20 to 0.3 px. The reference has more than twice the
         // points, enough that it is exact to 1e-6.
         let light = Light::Monochrome(550.0).wavelengths();
-        for (blades, roundness) in [(7, 0.0), (8, 0.0), (0, 0.0), (6, 0.5)] {
+        let cases = [(7, 0.0), (8, 0.0), (0, 0.0), (6, 0.5)];
+        for ((blades, roundness), sending) in cases
+            .into_iter()
+            .flat_map(|case| [(case, Sending::Point), (case, Sending::Pixel)])
+        {
             let optics = stop(blades, roundness, 4.0);
             for lambda_n_px in [0.3, 0.7, 1.0, 2.2, 5.0, 20.0] {
                 let pitch = 550e-6 * 4.0 / lambda_n_px;
-                let ours = rasterise(&NearField::new(&optics, &light, pitch), pitch, 12);
-                let exact = rasterise(&NearField::exact(&optics, &light, pitch), pitch, 12);
+                let near = NearField::new(&optics, &light, (pitch, sending));
+                let exact = NearField::exact(&optics, &light, (pitch, sending));
+                let (ours, exact) = (rasterise(&near, pitch, 12), rasterise(&exact, pitch, 12));
                 let mut worst = (0.0, 0);
                 for (k, (a, b)) in ours.iter().zip(&exact).enumerate() {
                     let error = (a / b - 1.0).abs();
@@ -226,7 +398,7 @@ mod tests {
                 }
                 assert!(
                     worst.0 < 0.005,
-                    "{blades} blades, λN {lambda_n_px} px: pixel {} off by {:.4}",
+                    "{blades} blades, {sending:?}, λN {lambda_n_px} px: pixel {} off by {:.4}",
                     worst.1,
                     worst.0
                 );

@@ -8,7 +8,7 @@ use super::Spectrum;
 use crate::control::{for_each_row, Control};
 use crate::convolve;
 use crate::error::Result;
-use crate::kernel::{Extent, Kernel};
+use crate::kernel::{Extent, Kernel, Sending};
 use crate::optics::aperture::Optics;
 use rayon::prelude::*;
 
@@ -39,7 +39,7 @@ pub(super) fn through_filter(
         .iter()
         .map(|plane| centre_window(plane, extent, ORDER_REACH))
         .collect();
-    let cores = Cores::new(optics, spectrum, &windows, pitch_mm);
+    let cores = Cores::new(optics, spectrum, &windows, pitch_mm, extent.sending);
     let share = 1.0 / planes.len().max(1) as f64;
     let mut filtered = Vec::with_capacity(planes.len());
     for (c, plane) in planes.iter().enumerate() {
@@ -286,7 +286,13 @@ struct Cores {
 }
 
 impl Cores {
-    fn new(optics: &Optics, spectrum: &Spectrum, windows: &[Window], pitch_mm: f64) -> Cores {
+    fn new(
+        optics: &Optics,
+        spectrum: &Spectrum,
+        windows: &[Window],
+        pitch_mm: f64,
+        sending: Sending,
+    ) -> Cores {
         let longest = spectrum.iter().map(|(l, _)| *l).fold(0.0, f64::max);
         let lambda_n_px = longest * 1e-6 * optics.focal_mm / optics.diameter_mm / pitch_mm;
         // Whole-pixel placing blurs the core and the rings about it, which
@@ -311,7 +317,7 @@ impl Cores {
             .collect();
         let nears: Vec<NearField<'_>> = singles
             .iter()
-            .map(|single| NearField::new(optics, single, pitch_mm))
+            .map(|single| NearField::new(optics, single, (pitch_mm, sending)))
             .collect();
         let exact: Vec<Vec<f64>> = (0..spectrum.len() * evaluated)
             .into_par_iter()
@@ -486,10 +492,11 @@ fn pattern_about(near: &NearField<'_>, reach: usize, fx: f64, fy: f64, pitch_mm:
 mod tests {
     use super::*;
     use crate::control::Cancel;
+    use crate::kernel::Sending;
 
     #[test]
     fn scattering_and_fft_spread_orders_alike() {
-        let extent = Extent::new(47, 33).unwrap();
+        let extent = Extent::new(47, 33).unwrap().sent_by(Sending::Point);
         let mut comb = vec![0.0; 47 * 33];
         for (i, v) in [
             (5usize, 0.3),

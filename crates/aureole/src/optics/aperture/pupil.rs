@@ -446,6 +446,20 @@ impl Pupil {
     /// e^(iq·e/2) factor into a part of the point and a part of the offset,
     /// so that the sines of the inner loop become complex products.
     pub fn intensity_sums(&self, nu_x: &[f64], nu_y: f64, offsets: &Offsets, out: &mut [f64]) {
+        self.intensity_moments(nu_x, nu_y, offsets, &[&offsets.weights], out);
+    }
+
+    /// Σ_k w_k |Â(ν_i + δ_k)|² for each set of weights w in `sets`, as
+    /// [`Pupil::intensity_sums`]: `out`[i·S + s] for the point i and the
+    /// set s of S. The transform is evaluated once for all the sets.
+    pub fn intensity_moments(
+        &self,
+        nu_x: &[f64],
+        nu_y: f64,
+        offsets: &Offsets,
+        sets: &[&[f64]],
+        out: &mut [f64],
+    ) {
         let (dnu_x, dnu_y) = (&offsets.x, &offsets.y);
         let (points, count) = (nu_x.len(), dnu_x.len());
         let mut total = vec![[0.0f64; 2]; points * count];
@@ -517,12 +531,14 @@ impl Pupil {
                 add_product(t, element.weight, a);
             }
         }
-        for (o, point) in out.iter_mut().zip(total.chunks(count)) {
-            *o = point
-                .iter()
-                .zip(&offsets.weights)
-                .map(|([re, im], w)| w * (re * re + im * im))
-                .sum();
+        for (o, point) in out.chunks_mut(sets.len()).zip(total.chunks(count)) {
+            for (o, weights) in o.iter_mut().zip(sets) {
+                *o = point
+                    .iter()
+                    .zip(weights.iter())
+                    .map(|([re, im], w)| w * (re * re + im * im))
+                    .sum();
+            }
         }
     }
 }
@@ -639,6 +655,11 @@ impl Offsets {
     /// Whether there are none.
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
+    }
+
+    /// The quadrature weight of each offset.
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
     }
 }
 

@@ -21,6 +21,7 @@ use rims::{FringeRow, Fringes};
 use spots::Spots;
 
 use super::Spectrum;
+use crate::kernel::Sending;
 use crate::optics::aperture::pupil::{sinc, EdgeTerm};
 use crate::optics::aperture::Optics;
 use std::f64::consts::{PI, TAU};
@@ -66,6 +67,8 @@ pub(super) struct FarField {
     longest: f64,
     area: f64,
     focal: f64,
+    /// What sends the light: a pixel's tent widens a ray across itself.
+    sending: Sending,
 }
 
 /// One wavelength: λ in mm, its share of each plane's weight, and its own
@@ -269,6 +272,36 @@ impl Cumulative {
         out
     }
 
+    /// The mean of every plane's g that a pixel receives, as `sending`
+    /// sends it: from a point, over the pixel's square ([`Cumulative::mean`]);
+    /// from a pixel, under its tent, whose width along u is the square's
+    /// trapezoid T convolved with itself: the square's mean at the
+    /// sending pixel's offsets s along u, T's distribution, by the
+    /// symmetric three-point rule that holds T's moments to the fifth
+    /// (nodes 0 and ±√(m₄/m₂), m₂ = (β² + γ²)/3 and
+    /// m₄ = (β⁴ + γ⁴)/5 + 2β²γ²/3 its second and fourth moments; for
+    /// γ = 0, Gauss–Legendre's three points).
+    #[inline]
+    fn received(&self, c: f64, beta: f64, gamma: f64, sending: Sending) -> [f64; PLANES] {
+        if sending == Sending::Point {
+            return self.mean(c, beta, gamma);
+        }
+        let (b2, g2) = (beta * beta, gamma * gamma);
+        let m2 = (b2 + g2) / 3.0;
+        let m4 = (b2 * b2 + g2 * g2) / 5.0 + 2.0 * b2 * g2 / 3.0;
+        let (d, side) = ((m4 / m2).sqrt(), m2 * m2 / (2.0 * m4));
+        let (middle, before, after) = (
+            self.mean(c, beta, gamma),
+            self.mean(c - d, beta, gamma),
+            self.mean(c + d, beta, gamma),
+        );
+        let mut out = [0.0; PLANES];
+        for k in 0..self.planes {
+            out[k] = (1.0 - 2.0 * side) * middle[k] + side * (before[k] + after[k]);
+        }
+        out
+    }
+
     /// The mean of every plane's g over a square pixel whose sides project
     /// onto the u axis as 2β and 2γ (β ≥ γ) about `c`: g weighted by the
     /// trapezoid that is the square's width along u, the second difference
@@ -305,7 +338,7 @@ impl FarField {
         optics: &Optics,
         spectrum: &Spectrum,
         weights_total: &[f64],
-        pitch: f64,
+        (pitch, sending): (f64, Sending),
         reach: f64,
     ) -> FarField {
         let (edges, discs, spots) = optics.pupil.far_field_terms();
@@ -336,15 +369,18 @@ impl FarField {
                 ratio,
                 pixel: lines
                     .iter()
-                    .map(|line| square_mean(pitch, [d[0], d[1]].map(|v| v / (line.lambda * f))))
+                    .map(|line| {
+                        pixel_mean(pitch, sending, [d[0], d[1]].map(|v| v / (line.lambda * f)))
+                    })
                     .collect(),
                 nodes: lines
                     .iter()
-                    .map(|line| core_nodes(edge, d, ratio, line.lambda, f, pitch))
+                    .map(|line| core_nodes(edge, d, ratio, line.lambda, f, (pitch, sending)))
                     .collect(),
             });
         }
-        let fringes = Fringes::new(&discs, &straight, &lines, f, pitch, optics.pupil.area());
+        let area = optics.pupil.area();
+        let fringes = Fringes::new(&discs, &straight, &lines, f, pitch, sending, area);
         FarField {
             edges: straight
                 .into_iter()
@@ -378,8 +414,9 @@ impl FarField {
                     spectrum.iter().map(|(l, w)| l * 1e-6 * w[c]).sum::<f64>() / weights_total[c]
                 })
                 .collect(),
-            area: optics.pupil.area(),
+            area,
             focal: f,
+            sending,
         }
     }
 
@@ -462,21 +499,30 @@ impl FarField {
             let along = along0 + i as f64 * d_along;
             (edge.l2 * along * along, across * k)
         };
-        let table = band(
-            across0,
-            d_across,
-            (self.table.end + beta + gamma) / k,
-            count,
-        );
+        // A sending pixel's tent reaches as far again as the square.
+        let spread = match self.sending {
+            Sending::Point => beta + gamma,
+            Sending::Pixel => 2.0 * (beta + gamma),
+        };
+        let table = band(across0, d_across, (self.table.end + spread) / k, count);
         // Beyond the table all four corners' u lie on one side, where
         // g = tail/u² and the trapezoid's mean is
-        // −tail·ln(1 − x)/(x D), D = c² − (β − γ)², x = 4βγ/D ≤ 10⁻³.
+        // −tail·ln(1 − x)/(x D), D = c² − (β − γ)², x = 4βγ/D ≤ 10⁻³: to
+        // the second order 1/c²·(1 + 3m₂/c²), m₂ = (β² + γ²)/3 the
+        // trapezoid's second moment, which the tent's doubles.
         let squeeze = (beta - gamma) * (beta - gamma);
         let corners = 2.0 * beta * gamma;
+        let tented = 2.0 * (beta * beta + gamma * gamma);
+        let sending = self.sending;
         let tail = |i: usize| {
             let (weight, c) = strip(i);
-            let d = 1.0 / (c * c - squeeze);
-            weight * d * (1.0 + corners * d)
+            match sending {
+                Sending::Point => {
+                    let d = 1.0 / (c * c - squeeze);
+                    weight * d * (1.0 + corners * d)
+                }
+                Sending::Pixel => weight / (c * c - tented),
+            }
         };
         for range in [0..table.start, table.end..count] {
             for (i, sum) in range.clone().zip(&mut row.tails[range]) {
@@ -486,7 +532,7 @@ impl FarField {
         row.means.resize(count, 0.0);
         for i in table.clone() {
             let (weight, c) = strip(i);
-            let mean = self.table.mean(c, beta, gamma);
+            let mean = self.table.received(c, beta, gamma, self.sending);
             row.means[i] = mean[0];
             for (sum, m) in row.sums[i * planes..(i + 1) * planes].iter_mut().zip(mean) {
                 *sum += weight * m;
@@ -522,7 +568,7 @@ impl FarField {
                 }
                 self.add_cross(pair, &at, table.clone(), &strip, planes, row);
             } else {
-                let reach = (PAIR_REACH * self.longest + beta + gamma) / k;
+                let reach = (PAIR_REACH * self.longest + spread) / k;
                 let near = band(across0, d_across, reach, count);
                 let start = near.start.max(table.start);
                 let near = start..near.end.min(table.end).max(start);
@@ -581,7 +627,7 @@ impl FarField {
                 } else {
                     // One wavelength's mean is the edge's own, found already.
                     let mean = match &line.table {
-                        Some(table) => table.mean(c, at.beta, at.gamma)[0],
+                        Some(table) => table.received(c, at.beta, at.gamma, self.sending)[0],
                         None => row.means[i],
                     };
                     mean * pixel * row.cosines[i] * pair.beat(c, line.lambda)
@@ -688,7 +734,7 @@ fn core_nodes(
     ratio: f64,
     lambda: f64,
     f: f64,
-    pitch: f64,
+    (pitch, sending): (f64, Sending),
 ) -> Vec<(f64, f64)> {
     let (k, a) = (edge.length / f, edge.along);
     let per_z = k / lambda;
@@ -710,18 +756,25 @@ fn core_nodes(
                     z * per_z * a[0] + d[0] / (lambda * f),
                     z * per_z * a[1] + d[1] / (lambda * f),
                 ];
-                let box_mean = square_mean(pitch, omega);
-                nodes.push((z * per_z, 0.5 * (to - from) * w * trapezoid(z) * box_mean));
+                let pixel = pixel_mean(pitch, sending, omega);
+                nodes.push((z * per_z, 0.5 * (to - from) * w * trapezoid(z) * pixel));
             }
         }
     }
     nodes
 }
 
-/// The mean of e^(i2πω·δ) over a square pixel `pitch` wide centred at 0:
-/// the product of the sincs of its two sides.
-fn square_mean(pitch: f64, omega: [f64; 2]) -> f64 {
-    sinc(PI * pitch * omega[0]) * sinc(PI * pitch * omega[1])
+/// The mean of e^(i2πω·δ) over where a pixel `pitch` wide centred at 0
+/// takes its light from: its square for light sent by a point, the
+/// product of the sincs of its two sides; its tent for light sent by a
+/// pixel, the square's own convolved with itself, whose transform is that
+/// product squared.
+pub(super) fn pixel_mean(pitch: f64, sending: Sending, omega: [f64; 2]) -> f64 {
+    let square = sinc(PI * pitch * omega[0]) * sinc(PI * pitch * omega[1]);
+    match sending {
+        Sending::Point => square,
+        Sending::Pixel => square * square,
+    }
 }
 
 /// The pixels i of 0..`count` where |`c0` + i·`c1`| < `reach`, and one

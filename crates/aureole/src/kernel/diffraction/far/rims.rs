@@ -4,7 +4,8 @@
 
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 
-use super::{band, sin_cos, square_mean, Line, FRINGE_FLOOR, PLANES};
+use super::{band, pixel_mean, sin_cos, Line, FRINGE_FLOOR, PLANES};
+use crate::kernel::Sending;
 use crate::optics::aperture::pupil::{DiscTerm, EdgeTerm};
 
 /// The discs' fringes. Far out a disc's amplitude is, by stationary
@@ -72,6 +73,7 @@ impl Rim {
         lines: &[Line],
         f: f64,
         pitch: f64,
+        sending: Sending,
         area: f64,
     ) -> Vec<Rim> {
         let shortest = lines.iter().map(|l| l.lambda).fold(f64::INFINITY, f64::min);
@@ -122,7 +124,7 @@ impl Rim {
                                 .map(|i| {
                                     let (sin, cos) = (-PI + i as f64 * step).sin_cos();
                                     let g = [disc.radius * cos + d[0], disc.radius * sin + d[1]];
-                                    square_mean(pitch, g.map(|g| g / (line.lambda * f)))
+                                    pixel_mean(pitch, sending, g.map(|g| g / (line.lambda * f)))
                                 })
                                 .collect()
                         })
@@ -189,6 +191,7 @@ impl Fringes {
         lines: &[Line],
         f: f64,
         pitch: f64,
+        sending: Sending,
         area: f64,
     ) -> Fringes {
         // Each wave's form, amplitude and R₁ ± R₂ (or 2R), the same in
@@ -226,7 +229,7 @@ impl Fringes {
                             .map(|i| {
                                 let u = (i as f64 * step).min(FRAC_1_SQRT_2);
                                 let v = (1.0 - u * u).sqrt();
-                                square_mean(pitch, [k * u / TAU, k * v / TAU])
+                                pixel_mean(pitch, sending, [k * u / TAU, k * v / TAU])
                             })
                             .collect();
                         Wave {
@@ -242,7 +245,7 @@ impl Fringes {
         // `discs`, λ f p²/(4π² r³·area) of the light in a pixel.
         let roots: f64 = discs.iter().map(|d| d.radius.sqrt()).sum();
         let longest = lines.iter().map(|l| l.lambda).fold(0.0, f64::max);
-        let rims = Rim::find(edges, discs, lines, f, pitch, area);
+        let rims = Rim::find(edges, discs, lines, f, pitch, sending, area);
         let reach = rims.iter().map(|rim| rim.reach).fold(
             (roots * roots * longest * f * pitch * pitch / (PI * PI * area * FRINGE_FLOOR)).cbrt(),
             f64::max,
