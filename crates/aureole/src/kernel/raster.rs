@@ -23,10 +23,32 @@ pub(super) fn shape_plane(
     extent: &Extent,
     control: &mut Control,
 ) -> Result<Option<Vec<f32>>> {
+    let width = extent.width;
+    // A shape singular at the centre keeps the sending pixel a point.
+    let mut plane = if extent.sending == Sending::Pixel && shape.spreads_centre() {
+        tent_plane(shape, extent, control)?
+    } else {
+        point_plane(shape, extent, control)?
+    };
+    let total = plane_sum(&plane, width);
+    if !(total > 0.0 && total.is_finite()) {
+        return Ok(None);
+    }
+    let scale = 1.0 / total;
+    plane
+        .par_iter_mut()
+        .for_each(|v| *v = (f64::from(*v) * scale) as f32);
+    Ok(Some(plane))
+}
+
+/// f averaged over every receiving pixel, for light sent by a point.
+fn point_plane(
+    shape: &dyn SpreadShape,
+    extent: &Extent,
+    control: &mut Control,
+) -> Result<Vec<f32>> {
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = extent.centre();
-    // A shape singular at the centre keeps the sending pixel a point.
-    let tent = extent.sending == Sending::Pixel && shape.spreads_centre();
     let mut plane = vec![0f32; width * height];
     if shape.mirror_symmetric() {
         // Offsets 0..=reach along each axis cover both sides of the centre.
@@ -34,19 +56,10 @@ pub(super) fn shape_plane(
         let mut quarter = vec![0.0; (reach_x + 1) * (reach_y + 1)];
         for_each_row(&mut quarter, reach_x + 1, control, |dy, row| {
             for (dx, value) in row.iter_mut().enumerate() {
-                *value = pixel_mean(shape, dx as f64, dy as f64, (dx, dy) == (0, 0), tent) as f32;
+                *value = pixel_mean(shape, dx as f64, dy as f64, (dx, dy) == (0, 0));
             }
         })?;
-        plane
-            .par_chunks_mut(width)
-            .enumerate()
-            .for_each(|(j, row)| {
-                let dy = j.abs_diff(cy);
-                let source = &quarter[dy * (reach_x + 1)..(dy + 1) * (reach_x + 1)];
-                for (i, value) in row.iter_mut().enumerate() {
-                    *value = source[i.abs_diff(cx)];
-                }
-            });
+        mirror(&quarter, reach_x + 1, &mut plane, width, (cx, cy));
     } else {
         // Pieces of rows rather than rows: the few rows through the centre,
         // where every ray is sampled finely, would otherwise hold a batch
@@ -63,7 +76,7 @@ pub(super) fn shape_plane(
         for_each(&mut pieces, control, |_, (j, first, piece)| {
             let (j, first) = (*j, *first);
             let y = cy as f64 - j as f64;
-            let spans = lit_spans(shape, y, tent);
+            let spans = shape.lit_spans(y);
             for (i, value) in piece.iter_mut().enumerate() {
                 let i = first + i;
                 let x = i as f64 - cx as f64;
@@ -73,31 +86,11 @@ pub(super) fn shape_plane(
                         continue;
                     }
                 }
-                *value = pixel_mean(shape, x, y, (i, j) == (cx, cy), tent) as f32;
+                *value = pixel_mean(shape, x, y, (i, j) == (cx, cy)) as f32;
             }
         })?;
     }
-    let total = plane_sum(&plane, width);
-    if !(total > 0.0 && total.is_finite()) {
-        return Ok(None);
-    }
-    let scale = 1.0 / total;
-    plane
-        .par_iter_mut()
-        .for_each(|v| *v = (f64::from(*v) * scale) as f32);
-    Ok(Some(plane))
-}
-
-/// The ranges of pixel centres on the row at height y that may hold light:
-/// with the `tent`, those of the unit squares on the half rows above and
-/// below, widened by half a pixel.
-fn lit_spans(shape: &dyn SpreadShape, y: f64, tent: bool) -> Option<Vec<(f64, f64)>> {
-    if !tent {
-        return shape.lit_spans(y);
-    }
-    let mut spans = shape.lit_spans(y - 0.5)?;
-    spans.extend(shape.lit_spans(y + 0.5)?);
-    Some(spans.into_iter().map(|(a, b)| (a - 0.5, b + 0.5)).collect())
+    Ok(plane)
 }
 
 /// Σ of a plane in f64: row sums in parallel, added in row order, so the
@@ -107,93 +100,212 @@ pub(super) fn plane_sum(plane: &[f32], width: usize) -> f64 {
     rows.iter().sum()
 }
 
-/// The light that the pixel centred at (x, y) receives from the centre
-/// (`centre`: it is the centre pixel). With the `tent`, from a pixel of
-/// uniform radiance there: f averaged over both pixels' areas, its mean
-/// under (1 − |s|)(1 − |t|) over the 2 × 2 px about (x, y)
-/// (docs/physics.md §2). Without, from a point at its centre: f averaged
-/// over the receiving pixel.
-fn pixel_mean(shape: &dyn SpreadShape, x: f64, y: f64, centre: bool, tent: bool) -> f64 {
-    if !tent {
-        if centre {
-            if !shape.spreads_centre() {
-                return 0.0;
-            }
-            // An even count keeps sample points off r = 0, where the
-            // direction φ is undefined.
-            let m = shape.grid(x, y);
-            let even = |n: u32| n.max(16) + n.max(16) % 2;
-            let grid = Supersampling {
-                x: even(m.x),
-                y: even(m.y),
-            };
-            return pixel_average(shape, x, y, grid);
-        }
-        if shape.vanishes_over_pixel(x, y) {
+/// The mean of f over the pixel centred at (x, y) (`centre`: the kernel's
+/// centre pixel).
+fn pixel_mean(shape: &dyn SpreadShape, x: f64, y: f64, centre: bool) -> f64 {
+    if centre {
+        if !shape.spreads_centre() {
             return 0.0;
         }
-        return pixel_average(shape, x, y, shape.grid(x, y));
+        // An even count keeps sample points off r = 0, where the direction φ
+        // is undefined.
+        let m = shape.grid(x, y);
+        let even = |n: u32| n.max(16) + n.max(16) % 2;
+        let grid = Supersampling {
+            x: even(m.x),
+            y: even(m.y),
+        };
+        return pixel_average(shape, x, y, grid);
     }
-    let quarters = QUARTERS.map(|(sx, sy)| (x + 0.5 * sx, y + 0.5 * sy));
-    if quarters
-        .iter()
-        .all(|&(qx, qy)| shape.vanishes_over_pixel(qx, qy))
-    {
+    if shape.vanishes_over_pixel(x, y) {
         return 0.0;
     }
-    let grids = quarters.map(|(qx, qy)| {
-        let m = shape.grid(qx, qy);
-        // A quarter with the centre at a corner holds the steepest part
-        // of f; its midpoints never fall on r = 0.
-        if qx.abs() <= 0.5 && qy.abs() <= 0.5 {
-            Supersampling {
-                x: m.x.max(16),
-                y: m.y.max(16),
-            }
-        } else {
-            m
-        }
-    });
-    if grids.iter().all(|g| g.x <= 1 && g.y <= 1) {
-        // f is smooth over the 2 × 2 px: the midpoint rule's error, f''/12
-        // of the tent's variance, is the box's own order.
-        return shape.density(x, y);
-    }
-    let sum: f64 = QUARTERS
-        .iter()
-        .zip(grids)
-        .map(|(&(sx, sy), grid)| quarter_mean(shape, x, y, (sx, sy), grid))
-        .sum();
-    0.25 * sum
+    pixel_average(shape, x, y, shape.grid(x, y))
 }
 
-/// The directions from a pixel's centre to the centres of the four unit
-/// squares that its tent covers, in half pixels.
-const QUARTERS: [(f64, f64); 4] = [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)];
+/// A unit square's light under each of its corner pixels' tents: top
+/// left, top right, bottom left, bottom right (y up).
+type Corners = [f64; 4];
+const TOP_LEFT: usize = 0;
+const TOP_RIGHT: usize = 1;
+const BOTTOM_LEFT: usize = 2;
+const BOTTOM_RIGHT: usize = 3;
 
-/// The mean of f weighted by 2(1 − |s|)·2(1 − |t|) (mean 1) over the unit
-/// square between (x, y) and (x + sx, y + sy), by the midpoint rule on
-/// `grid`, which sums the linear weight exactly.
-fn quarter_mean(
+/// Pixel rows rasterised together: their squares are held at once.
+const BAND: usize = 32;
+
+/// f under every pixel's tent, for light sent by a pixel (docs/physics.md
+/// §2): the unit squares between four pixel centres are each sampled once
+/// ([`corners`]), and a pixel sums its four. A mirror-symmetric f is
+/// computed on a quarter and mirrored.
+fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -> Result<Vec<f32>> {
+    let (width, height) = (extent.width, extent.height);
+    let (cx, cy) = extent.centre();
+    let mut plane = vec![0f32; width * height];
+    if shape.mirror_symmetric() {
+        // Squares at (p + ½, q + ½) for p, q ≥ 0; the one at −½ is the
+        // mirror of the one at +½. A pixel at offset d ≥ 0 takes the inner
+        // corner of the square at d + ½ and the outer of the one at d − ½,
+        // or for d = 0 the inner corner of the square at ½ twice.
+        let (reach_x, reach_y) = (cx.max(width - 1 - cx), cy.max(height - 1 - cy));
+        let sides = |d: usize| [(d, false), (d.saturating_sub(1), d > 0)];
+        let mut quarter = vec![0.0; (reach_x + 1) * (reach_y + 1)];
+        rasterise_bands(
+            shape,
+            (&mut quarter, reach_x + 1),
+            &|q| q as f64 + 0.5,
+            &|p| p as f64 + 0.5,
+            &|dy, dx, squares| {
+                let mut sum = 0.0;
+                for (q, outer_y) in sides(dy) {
+                    for (p, outer_x) in sides(dx) {
+                        // Inner is toward the centre: left and below.
+                        let corner = match (outer_x, outer_y) {
+                            (false, false) => BOTTOM_LEFT,
+                            (true, false) => BOTTOM_RIGHT,
+                            (false, true) => TOP_LEFT,
+                            (true, true) => TOP_RIGHT,
+                        };
+                        sum += squares(q, p)[corner];
+                    }
+                }
+                sum
+            },
+            control,
+        )?;
+        mirror(&quarter, reach_x + 1, &mut plane, width, (cx, cy));
+    } else {
+        // Square row k lies between pixel rows k − 1 and k, square i
+        // between columns i − 1 and i.
+        let mut full = vec![0.0; width * height];
+        rasterise_bands(
+            shape,
+            (&mut full, width),
+            &|k| cy as f64 - k as f64 + 0.5,
+            &|i| i as f64 - cx as f64 - 0.5,
+            &|j, i, squares| {
+                squares(j, i)[BOTTOM_RIGHT]
+                    + squares(j, i + 1)[BOTTOM_LEFT]
+                    + squares(j + 1, i)[TOP_RIGHT]
+                    + squares(j + 1, i + 1)[TOP_LEFT]
+            },
+            control,
+        )?;
+        plane
+            .par_iter_mut()
+            .zip(&full)
+            .for_each(|(v, f)| *v = *f as f32);
+    }
+    Ok(plane)
+}
+
+/// `plane` (rows of `width`, its centre at `centre`) from the `quarter` of
+/// offsets 0..`span` along x and down the rows, mirrored into all four.
+fn mirror(quarter: &[f64], span: usize, plane: &mut [f32], width: usize, centre: (usize, usize)) {
+    let (cx, cy) = centre;
+    plane
+        .par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(j, row)| {
+            let dy = j.abs_diff(cy);
+            let source = &quarter[dy * span..(dy + 1) * span];
+            for (i, value) in row.iter_mut().enumerate() {
+                *value = source[i.abs_diff(cx)] as f32;
+            }
+        });
+}
+
+/// A pixel's value from the squares about it: `combine`(row, column,
+/// squares) with squares(k, i) the corners of square i of square row k.
+type Combine<'a> = dyn Fn(usize, usize, &dyn Fn(usize, usize) -> Corners) -> f64 + Sync + 'a;
+
+/// Fills `out` (rows of `width` pixels) band by band: first the square
+/// rows the band needs (from the one before its first pixel row to the one
+/// after its last), square row k at height `y_of`(k) and square i at
+/// `x_of`(i) for i in 0..=width, evaluated in parallel pieces and left
+/// dark outside the shape's lit spans; then every pixel from them. The
+/// same sums in the same order on any number of threads.
+fn rasterise_bands(
     shape: &dyn SpreadShape,
-    x: f64,
-    y: f64,
-    (sx, sy): (f64, f64),
-    grid: Supersampling,
-) -> f64 {
+    (out, width): (&mut [f64], usize),
+    y_of: &(dyn Fn(usize) -> f64 + Sync),
+    x_of: &(dyn Fn(usize) -> f64 + Sync),
+    combine: &Combine<'_>,
+    control: &mut Control,
+) -> Result<()> {
+    let bands = (out.len() / width.max(1)).div_ceil(BAND).max(1);
+    let per_row = width + 1;
+    for (b, band) in out.chunks_mut(BAND * width.max(1)).enumerate() {
+        control.check()?;
+        let first = b * BAND;
+        let (k0, k1) = (first.saturating_sub(1), first + band.len() / width);
+        let mut squares = vec![[0.0; 4]; (k1 + 1 - k0) * per_row];
+        squares
+            .par_chunks_mut(per_row)
+            .enumerate()
+            .for_each(|(n, row)| {
+                let y = y_of(k0 + n);
+                let spans = shape.lit_spans(y);
+                row.par_chunks_mut(PIECE)
+                    .enumerate()
+                    .for_each(|(p, piece)| {
+                        for (m, c) in piece.iter_mut().enumerate() {
+                            let x = x_of(p * PIECE + m);
+                            let lit = spans
+                                .as_ref()
+                                .is_none_or(|s| s.iter().any(|&(a, b)| a <= x && x <= b));
+                            if lit {
+                                *c = corners(shape, x, y);
+                            }
+                        }
+                    });
+            });
+        let lookup = |k: usize, i: usize| squares[(k - k0) * per_row + i];
+        band.par_chunks_mut(width).enumerate().for_each(|(n, row)| {
+            for (i, value) in row.iter_mut().enumerate() {
+                *value = combine(first + n, i, &lookup);
+            }
+        });
+        control.report((b + 1) as f64 / bands as f64);
+    }
+    Ok(())
+}
+
+/// The light of the unit square centred at (x, y) under each corner
+/// pixel's tent, bilinear, 1 at the corner and 0 at the far side: the
+/// midpoint rule on the shape's grid, at least 16 × 16 where the centre is
+/// a corner of the square (its midpoints never fall on r = 0).
+fn corners(shape: &dyn SpreadShape, x: f64, y: f64) -> Corners {
+    if shape.vanishes_over_pixel(x, y) {
+        return [0.0; 4];
+    }
+    let mut grid = shape.grid(x, y);
+    if x.abs() <= 0.5 && y.abs() <= 0.5 {
+        grid = Supersampling {
+            x: grid.x.max(16),
+            y: grid.y.max(16),
+        };
+    }
     let (mx, my) = (grid.x.max(1), grid.y.max(1));
     let (step_x, step_y) = (1.0 / f64::from(mx), 1.0 / f64::from(my));
-    let mut sum = 0.0;
+    let mut sums = [0.0; 4];
     for a in 0..my {
-        let t = (f64::from(a) + 0.5) * step_y;
-        let mut row = 0.0;
+        let t = -0.5 + (f64::from(a) + 0.5) * step_y;
+        let (top, bottom) = (0.5 + t, 0.5 - t);
+        let (mut left, mut right) = (0.0, 0.0);
         for b in 0..mx {
-            let s = (f64::from(b) + 0.5) * step_x;
-            row += 2.0 * (1.0 - s) * shape.density(x + sx * s, y + sy * t);
+            let s = -0.5 + (f64::from(b) + 0.5) * step_x;
+            let f = shape.density(x + s, y + t);
+            left += (0.5 - s) * f;
+            right += (0.5 + s) * f;
         }
-        sum += 2.0 * (1.0 - t) * row;
+        sums[TOP_LEFT] += top * left;
+        sums[TOP_RIGHT] += top * right;
+        sums[BOTTOM_LEFT] += bottom * left;
+        sums[BOTTOM_RIGHT] += bottom * right;
     }
-    sum / f64::from(mx * my)
+    let n = f64::from(mx * my);
+    sums.map(|v| v / n)
 }
 
 /// The mean of f over the pixel centred at (x, y), by the midpoint rule on
