@@ -56,7 +56,7 @@ fn point_plane(
         let mut quarter = vec![0.0; (reach_x + 1) * (reach_y + 1)];
         for_each_row(&mut quarter, reach_x + 1, control, |dy, row| {
             for (dx, value) in row.iter_mut().enumerate() {
-                *value = pixel_mean(shape, dx as f64, dy as f64, (dx, dy) == (0, 0));
+                *value = pixel_mean(shape, dx as f64, dy as f64, (dx, dy) == (0, 0)) as f32;
             }
         })?;
         mirror(&quarter, reach_x + 1, &mut plane, width, (cx, cy));
@@ -177,10 +177,9 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
     } else {
         // Square row k lies between pixel rows k − 1 and k, square i
         // between columns i − 1 and i.
-        let mut full = vec![0.0; width * height];
         rasterise_bands(
             shape,
-            (&mut full, width),
+            (&mut plane, width),
             &|k| cy as f64 - k as f64 + 0.5,
             &|i| i as f64 - cx as f64 - 0.5,
             &|j, i, squares| {
@@ -191,17 +190,13 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
             },
             control,
         )?;
-        plane
-            .par_iter_mut()
-            .zip(&full)
-            .for_each(|(v, f)| *v = *f as f32);
     }
     Ok(plane)
 }
 
 /// `plane` (rows of `width`, its centre at `centre`) from the `quarter` of
 /// offsets 0..`span` along x and down the rows, mirrored into all four.
-fn mirror(quarter: &[f64], span: usize, plane: &mut [f32], width: usize, centre: (usize, usize)) {
+fn mirror(quarter: &[f32], span: usize, plane: &mut [f32], width: usize, centre: (usize, usize)) {
     let (cx, cy) = centre;
     plane
         .par_chunks_mut(width)
@@ -210,7 +205,7 @@ fn mirror(quarter: &[f64], span: usize, plane: &mut [f32], width: usize, centre:
             let dy = j.abs_diff(cy);
             let source = &quarter[dy * span..(dy + 1) * span];
             for (i, value) in row.iter_mut().enumerate() {
-                *value = source[i.abs_diff(cx)] as f32;
+                *value = source[i.abs_diff(cx)];
             }
         });
 }
@@ -227,7 +222,7 @@ type Combine<'a> = dyn Fn(usize, usize, &dyn Fn(usize, usize) -> Corners) -> f64
 /// same sums in the same order on any number of threads.
 fn rasterise_bands(
     shape: &dyn SpreadShape,
-    (out, width): (&mut [f64], usize),
+    (out, width): (&mut [f32], usize),
     y_of: &(dyn Fn(usize) -> f64 + Sync),
     x_of: &(dyn Fn(usize) -> f64 + Sync),
     combine: &Combine<'_>,
@@ -235,22 +230,47 @@ fn rasterise_bands(
 ) -> Result<()> {
     let bands = (out.len() / width.max(1)).div_ceil(BAND).max(1);
     let per_row = width + 1;
+    // x_of is x_of(0) + i: a span [a, b] of square centres holds the
+    // squares ⌈a − x₀⌉ to ⌊b − x₀⌋.
+    let x0 = x_of(0);
+    let lit_range = |spans: &Option<Vec<(f64, f64)>>| match spans {
+        None => 0..per_row,
+        Some(spans) => {
+            let lo = spans
+                .iter()
+                .map(|s| (s.0 - x0).ceil().max(0.0))
+                .fold(f64::INFINITY, f64::min);
+            let hi = spans
+                .iter()
+                .map(|s| (s.1 - x0).floor() + 1.0)
+                .fold(0.0, f64::max);
+            let (lo, hi) = (
+                lo.min(per_row as f64) as usize,
+                hi.clamp(0.0, per_row as f64) as usize,
+            );
+            lo..hi.max(lo)
+        }
+    };
     for (b, band) in out.chunks_mut(BAND * width.max(1)).enumerate() {
         control.check()?;
         let first = b * BAND;
         let (k0, k1) = (first.saturating_sub(1), first + band.len() / width);
         let mut squares = vec![[0.0; 4]; (k1 + 1 - k0) * per_row];
-        squares
+        // Per square row, the squares that may hold light; the rest are
+        // dark and their pixels stay 0.
+        let ranges: Vec<std::ops::Range<usize>> = squares
             .par_chunks_mut(per_row)
             .enumerate()
-            .for_each(|(n, row)| {
+            .map(|(n, row)| {
                 let y = y_of(k0 + n);
                 let spans = shape.lit_spans(y);
-                row.par_chunks_mut(PIECE)
+                let range = lit_range(&spans);
+                row[range.clone()]
+                    .par_chunks_mut(PIECE)
                     .enumerate()
                     .for_each(|(p, piece)| {
                         for (m, c) in piece.iter_mut().enumerate() {
-                            let x = x_of(p * PIECE + m);
+                            let x = x_of(range.start + p * PIECE + m);
                             let lit = spans
                                 .as_ref()
                                 .is_none_or(|s| s.iter().any(|&(a, b)| a <= x && x <= b));
@@ -259,11 +279,26 @@ fn rasterise_bands(
                             }
                         }
                     });
-            });
+                range
+            })
+            .collect();
         let lookup = |k: usize, i: usize| squares[(k - k0) * per_row + i];
         band.par_chunks_mut(width).enumerate().for_each(|(n, row)| {
-            for (i, value) in row.iter_mut().enumerate() {
-                *value = combine(first + n, i, &lookup);
+            // A pixel meets the squares of the rows beside its own and
+            // the columns beside its own.
+            let r = first + n;
+            let near = (r.saturating_sub(1).max(k0)..=(r + 1).min(k1))
+                .map(|k| &ranges[k - k0])
+                .filter(|range| !range.is_empty());
+            let (lo, hi) = near.fold((usize::MAX, 0), |(lo, hi), range| {
+                (lo.min(range.start), hi.max(range.end))
+            });
+            if lo >= hi {
+                return;
+            }
+            let columns = lo.saturating_sub(1)..(hi + 1).min(width);
+            for i in columns {
+                row[i] = combine(r, i, &lookup) as f32;
             }
         });
         control.report((b + 1) as f64 / bands as f64);
