@@ -81,7 +81,7 @@ pub mod optics;
 pub mod pipeline;
 pub mod presets;
 pub mod schema;
-pub mod sending;
+mod sending;
 pub mod units;
 
 pub use camera::Camera;

@@ -154,7 +154,7 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
             shape,
             (&mut quarter, reach_x + 1),
             &|q| q as f64 + 0.5,
-            &|p| p as f64 + 0.5,
+            0.5,
             &|dy, dx, squares| {
                 let mut sum = 0.0;
                 for (q, outer_y) in sides(dy) {
@@ -181,7 +181,7 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
             shape,
             (&mut plane, width),
             &|k| cy as f64 - k as f64 + 0.5,
-            &|i| i as f64 - cx as f64 - 0.5,
+            -(cx as f64) - 0.5,
             &|j, i, squares| {
                 squares(j, i)[BOTTOM_RIGHT]
                     + squares(j, i + 1)[BOTTOM_LEFT]
@@ -217,22 +217,21 @@ type Combine<'a> = dyn Fn(usize, usize, &dyn Fn(usize, usize) -> Corners) -> f64
 /// Fills `out` (rows of `width` pixels) band by band: first the square
 /// rows the band needs (from the one before its first pixel row to the one
 /// after its last), square row k at height `y_of`(k) and square i at
-/// `x_of`(i) for i in 0..=width, evaluated in parallel pieces and left
+/// `x0` + i for i in 0..=width, evaluated in parallel pieces and left
 /// dark outside the shape's lit spans; then every pixel from them. The
 /// same sums in the same order on any number of threads.
 fn rasterise_bands(
     shape: &dyn SpreadShape,
     (out, width): (&mut [f32], usize),
     y_of: &(dyn Fn(usize) -> f64 + Sync),
-    x_of: &(dyn Fn(usize) -> f64 + Sync),
+    x0: f64,
     combine: &Combine<'_>,
     control: &mut Control,
 ) -> Result<()> {
     let bands = (out.len() / width.max(1)).div_ceil(BAND).max(1);
     let per_row = width + 1;
-    // x_of is x_of(0) + i: a span [a, b] of square centres holds the
-    // squares ⌈a − x₀⌉ to ⌊b − x₀⌋.
-    let x0 = x_of(0);
+    // A span [a, b] of square centres holds the squares ⌈a − x₀⌉ to
+    // ⌊b − x₀⌋.
     let lit_range = |spans: &Option<Vec<(f64, f64)>>| match spans {
         None => 0..per_row,
         Some(spans) => {
@@ -270,7 +269,7 @@ fn rasterise_bands(
                     .enumerate()
                     .for_each(|(p, piece)| {
                         for (m, c) in piece.iter_mut().enumerate() {
-                            let x = x_of(range.start + p * PIECE + m);
+                            let x = x0 + (range.start + p * PIECE + m) as f64;
                             let lit = spans
                                 .as_ref()
                                 .is_none_or(|s| s.iter().any(|&(a, b)| a <= x && x <= b));

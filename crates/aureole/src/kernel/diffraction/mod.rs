@@ -275,9 +275,13 @@ fn near_tents(
 ) -> Result<()> {
     let planes = result.len();
     let ((cx, cy), pitch_mm) = (chord.centre, chord.pitch_mm);
+    let chords: Vec<Range<usize>> = rows
+        .clone()
+        .map(|j| chord.of_row(j, columns.clone()))
+        .collect();
     let row_chord = |j: usize| {
         if rows.contains(&j) {
-            chord.of_row(j, columns.clone())
+            chords[j - rows.start].clone()
         } else {
             0..0
         }
