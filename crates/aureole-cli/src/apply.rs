@@ -136,6 +136,14 @@ input's name) or, with --frames, a pattern such as out/shot.%04d.exr",
     #[arg(long, value_name = "W[xH]", value_parser = parse_size)]
     max_kernel: Option<(usize, usize)>,
 
+    /// Where the convolutions run: auto takes a hardware GPU (Vulkan,
+    /// Metal, DX12) when there is one, and the CPU when there is none or
+    /// the GPU cannot hold the kernel; gpu insists (a software adapter
+    /// such as Mesa's lavapipe too); cpu never looks. The summary line
+    /// says which ran.
+    #[arg(long, value_enum, default_value_t = DeviceArg::Auto)]
+    device: DeviceArg,
+
     #[command(flatten)]
     display: DisplayArgs,
 }
@@ -187,6 +195,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     let in_flight = if todo.len() > 1 { 2 } else { 0 };
     let session = session
         .with_memory_limit(limit)
+        .with_device(args.device.into())
         .with_frames_in_flight(in_flight);
     // A frame too large for the memory or the kernel is refused from its
     // header, before it is decoded.
@@ -475,14 +484,16 @@ impl Run<'_> {
                 applied.spread_pixels,
                 applied.threshold,
                 match (applied.method, applied.arithmetic) {
-                    (Method::Splat, _) => "splatted".to_string(),
+                    (Method::Splat, _) => "splatted on the CPU".to_string(),
                     (_, Arithmetic::Lamps(lamps)) => format!(
-                        "FFT, the near light of the {lamps} brightest px added exactly"
+                        "FFT on {}, the near light of the {lamps} brightest px added exactly",
+                        applied.device
                     ),
-                    (_, Arithmetic::Double) => {
-                        "FFT in f64: the scene's range is beyond f32".to_string()
-                    }
-                    (_, Arithmetic::Single) => "FFT".to_string(),
+                    (_, Arithmetic::Double) => format!(
+                        "FFT in f64 on {}: the scene's range is beyond f32",
+                        applied.device
+                    ),
+                    (_, Arithmetic::Single) => format!("FFT on {}", applied.device),
                 },
                 applied.energy_in,
                 applied.energy_out,
@@ -493,6 +504,24 @@ impl Run<'_> {
             ));
         }
         Ok(applied.image.planes)
+    }
+}
+
+/// `--device`.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub(crate) enum DeviceArg {
+    Auto,
+    Cpu,
+    Gpu,
+}
+
+impl From<DeviceArg> for aureole::Device {
+    fn from(device: DeviceArg) -> aureole::Device {
+        match device {
+            DeviceArg::Auto => aureole::Device::Auto,
+            DeviceArg::Cpu => aureole::Device::Cpu,
+            DeviceArg::Gpu => aureole::Device::Gpu,
+        }
     }
 }
 

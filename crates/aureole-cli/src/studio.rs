@@ -7,6 +7,7 @@ use anyhow::anyhow;
 use aureole_io::limits::default_memory_limit;
 use aureole_studio::{Access, Roots, Studio};
 
+use crate::apply::DeviceArg;
 use crate::Failure;
 
 #[derive(clap::Args)]
@@ -38,6 +39,12 @@ pub struct Args {
     /// Do not open the page in the default browser.
     #[arg(long)]
     no_browser: bool,
+
+    /// Where previews and exports convolve: auto takes a hardware GPU
+    /// when there is one, gpu insists (a software adapter too), cpu never
+    /// looks.
+    #[arg(long, value_enum, default_value_t = DeviceArg::Auto)]
+    device: DeviceArg,
 }
 
 pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
@@ -92,7 +99,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
             url.push_str("&image=");
             url.push_str(&query_escaped(&first.display().to_string()));
         }
-        let studio = Studio::new(roots, default_memory_limit(), access);
+        let studio = Studio::new(roots, default_memory_limit(), args.device.into(), access);
         // The URL goes to stdout so that a script can read it.
         println!("{url}");
         if !quiet {

@@ -808,3 +808,49 @@ fn docs_say_where_the_sample_images_come_from() {
         assert!(!text.contains("../shared"), "{}", path.display());
     }
 }
+
+/// `--device`: the CPU when asked, the GPU where there is one (lavapipe in
+/// CI) with its name in the summary line, and one clear line, no output,
+/// when the GPU is asked for and the machine has no Vulkan driver.
+#[test]
+fn device_chooses_where_the_light_is_spread() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("lamps.pfm");
+    let (w, h) = (48usize, 32usize);
+    let mut bytes = format!("PF\n{w} {h}\n-1.0\n").into_bytes();
+    for i in 0..w * h {
+        let v: f32 = if i % 97 == 0 { 400.0 } else { 1.0 };
+        for _ in 0..3 {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    std::fs::write(&input, bytes).unwrap();
+    let run = |device: &str, name: &str| {
+        let mut command = aureole();
+        command
+            .args(["apply", "--preset", "paper-fig4-bloom", "--device", device])
+            .arg(&input)
+            .arg("-o")
+            .arg(dir.path().join(name));
+        command
+    };
+    run("cpu", "cpu.pfm")
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("(FFT on the CPU)"));
+    let gpu = run("gpu", "gpu.pfm").assert();
+    if gpu.get_output().status.success() {
+        gpu.stderr(predicate::str::contains("FFT on the GPU"));
+    } else {
+        eprintln!("no GPU here: the GPU run is not checked");
+    }
+    let refused = run("gpu", "none.pfm")
+        .arg("-q")
+        .env("VK_ICD_FILENAMES", "/nonexistent.json")
+        .env("VK_DRIVER_FILES", "/nonexistent.json")
+        .assert()
+        .failure();
+    let line = one_line(&refused.get_output().stderr);
+    assert!(line.contains("no GPU to compute on"), "{line}");
+    assert!(!dir.path().join("none.pfm").exists());
+}

@@ -441,9 +441,9 @@ fn apply_spreads_by_fft_or_splatting_as_asked_and_says_which() {
     let (input, _) = scene(dir.path(), "night.exr");
     let mut results = Vec::new();
     for (method, said) in [
-        ("fft", "(FFT)"),
-        ("splat", "(splatted)"),
-        ("auto", "(splatted)"),
+        ("fft", "(FFT on "),
+        ("splat", "(splatted on the CPU)"),
+        ("auto", "(splatted on the CPU)"),
     ] {
         let out = dir.path().join(format!("{method}.exr"));
         aureole()

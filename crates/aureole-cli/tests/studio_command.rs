@@ -14,6 +14,7 @@ fn export(root: &Path, body: &serde_json::Value) {
     let exports = Exports::new(
         Roots::new(&[root.to_path_buf()]).unwrap(),
         Budget::new(4 << 30),
+        aureole::Device::Cpu,
     );
     let request = ExportRequest::from_json(body.to_string().as_bytes()).unwrap();
     let id = exports.start(request).unwrap();

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use aureole::{ApplyOptions, Cancel, Config, ConfigFile, Control, Extent, Frame, FrameOptions};
-use aureole::{Method, Sending, Session, Stage};
+use aureole::{Device, Method, Sending, Session, Stage};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -58,15 +58,18 @@ impl Camera {
         Ok(Camera::new(file))
     }
 
-    /// A session for `size`: an idle one that holds its plan first.
-    fn session(&self, size: (usize, usize)) -> Session {
+    /// A session for `size` on `device`: an idle one that holds its plan
+    /// first.
+    fn session(&self, size: (usize, usize), device: Device) -> Session {
         let mut idle = self.sessions.lock().unwrap_or_else(|p| p.into_inner());
         let found = idle
             .iter()
-            .position(|s| s.plan().is_some_and(|p| p.size() == size));
-        match found.or_else(|| idle.len().checked_sub(1)) {
+            .position(|s| s.device() == device && s.plan().is_some_and(|p| p.size() == size));
+        match found.or_else(|| idle.iter().rposition(|s| s.device() == device)) {
             Some(i) => idle.swap_remove(i),
-            None => Session::new(self.config.clone()).with_memory_limit(default_memory_limit()),
+            None => Session::new(self.config.clone())
+                .with_memory_limit(default_memory_limit())
+                .with_device(device),
         }
     }
 
@@ -83,11 +86,11 @@ impl Camera {
     fn with_session<T: Send>(
         &self,
         py: Python<'_>,
-        size: (usize, usize),
+        (size, device): ((usize, usize), Device),
         progress: Option<&Bound<'_, PyAny>>,
         work: impl FnOnce(&mut Session, &mut dyn FnMut(Stage, f64)) -> T + Send,
     ) -> PyResult<T> {
-        let mut session = self.session(size);
+        let mut session = self.session(size, device);
         let cancel = Cancel::new();
         session.set_cancel_token(cancel.clone());
         let (outcome, session) = interruptible(py, &cancel, progress, move |latest| {
@@ -116,6 +119,14 @@ fn value_error_about(path: &std::path::Path, error: aureole::Error) -> PyErr {
 
 fn method(name: &str) -> PyResult<Method> {
     name.parse().map_err(value_error)
+}
+
+fn device(name: &str) -> PyResult<Device> {
+    Device::parse(name).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "device = {name:?} is not allowed: \"auto\", \"cpu\" or \"gpu\""
+        ))
+    })
 }
 
 #[pymethods]
@@ -291,7 +302,8 @@ impl Camera {
     /// of the image's shape without alpha. One camera applied to many
     /// frames of one size builds its kernel once.
     #[pyo3(signature = (image, threshold = None, knee = 0.0, input_scale = 1.0,
-                        glare_only = false, method = "auto", progress = None, layers = false))]
+                        glare_only = false, method = "auto", progress = None, layers = false,
+                        device = "auto"))]
     #[allow(clippy::too_many_arguments)]
     fn apply<'py>(
         &self,
@@ -304,8 +316,10 @@ impl Camera {
         method: &str,
         progress: Option<&Bound<'py, PyAny>>,
         layers: bool,
+        device: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
         refuse_layers_with_glare_only(layers, glare_only)?;
+        let device = self::device(device)?;
         let options = ApplyOptions {
             threshold,
             knee,
@@ -321,7 +335,7 @@ impl Camera {
             },
         )
         .map_err(value_error)?;
-        let size = (frame.image().width, frame.image().height);
+        let size = ((frame.image().width, frame.image().height), device);
         if !layers {
             let applied = self.with_session(py, size, progress, |session, report| {
                 session.apply(&frame, &options, report)
@@ -353,12 +367,13 @@ impl Camera {
     /// `half` or `compression` say otherwise; a picture is exposed
     /// automatically and tone-mapped filmic). The same bytes as the command
     /// line. Returns energy_in, energy_out (file units), spread_pixels,
-    /// threshold (cd/m²), scale and notes. With `layers`, the output EXR
-    /// holds beside the result the light each effect adds and the total
-    /// (`aureole apply --layers`).
+    /// threshold (cd/m²), scale, device (where it was spread) and notes.
+    /// With `layers`, the output EXR holds beside the result the light each
+    /// effect adds and the total (`aureole apply --layers`).
     #[pyo3(signature = (input, output, threshold = None, knee = 0.0, input_scale = None,
                         glare_only = false, method = "auto", half = None, compression = None,
-                        layer = None, part = None, progress = None, layers = false))]
+                        layer = None, part = None, progress = None, layers = false,
+                        device = "auto"))]
     #[allow(clippy::too_many_arguments)]
     fn apply_file<'py>(
         &self,
@@ -376,7 +391,9 @@ impl Camera {
         part: Option<String>,
         progress: Option<&Bound<'py, PyAny>>,
         layers: bool,
+        device: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let device = self::device(device)?;
         // The guards every front end keeps, before any work.
         aureole_io::job::check_output(&output, Some(&input)).map_err(file_error)?;
         refuse_layers_with_glare_only(layers, glare_only)?;
@@ -418,7 +435,10 @@ impl Camera {
             .map_err(file_error)?;
         let mut notes = std::mem::take(&mut file.notes);
         let scale = file.frame.scale();
-        let size = (file.frame.image().width, file.frame.image().height);
+        let size = (
+            (file.frame.image().width, file.frame.image().height),
+            device,
+        );
         let (applied, written) = self.with_session(py, size, progress, |session, report| {
             // A stereo plate's every view goes through the camera.
             let applied = if layers {
@@ -442,6 +462,7 @@ impl Camera {
         report.set_item("energy_out", applied.energy_out)?;
         report.set_item("spread_pixels", applied.spread_pixels)?;
         report.set_item("threshold", applied.threshold)?;
+        report.set_item("device", &applied.device)?;
         report.set_item("scale", scale)?;
         report.set_item("notes", notes)?;
         Ok(report)

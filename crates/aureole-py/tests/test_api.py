@@ -114,6 +114,24 @@ def test_a_camera_pickles_as_its_toml():
     assert np.array_equal(again.apply(lamp()), camera.apply(lamp()))
 
 
+def test_the_device_is_chosen_and_the_cpu_gives_the_cli_bytes(tmp_path):
+    # "gpu" runs on lavapipe in CI; where there is no Vulkan driver it is
+    # refused in one line naming the fall back.
+    camera = aureole.Camera.preset("paper-fig4-bloom")
+    image = lamp()
+    on_cpu = camera.apply(image, device="cpu")
+    try:
+        on_gpu = camera.apply(image, device="gpu")
+    except ValueError as refused:
+        assert "no GPU to compute on" in str(refused)
+    else:
+        assert np.linalg.norm(on_gpu - on_cpu) <= 1e-5 * np.linalg.norm(on_cpu)
+    source = tmp_path / "in.exr"
+    aureole.write(source, image)
+    report = camera.apply_file(source, tmp_path / "out.exr", device="cpu")
+    assert report["device"] == "the CPU"
+
+
 def test_threshold_glare_only_and_input_scale():
     camera = aureole.Camera.preset("paper-fig5-both")
     image = lamp()
@@ -134,6 +152,8 @@ def test_bad_parameters_raise_value_error_with_the_librarys_line():
     camera = aureole.Camera.preset("paper-fig5-both")
     with pytest.raises(ValueError, match="method"):
         camera.apply(lamp(), method="magic")
+    with pytest.raises(ValueError, match='device = "tpu" is not allowed'):
+        camera.apply(lamp(), device="tpu")
     with pytest.raises(ValueError, match="shape"):
         camera.apply(np.zeros((2, 3, 4, 5), np.float32))
     with pytest.raises(ValueError, match="NaN"):

@@ -2,6 +2,7 @@
 //! follows: the same session, options and writer as `aureole apply`, with
 //! the stage and fraction done, and a cancel.
 
+use aureole::Device;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -96,6 +97,7 @@ struct Job {
 pub struct Exports {
     roots: Roots,
     budget: Arc<Budget>,
+    device: Device,
     next: AtomicU64,
     jobs: Mutex<HashMap<u64, Arc<Job>>>,
 }
@@ -103,10 +105,11 @@ pub struct Exports {
 impl Exports {
     /// Jobs that read and write under `roots`, within `budget`, which
     /// previews share.
-    pub fn new(roots: Roots, budget: Arc<Budget>) -> Exports {
+    pub fn new(roots: Roots, budget: Arc<Budget>, device: Device) -> Exports {
         Exports {
             roots,
             budget,
+            device,
             next: AtomicU64::new(1),
             jobs: Mutex::new(HashMap::new()),
         }
@@ -150,12 +153,14 @@ impl Exports {
         });
         locked(&self.jobs).insert(id, job.clone());
         let budget = self.budget.clone();
+        let device = self.device;
         std::thread::spawn(move || {
             let target = Target {
                 input: input.as_deref(),
                 output: &output,
                 overwrite: request.overwrite,
                 max_extent,
+                device,
             };
             let outcome = run(&job, &request, config, display, target, &budget);
             let mut progress = locked(&job.progress);
@@ -234,6 +239,7 @@ struct Target<'a> {
     output: &'a Path,
     overwrite: bool,
     max_extent: Option<(usize, usize)>,
+    device: Device,
 }
 
 fn run(
@@ -250,13 +256,15 @@ fn run(
         output,
         overwrite,
         max_extent,
+        device,
     } = target;
     let limits = Limits {
         max_bytes: memory_limit,
     };
     let mut session = Session::new(config.clone())
         .with_memory_limit(memory_limit)
-        .with_max_extent(max_extent);
+        .with_max_extent(max_extent)
+        .with_device(device);
     session.set_cancel_token(job.cancel.clone());
     let mut input = match input {
         None => Input::from_image(

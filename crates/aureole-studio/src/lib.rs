@@ -38,6 +38,7 @@ pub mod export;
 pub mod render;
 pub mod roots;
 
+use aureole::Device;
 use std::sync::Arc;
 
 use axum::body::Bytes;
@@ -77,11 +78,11 @@ pub struct Studio {
 
 impl Studio {
     /// A studio reading (and exporting) under `roots`, its renders and
-    /// exports together within `memory_limit` bytes, driven by whoever
-    /// `access` lets in.
-    pub fn new(roots: Roots, memory_limit: u64, access: Access) -> Studio {
+    /// exports together within `memory_limit` bytes, convolving on
+    /// `device`, driven by whoever `access` lets in.
+    pub fn new(roots: Roots, memory_limit: u64, device: Device, access: Access) -> Studio {
         let budget = budget::Budget::new(memory_limit);
-        let renderer = Arc::new(Renderer::new(roots.clone(), budget.clone()));
+        let renderer = Arc::new(Renderer::new(roots.clone(), budget.clone(), device));
         // A job that would wait takes the memory of the kept preview
         // session first.
         let kept = Arc::downgrade(&renderer);
@@ -93,7 +94,7 @@ impl Studio {
         Studio {
             access,
             renderer,
-            exports: Arc::new(export::Exports::new(roots, budget)),
+            exports: Arc::new(export::Exports::new(roots, budget, device)),
         }
     }
 }

@@ -144,6 +144,14 @@ pub enum Error {
         built: bool,
     },
 
+    /// The GPU was asked for and there is none.
+    #[error("no GPU to compute on: {0}; compute on the CPU instead (device cpu or auto)")]
+    NoGpu(String),
+
+    /// The GPU refused or failed a step (memory, a lost device).
+    #[error("the GPU failed: {0}")]
+    Gpu(String),
+
     /// The caller cancelled the run.
     #[error("cancelled")]
     Cancelled,

@@ -75,12 +75,15 @@ class Camera:
         method: Literal["auto", "fft", "splat"] = "auto",
         progress: Optional[Progress] = None,
         layers: bool = False,
+        device: Literal["auto", "cpu", "gpu"] = "auto",
     ) -> Any:
         """The image the camera records: a new float32 array of the same
         shape, alpha carried through. Frames of one size reuse the kernel.
         With `layers=True`, (result, layers): a dict of the light each
         effect adds ("glare.bloom", …) and the total ("glare"), which they
-        sum to, each of the image's shape without alpha."""
+        sum to, each of the image's shape without alpha. `device`: "auto"
+        convolves on a hardware GPU when there is one, "gpu" insists (a
+        software adapter too; ValueError without one), "cpu" never looks."""
 
     def apply_file(
         self,
@@ -97,6 +100,7 @@ class Camera:
         part: Optional[str] = None,
         progress: Optional[Progress] = None,
         layers: bool = False,
+        device: Literal["auto", "cpu", "gpu"] = "auto",
     ) -> dict[str, Any]:
         """`aureole apply INPUT -o OUTPUT` with this camera, the same bytes:
         an EXR result keeps the input's layers, parts and attributes, and

@@ -3,6 +3,7 @@
 //! it), through the same session as `aureole apply`, then exposed and
 //! tone-mapped as a PNG.
 
+use aureole::Device;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -236,6 +237,8 @@ pub struct Renderer {
     roots: Roots,
     /// Shared with the exports; its total is each session's limit too.
     budget: Arc<Budget>,
+    /// Where the sessions convolve.
+    device: Device,
     loaded: Mutex<Option<Loaded>>,
     preview: Mutex<Option<Preview>>,
     kept: Mutex<Option<KeptSession>>,
@@ -258,10 +261,11 @@ pub struct Status {
 impl Renderer {
     /// Renders from files under `roots`, within `budget`, which exports
     /// share.
-    pub fn new(roots: Roots, budget: Arc<Budget>) -> Renderer {
+    pub fn new(roots: Roots, budget: Arc<Budget>, device: Device) -> Renderer {
         Renderer {
             roots,
             budget,
+            device,
             loaded: Mutex::new(None),
             preview: Mutex::new(None),
             kept: Mutex::new(None),
@@ -364,7 +368,8 @@ impl Renderer {
                         key,
                         session: Session::new(config)
                             .with_memory_limit(self.budget.total())
-                            .with_max_extent(max_extent),
+                            .with_max_extent(max_extent)
+                            .with_device(self.device),
                         _lease: lease,
                     });
                 }

@@ -41,7 +41,12 @@ pub fn server_within(root: &Path, memory: u64) -> SocketAddr {
         runtime.block_on(async {
             let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
             let bound = listener.local_addr().unwrap();
-            let studio = Studio::new(roots, memory, Access::with_token(bound, TOKEN.into()));
+            let studio = Studio::new(
+                roots,
+                memory,
+                aureole::Device::Cpu,
+                Access::with_token(bound, TOKEN.into()),
+            );
             tx.send(bound).unwrap();
             aureole_studio::serve(listener, studio).await.unwrap();
         });

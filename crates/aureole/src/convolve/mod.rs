@@ -6,10 +6,12 @@
 //! (`grid.rs`), the kernel's placement in the period and the buffer pool.
 //! [`engine`] chooses among them by [`Backend`] and [`Precision`],
 //! [`footprint`] says what each holds for the memory estimate, and
-//! [`compose`] is how kernels convolve one another: a further backend (a
-//! GPU) is one more module and one more arm in each of those matches.
+//! [`compose`] is how kernels convolve one another. The GPU engine
+//! (`gpu/`) is one more module and one more arm in each of those matches;
+//! [`choose`] finds where a user's [`Device`] runs.
 
 mod double;
+mod gpu;
 mod grid;
 mod lamps;
 mod placement;
@@ -17,12 +19,13 @@ mod pool;
 mod simd;
 mod single;
 
+pub use gpu::{software_adapter, Gpu};
 pub use grid::{fast_size, padded_size};
 pub use simd::{force_scalar, vectors_in_use};
 pub use single::Convolver;
 
 use crate::control::Control;
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// Whether an engine convolves a kernel's centre weight with the rest, or
 /// leaves it out of the transform and applies it exactly, pixel by pixel:
@@ -79,6 +82,63 @@ pub enum Backend {
     /// The processor's cores, through rustfft (AVX2 where present).
     #[default]
     Cpu,
+    /// The process's GPU ([`gpu`]), in f32; the f64 engine stays on the
+    /// processor.
+    Gpu,
+}
+
+/// Where a user asks the convolutions to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Device {
+    /// A GPU when there is a hardware one, else the processor.
+    #[default]
+    Auto,
+    /// The processor.
+    Cpu,
+    /// The GPU (a software adapter such as lavapipe too); an error where
+    /// there is none.
+    Gpu,
+}
+
+impl Device {
+    /// The device's name as the front ends spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Device::Auto => "auto",
+            Device::Cpu => "cpu",
+            Device::Gpu => "gpu",
+        }
+    }
+
+    /// The device named `name` (auto, cpu or gpu).
+    pub fn parse(name: &str) -> Option<Device> {
+        [Device::Auto, Device::Cpu, Device::Gpu]
+            .into_iter()
+            .find(|device| device.name() == name)
+    }
+}
+
+/// Where the convolutions will run for `device`, and in words where and
+/// why: the GPU's name, or why the processor (no adapter, a software
+/// one). Only [`Device::Gpu`] without any adapter is an error.
+pub fn choose(device: Device) -> Result<(Backend, String)> {
+    match device {
+        Device::Cpu => Ok((Backend::Cpu, "the CPU".into())),
+        Device::Gpu => match gpu::gpu() {
+            Ok(found) => Ok((Backend::Gpu, format!("the GPU {}", found.name()))),
+            Err(why) => Err(Error::NoGpu(why)),
+        },
+        Device::Auto => Ok(match gpu::software_adapter() {
+            Some(software) => (
+                Backend::Cpu,
+                format!("the CPU: the only GPU adapter, {software}, is software"),
+            ),
+            None => match gpu::gpu() {
+                Ok(found) => (Backend::Gpu, format!("the GPU {}", found.name())),
+                Err(why) => (Backend::Cpu, format!("the CPU: {why}")),
+            },
+        }),
+    }
 }
 
 /// The engine that convolves `width`×`height` images with a kernel given as
@@ -98,9 +158,19 @@ pub fn engine(
         (Backend::Cpu, Precision::Single) => Box::new(single::Convolver::deferred(
             planes, size, width, height, centre,
         )),
-        (Backend::Cpu, Precision::Double) => Box::new(double::Convolver::new(
+        (_, Precision::Double) => Box::new(double::Convolver::new(
             planes, size, width, height, centre, control,
         )?),
+        (Backend::Gpu, Precision::Single) => {
+            let found = gpu::gpu().map_err(Error::NoGpu)?;
+            Box::new(gpu::GpuConvolver::new(
+                found,
+                planes,
+                size,
+                (width, height),
+                centre,
+            )?)
+        }
     })
 }
 
@@ -134,7 +204,8 @@ pub struct Footprint {
 pub fn footprint((backend, precision): (Backend, Precision), load: &Load) -> Footprint {
     match (backend, precision) {
         (Backend::Cpu, Precision::Single) => single::footprint(load),
-        (Backend::Cpu, Precision::Double) => double::footprint(load),
+        (_, Precision::Double) => double::footprint(load),
+        (Backend::Gpu, Precision::Single) => gpu::footprint(load),
     }
 }
 

@@ -72,6 +72,9 @@ pub struct Applied {
     pub method: Method,
     /// The arithmetic of the FFT, chosen from the scene's range.
     pub arithmetic: Arithmetic,
+    /// Where the light was spread, in words (the GPU's name, or the CPU
+    /// and why).
+    pub device: String,
 }
 
 /// The arithmetic an application used (docs/physics.md §8): f32 unless its

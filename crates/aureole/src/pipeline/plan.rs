@@ -13,7 +13,7 @@ use super::splat::{copies, splat};
 use super::threshold::{Survey, Threshold};
 use crate::config::Config;
 use crate::control::{Cancel, Control};
-use crate::convolve::{engine, Backend, Centre, Engine, Precision, Spread, Term};
+use crate::convolve::{choose, engine, Backend, Centre, Device, Engine, Precision, Spread, Term};
 use crate::error::{Error, Fit, Result};
 use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
 use crate::kernel::{Extent, Kernel};
@@ -58,8 +58,9 @@ pub struct Plan {
     kernel: Kernel,
     /// The configuration's threshold, cd/m², for callers that give none.
     threshold: f64,
-    /// Where its engines compute.
+    /// Where its f32 engine computes, and that in words.
     backend: Backend,
+    device: String,
     /// The engine every scene starts in (f32), the kernel's centre weight
     /// applied exactly.
     engine: Box<dyn Engine>,
@@ -90,9 +91,9 @@ impl Plan {
     ) -> Result<Plan> {
         Plan::build(
             config,
-            width,
-            height,
+            (width, height),
             max_extent,
+            Device::Cpu,
             &mut Control::quiet(&Cancel::new()),
         )
     }
@@ -101,15 +102,16 @@ impl Plan {
     /// cancelled.
     pub(crate) fn build(
         config: &Config,
-        width: usize,
-        height: usize,
+        (width, height): (usize, usize),
         max_extent: Option<(usize, usize)>,
+        device: Device,
         control: &mut Control,
     ) -> Result<Plan> {
         let extent = Extent::for_image_within(width, height, max_extent)?;
         let kernel = config.kernel_with(&extent, &mut control.part(0.0, 0.9))?;
-        let mut plan = Plan::transform(kernel, width, height, &mut control.part(0.9, 1.0))
-            .map_err(|failed| failed.1)?;
+        let mut plan =
+            Plan::transform(kernel, (width, height), device, &mut control.part(0.9, 1.0))
+                .map_err(|failed| failed.1)?;
         plan.threshold = config.threshold;
         Ok(plan)
     }
@@ -118,8 +120,30 @@ impl Plan {
     /// by `aureole psf`, read back from a file): kernels are cacheable. Its
     /// threshold is 0 unless the options give one.
     pub fn with_kernel(kernel: Kernel, width: usize, height: usize) -> Result<Plan> {
-        Plan::transform(kernel, width, height, &mut Control::quiet(&Cancel::new()))
-            .map_err(|failed| failed.1)
+        Plan::transform(
+            kernel,
+            (width, height),
+            Device::Cpu,
+            &mut Control::quiet(&Cancel::new()),
+        )
+        .map_err(|failed| failed.1)
+    }
+
+    /// [`Plan::with_kernel`] convolving on `device`: [`Device::Auto`] takes
+    /// a hardware GPU where there is one, and the CPU where there is none
+    /// or the GPU cannot hold the plan; [`Device::Gpu`] refuses instead.
+    pub fn with_kernel_on(
+        kernel: Kernel,
+        (width, height): (usize, usize),
+        device: Device,
+    ) -> Result<Plan> {
+        Plan::transform(
+            kernel,
+            (width, height),
+            device,
+            &mut Control::quiet(&Cancel::new()),
+        )
+        .map_err(|failed| failed.1)
     }
 
     /// [`Plan::with_kernel`], reporting to `control` and stopping when it
@@ -127,19 +151,32 @@ impl Plan {
     /// caller that keeps it for the next try.
     pub(crate) fn transform(
         kernel: Kernel,
-        width: usize,
-        height: usize,
+        (width, height): (usize, usize),
+        device: Device,
         control: &mut Control,
     ) -> std::result::Result<Plan, Box<(Kernel, Error)>> {
-        let backend = Backend::default();
-        let built = engine(
-            (backend, Precision::Single),
-            &kernel_planes(&kernel),
-            (kernel.width(), kernel.height()),
-            (width, height),
-            Centre::Leave,
-            control,
-        );
+        let (mut backend, mut words) = match choose(device) {
+            Ok(chosen) => chosen,
+            Err(error) => return Err(Box::new((kernel, error))),
+        };
+        let mut build = |backend| {
+            engine(
+                (backend, Precision::Single),
+                &kernel_planes(&kernel),
+                (kernel.width(), kernel.height()),
+                (width, height),
+                Centre::Leave,
+                control,
+            )
+        };
+        let mut built = build(backend);
+        // A GPU chosen by itself that cannot hold the plan (its memory, its
+        // largest buffer) leaves the work to the CPU, and says so.
+        if let (Err(Error::Gpu(why)), Device::Auto) = (&built, device) {
+            words = format!("the CPU: {words} could not hold it ({why})");
+            backend = Backend::Cpu;
+            built = build(backend);
+        }
         match built {
             Ok(engine) => Ok(Plan {
                 width,
@@ -147,6 +184,7 @@ impl Plan {
                 kernel,
                 threshold: 0.0,
                 backend,
+                device: words,
                 engine,
                 exact: OnceLock::new(),
                 near: OnceLock::new(),
@@ -170,6 +208,12 @@ impl Plan {
     /// The kernel back, the spectra dropped.
     pub fn into_kernel(self) -> Kernel {
         self.kernel
+    }
+
+    /// Where its f32 convolutions run, in words: the GPU's name, or the
+    /// CPU and why.
+    pub fn device(&self) -> &str {
+        &self.device
     }
 
     /// The threshold applied when the options give none, cd/m².
@@ -285,6 +329,11 @@ impl Plan {
             spread_pixels: survey.spread,
             threshold: threshold_cd,
             method,
+            device: if route == Route::Double || method == Method::Splat {
+                "the CPU".to_string()
+            } else {
+                self.device.clone()
+            },
             arithmetic: match route {
                 Route::Single => Arithmetic::Single,
                 Route::Lamps { lamps, .. } => Arithmetic::Lamps(lamps.len()),

@@ -9,7 +9,7 @@ use super::plan::{DoubleRefused, Plan};
 use super::threshold::Threshold;
 use crate::config::Config;
 use crate::control::{Cancel, Control};
-use crate::convolve::{padded_size, Backend};
+use crate::convolve::{padded_size, Backend, Device};
 use crate::error::{Error, Result};
 use crate::image::{Image, PixelLuminance, Shape};
 use crate::kernel::Kernel;
@@ -191,6 +191,7 @@ pub struct Session {
     lens: Lens,
     memory_limit: Option<u64>,
     max_extent: Option<(usize, usize)>,
+    device: Device,
     cancel: Cancel,
     plan: Option<Plan>,
     recycled: Vec<Vec<f32>>,
@@ -218,6 +219,7 @@ impl Session {
             lens,
             memory_limit: None,
             max_extent: None,
+            device: Device::Cpu,
             cancel: Cancel::new(),
             plan: None,
             recycled: Vec::new(),
@@ -246,6 +248,18 @@ impl Session {
     pub fn with_max_extent(mut self, max_extent: Option<(usize, usize)>) -> Session {
         self.max_extent = max_extent;
         self
+    }
+
+    /// Where the convolutions run (the CPU unless asked): a plan built
+    /// after this call uses it.
+    pub fn with_device(mut self, device: Device) -> Session {
+        self.device = device;
+        self
+    }
+
+    /// Where the convolutions run.
+    pub fn device(&self) -> Device {
+        self.device
     }
 
     /// The flag that stops this session's work: raise it from any thread
@@ -341,6 +355,7 @@ impl Session {
             ..config.clone()
         })
         .with_max_extent(self.max_extent)
+        .with_device(self.device)
         .with_frames_in_flight(self.in_flight + held);
         prefix.memory_limit = self.memory_limit;
         prefix.cancel = self.cancel.clone();
@@ -380,18 +395,24 @@ impl Session {
         let mut report = |f| progress(Stage::BuildingKernel, f);
         let mut control = Control::new(&self.cancel, &mut report);
         let plan = match &mut self.lens {
-            Lens::Config(config) => {
-                Plan::build(config, width, height, self.max_extent, &mut control)
-            }
+            Lens::Config(config) => Plan::build(
+                config,
+                (width, height),
+                self.max_extent,
+                self.device,
+                &mut control,
+            ),
             Lens::Kernel(slot) => {
                 let Some(kernel) = slot.take() else {
                     return Err(Error::NoEffect);
                 };
-                Plan::transform(kernel, width, height, &mut control).map_err(|failed| {
-                    let (kernel, error) = *failed;
-                    *slot = Some(kernel);
-                    error
-                })
+                Plan::transform(kernel, (width, height), self.device, &mut control).map_err(
+                    |failed| {
+                        let (kernel, error) = *failed;
+                        *slot = Some(kernel);
+                        error
+                    },
+                )
             }
         }?;
         Ok(match double {
