@@ -11,7 +11,13 @@ and on a 2D canvas): the median of 60 redraws, each waited for, driven over
 the DevTools protocol. Standard library only:
 
     cargo build --release && python3 bench/studio_latency.py
+    python3 bench/studio_latency.py --device gpu --width 3840   # a 4K preview on the GPU
+
+`--device` is the studio's (auto, cpu or gpu); a `--width` beyond the
+built-in 1280x720 street renders the street `aureole demo` writes at that
+width (16:9) instead.
 """
+import argparse
 import base64
 import json
 import os
@@ -31,7 +37,19 @@ BINARY = os.path.join(ROOT, "target", "release", "aureole")
 
 
 def main():
-    server = subprocess.Popen([BINARY, "studio", "--no-browser", "-q", "--root", ROOT],
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--device", default="auto", choices=["auto", "cpu", "gpu"])
+    parser.add_argument("--width", type=int, default=1280)
+    args = parser.parse_args()
+    width, height = args.width, args.width * 9 // 16
+    folder = tempfile.mkdtemp()
+    image = "demo"
+    if width > 1280:
+        image = os.path.join(folder, "street.exr")
+        subprocess.run([BINARY, "demo", "-q", "--size", f"{width}x{height}", "--hdr", image,
+                        "-o", os.path.join(folder, "street.png")], check=True)
+    server = subprocess.Popen([BINARY, "studio", "--no-browser", "-q", "--root", ROOT,
+                               "--root", folder, "--device", args.device],
                               stdout=subprocess.PIPE, text=True)
     try:
         # http://127.0.0.1:PORT/?token=TOKEN: scripts send the token as a header.
@@ -43,7 +61,7 @@ def main():
 
         def render(config, **extra):
             # As the page asks: the linear preview, which it tone-maps itself.
-            body = json.dumps({"image": "demo", "config": config, "width": 1280,
+            body = json.dumps({"image": image, "config": config, "width": width,
                                "format": "linear", **extra}).encode()
             request = urllib.request.Request(url + "api/render", data=body,
                                              headers={"content-type": "application/json", **auth})
@@ -62,7 +80,8 @@ def main():
             "aperture, spectral": lambda k: presets["camera-f8-7blade"].replace(
                 "blades = 7", f"blades = {6 + k % 3}"),
         }
-        print("1280x720 preview of the demo street, median of 4 changes (ms):")
+        print(f"{width}x{height} preview of the demo street on device {args.device}, "
+              "median of 4 changes (ms):")
         for name, make in chains.items():
             times = [render(make(k)) for k in range(5)]
             print(f"  {name:20s} {statistics.median(times[1:]):6.0f}")
@@ -78,6 +97,7 @@ def main():
                 print(f"  {display:20s} {ms:6.2f}")
     finally:
         server.terminate()
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def page_redraw(browser, url):

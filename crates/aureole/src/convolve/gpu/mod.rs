@@ -48,6 +48,16 @@ pub(super) fn footprint(load: &Load) -> Footprint {
     }
 }
 
+/// A padded complex grid's worth of device memory, for a kernel spectrum.
+fn spectrum_buffer(gpu: &Gpu, bytes: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("kernel spectrum"),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
 /// The uniforms of the grid shaders (`Grid` in common.wgsl).
 #[derive(Debug, Clone, Copy, Default)]
 struct Uniform {
@@ -155,8 +165,12 @@ pub(super) struct GpuConvolver {
     centre: Centre,
     /// Each kernel plane's centre weight, applied exactly.
     centres: Vec<f32>,
-    /// The spectra of the kernel planes, packed in pairs: (0, 1), (2, –).
-    spectra: Mutex<Vec<Arc<wgpu::Buffer>>>,
+    /// The spectra of the kernel planes, packed in pairs: (0, 1), (2, –),
+    /// held from the start so that a device without the memory refuses
+    /// the plan, not its first frame.
+    spectra: Vec<Arc<wgpu::Buffer>>,
+    /// Pairs transformed so far.
+    transformed: Mutex<usize>,
     /// The split for lamps last asked for.
     split: Mutex<Option<Arc<Split>>>,
     work: Mutex<Work>,
@@ -236,6 +250,11 @@ impl GpuConvolver {
                 kernel_columns,
             }
         })?;
+        let spectra = gpu.scoped("holding the kernel's spectra", || {
+            (0..planes.len().div_ceil(2))
+                .map(|_| Arc::new(spectrum_buffer(&gpu, grid_bytes)))
+                .collect()
+        })?;
         let centres = planes
             .iter()
             .map(|plane| {
@@ -257,7 +276,8 @@ impl GpuConvolver {
             planes: planes.len(),
             centre,
             centres,
-            spectra: Mutex::new(Vec::new()),
+            spectra,
+            transformed: Mutex::new(0),
             split: Mutex::new(None),
             work: Mutex::new(work),
         })
@@ -356,20 +376,12 @@ impl GpuConvolver {
         &self,
         work: &Work,
         (planes, leave_centre): (&[&[f32]], bool),
-        pair: usize,
+        (pair, spectrum): (usize, &wgpu::Buffer),
         control: &Control,
-    ) -> Result<wgpu::Buffer> {
+    ) -> Result<()> {
         let device = &self.gpu.device;
         let (kw, kh) = self.kernel_size;
         let packed: Vec<&[f32]> = planes.iter().skip(2 * pair).take(2).copied().collect();
-        let spectrum = self.gpu.scoped("holding the kernel's spectrum", || {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("kernel spectrum"),
-                size: self.px as u64 * self.py as u64 * COMPLEX,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        })?;
         let source = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("kernel planes"),
             size: (packed.len() * kw * kh * 4).max(4) as u64,
@@ -399,9 +411,8 @@ impl GpuConvolver {
         work.kernel_rows.encode(&self.gpu, &mut encoder);
         work.kernel_columns.encode(&self.gpu, &mut encoder);
         let end = &work.planes[work.kernel_columns.end];
-        encoder.copy_buffer_to_buffer(end, 0, &spectrum, 0, None);
-        self.run(encoder, control)?;
-        Ok(spectrum)
+        encoder.copy_buffer_to_buffer(end, 0, spectrum, 0, None);
+        self.run(encoder, control)
     }
 
     /// Outputs `a` and, where there is one, `b`, through one complex
@@ -620,6 +631,90 @@ impl GpuConvolver {
         }
     }
 
+    /// The kernel (`planes`) split at `radius`: K_far's spectra and the
+    /// lamps' grid and passes, the last split's dropped first.
+    fn build_split(
+        &self,
+        planes: &[&[f32]],
+        radius: usize,
+        control: &mut Control,
+    ) -> Result<Split> {
+        let size = self.kernel_size;
+        let near = Near::new(planes, size, radius);
+        let far_planes: Vec<Vec<f32>> = planes.iter().map(|p| near.far_plane(p, size)).collect();
+        let far_slices: Vec<&[f32]> = far_planes.iter().map(Vec::as_slice).collect();
+        let work = self.work.lock().unwrap_or_else(PoisonError::into_inner);
+        // The last split's grids go before the next one's are made.
+        self.split
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .take();
+        let pairs = self.planes.div_ceil(2);
+        let grid_bytes = self.px as u64 * self.py as u64 * COMPLEX;
+        let far: Vec<Arc<wgpu::Buffer>> =
+            self.gpu.scoped("holding the far kernel's spectra", || {
+                (0..pairs)
+                    .map(|_| Arc::new(spectrum_buffer(&self.gpu, grid_bytes)))
+                    .collect()
+            })?;
+        for (pair, spectrum) in far.iter().enumerate() {
+            self.kernel_pair(&work, (&far_slices, false), (pair, spectrum), control)?;
+            control.report(0.5 + 0.5 * (pair + 1) as f64 / pairs as f64);
+        }
+        self.gpu.scoped("holding the lamps' grids", || {
+            let buffer = |label: &str| {
+                self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: grid_bytes,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                })
+            };
+            let lit = buffer("lamps' grid");
+            let spectrum = work.planes[work.columns_forward.end].clone();
+            let free = work.planes[1 - work.columns_forward.end].clone();
+            let along = |buffers: [&wgpu::Buffer; 2], axis, batch, inverse, start| {
+                Passes::new(
+                    &self.gpu,
+                    buffers,
+                    &work.twiddles,
+                    (axis, self.px, self.py),
+                    (batch, inverse, start),
+                )
+            };
+            let lamp_rows = along([&lit, &free], Axis::Rows, self.height, false, 0);
+            let lamp_columns = along([&lit, &free], Axis::Columns, self.px, false, lamp_rows.end);
+            let product = if lamp_columns.end == 0 {
+                free.clone()
+            } else {
+                lit.clone()
+            };
+            let columns_inverse = along([&product, &spectrum], Axis::Columns, self.px, true, 0);
+            let rows_inverse = along(
+                [&product, &spectrum],
+                Axis::Rows,
+                self.height,
+                true,
+                columns_inverse.end,
+            );
+            let end = [&product, &spectrum][rows_inverse.end].clone();
+            Split {
+                near,
+                far,
+                lit,
+                lamp_rows,
+                lamp_columns,
+                product,
+                columns_inverse,
+                rows_inverse,
+                free,
+                end,
+            }
+        })
+    }
+
     /// The first `bytes` of `staging` as f32.
     fn read(&self, staging: &wgpu::Buffer, bytes: u64, control: &Control) -> Result<Vec<f32>> {
         if bytes == 0 {
@@ -680,85 +775,25 @@ impl Engine for GpuConvolver {
             return Ok(false);
         }
         self.prepare(planes, &mut control.part(0.0, 0.5))?;
-        let near = Near::new(planes, size, radius);
-        let far_planes: Vec<Vec<f32>> = planes.iter().map(|p| near.far_plane(p, size)).collect();
-        let far_slices: Vec<&[f32]> = far_planes.iter().map(Vec::as_slice).collect();
-        let work = self.work.lock().unwrap_or_else(PoisonError::into_inner);
-        // The last split's grids go before the next one's are made.
-        self.split
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .take();
-        let pairs = self.planes.div_ceil(2);
-        let mut far = Vec::with_capacity(pairs);
-        for pair in 0..pairs {
-            let spectrum = self.kernel_pair(&work, (&far_slices, false), pair, control)?;
-            far.push(Arc::new(spectrum));
-            control.report(0.5 + 0.5 * (pair + 1) as f64 / pairs as f64);
-        }
-        let split = self.gpu.scoped("holding the lamps' grids", || {
-            let grid_bytes = self.px as u64 * self.py as u64 * COMPLEX;
-            let buffer = |label: &str| {
-                self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: grid_bytes,
-                    usage: wgpu::BufferUsages::STORAGE
-                        | wgpu::BufferUsages::COPY_DST
-                        | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                })
-            };
-            let lit = buffer("lamps' grid");
-            let spectrum = work.planes[work.columns_forward.end].clone();
-            let free = work.planes[1 - work.columns_forward.end].clone();
-            let along = |buffers: [&wgpu::Buffer; 2], axis, batch, inverse, start| {
-                Passes::new(
-                    &self.gpu,
-                    buffers,
-                    &work.twiddles,
-                    (axis, self.px, self.py),
-                    (batch, inverse, start),
-                )
-            };
-            let lamp_rows = along([&lit, &free], Axis::Rows, self.height, false, 0);
-            let lamp_columns = along([&lit, &free], Axis::Columns, self.px, false, lamp_rows.end);
-            let product = if lamp_columns.end == 0 {
-                free.clone()
-            } else {
-                lit.clone()
-            };
-            let columns_inverse = along([&product, &spectrum], Axis::Columns, self.px, true, 0);
-            let rows_inverse = along(
-                [&product, &spectrum],
-                Axis::Rows,
-                self.height,
-                true,
-                columns_inverse.end,
-            );
-            let end = [&product, &spectrum][rows_inverse.end].clone();
-            Split {
-                near,
-                far,
-                lit,
-                lamp_rows,
-                lamp_columns,
-                product,
-                columns_inverse,
-                rows_inverse,
-                free,
-                end,
+        match self.build_split(planes, radius, control) {
+            Ok(split) => {
+                *self.split.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::new(split));
+                Ok(true)
             }
-        })?;
-        *self.split.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::new(split));
-        Ok(true)
+            // A device without the memory for the lamps' spectra and grid
+            // leaves the scene to the f64 engine, as a split that does not
+            // fit does on the CPU.
+            Err(Error::Gpu(_)) => Ok(false),
+            Err(other) => Err(other),
+        }
     }
 
     fn ready(&self) -> bool {
-        self.spectra
+        *self
+            .transformed
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
-            .len()
-            == self.planes.div_ceil(2)
+            == self.spectra.len()
     }
 
     fn prepare(&self, planes: &[&[f32]], control: &mut Control) -> Result<()> {
@@ -769,14 +804,17 @@ impl Engine for GpuConvolver {
             return Err(Error::NotTransformed);
         }
         let work = self.work.lock().unwrap_or_else(PoisonError::into_inner);
-        let mut spectra = self.spectra.lock().unwrap_or_else(PoisonError::into_inner);
-        let pairs = self.planes.div_ceil(2);
-        while spectra.len() < pairs {
-            let pair = spectra.len();
-            let leave = self.centre == Centre::Leave;
-            let spectrum = self.kernel_pair(&work, (planes, leave), pair, control)?;
-            spectra.push(Arc::new(spectrum));
-            control.report((pair + 1) as f64 / pairs as f64);
+        let mut transformed = self
+            .transformed
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        let leave = self.centre == Centre::Leave;
+        while *transformed < self.spectra.len() {
+            let pair = *transformed;
+            let spectrum = &self.spectra[pair];
+            self.kernel_pair(&work, (planes, leave), (pair, spectrum), control)?;
+            *transformed += 1;
+            control.report(*transformed as f64 / self.spectra.len() as f64);
         }
         Ok(())
     }
@@ -787,12 +825,7 @@ impl Engine for GpuConvolver {
         mut recycled: Vec<Vec<f32>>,
         control: &mut Control,
     ) -> Result<Vec<Vec<f32>>> {
-        let spectra = self
-            .spectra
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .clone();
-        if spectra.len() != self.planes.div_ceil(2) {
+        if !self.ready() {
             return Err(Error::NotTransformed);
         }
         let split = self
@@ -813,7 +846,7 @@ impl Engine for GpuConvolver {
         while next < outputs.len() {
             let a = &outputs[next];
             let b = outputs.get(next + 1).filter(|b| same(a, b));
-            let pair = (&spectra[..], split.as_deref());
+            let pair = (&self.spectra[..], split.as_deref());
             planes.extend(self.pair(&work, pair, (a, b), &mut recycled, control)?);
             next += 1 + usize::from(b.is_some());
             control.report(next as f64 / outputs.len() as f64);
