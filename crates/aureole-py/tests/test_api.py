@@ -114,7 +114,7 @@ def test_a_camera_pickles_as_its_toml():
     assert np.array_equal(again.apply(lamp()), camera.apply(lamp()))
 
 
-def test_the_device_is_chosen_and_the_cpu_gives_the_cli_bytes(tmp_path):
+def test_the_device_is_chosen_and_reported(tmp_path):
     # "gpu" runs on lavapipe in CI; where there is no Vulkan driver it is
     # refused in one line naming the fall back.
     camera = aureole.Camera.preset("paper-fig4-bloom")

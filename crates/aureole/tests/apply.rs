@@ -1,6 +1,8 @@
 //! The pipeline against its definition: linear convolution with zero outside
 //! the frame, the threshold split O = I·[Y ≤ T] + K ⊛ (I·[Y > T]), energy.
 
+mod noise;
+
 use aureole::convolve::Convolver;
 use aureole::convolve::{Centre, Engine, Spread, Term};
 use aureole::pipeline::spread_fraction;
@@ -8,20 +10,7 @@ use aureole::{
     ApplyOptions, Arithmetic, Bloom, Cancel, Config, Control, Effect, Image, Kernel, Layout,
     Length, Method, Plan,
 };
-
-fn pseudo_random(n: usize, seed: u64) -> Vec<f32> {
-    let mut state = seed
-        .wrapping_mul(6364136223846793005)
-        .wrapping_add(1442695040888963407);
-    (0..n)
-        .map(|_| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 40) as f32) / (1u64 << 24) as f32
-        })
-        .collect()
-}
+use noise::pseudo_random;
 
 /// The f32 engine for `kernel` on `w`×`h` planes.
 fn convolver(kernel: &Kernel, w: usize, h: usize, centre: Centre) -> Convolver {

@@ -23,8 +23,23 @@ pub(crate) struct Near {
 
 impl Near {
     /// The windows of `planes` (row-major, `size`, centre at the middle) at
+    /// `radius`; `None` where the window does not fit inside the kernel or
+    /// the planes are not `count` planes of that size (an engine's kernel).
+    pub fn fitting(
+        planes: &[&[f32]],
+        size: (usize, usize),
+        radius: usize,
+        count: usize,
+    ) -> Option<Near> {
+        let (cx, cy) = (size.0 / 2, size.1 / 2);
+        let fits = radius <= cx.min(cy).min(size.0 - 1 - cx).min(size.1 - 1 - cy);
+        let shaped = planes.len() == count && planes.iter().all(|p| p.len() == size.0 * size.1);
+        (fits && shaped).then(|| Near::new(planes, size, radius))
+    }
+
+    /// The windows of `planes` (row-major, `size`, centre at the middle) at
     /// `radius`, which must fit inside the kernel.
-    pub fn new(planes: &[&[f32]], (kw, kh): (usize, usize), radius: usize) -> Near {
+    fn new(planes: &[&[f32]], (kw, kh): (usize, usize), radius: usize) -> Near {
         let (cx, cy) = (kw / 2, kh / 2);
         let side = 2 * radius + 1;
         let windows = planes

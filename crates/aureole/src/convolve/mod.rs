@@ -88,10 +88,9 @@ pub enum Backend {
 }
 
 /// Where a user asks the convolutions to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Device {
     /// A GPU when there is a hardware one, else the processor.
-    #[default]
     Auto,
     /// The processor.
     Cpu,

@@ -34,6 +34,21 @@ impl Placement<'_> {
         (j + py - self.size.1 / 2) % py
     }
 
+    /// Each of `planes`' weight left out ([`Placement::left_out`]).
+    pub fn left_out_of(planes: &[&[f32]], size: (usize, usize), centre: Centre) -> Vec<f32> {
+        planes
+            .iter()
+            .map(|plane| {
+                Placement {
+                    plane,
+                    size,
+                    centre,
+                }
+                .left_out()
+            })
+            .collect()
+    }
+
     /// The weight the engine leaves out and applies exactly: the centre's,
     /// or 0 when the centre is convolved.
     pub fn left_out(&self) -> f32 {

@@ -270,17 +270,7 @@ impl Convolver {
                 })
                 .collect(),
         };
-        let centres = planes
-            .iter()
-            .map(|plane| {
-                Placement {
-                    plane,
-                    size,
-                    centre,
-                }
-                .left_out()
-            })
-            .collect();
+        let centres = Placement::left_out_of(planes, size, centre);
         Convolver {
             width,
             height,
@@ -855,15 +845,10 @@ impl Engine for Convolver {
         if self.has_split(radius) {
             return Ok(true);
         }
-        let size = self.kernel_size;
-        let (cx, cy) = (size.0 / 2, size.1 / 2);
-        let fits = radius <= cx.min(cy).min(size.0 - 1 - cx).min(size.1 - 1 - cy);
-        let shaped =
-            planes.len() == self.planes && planes.iter().all(|p| p.len() == size.0 * size.1);
-        if !fits || !shaped {
+        let Some(near) = Near::fitting(planes, self.kernel_size, radius, self.planes) else {
             return Ok(false);
-        }
-        let near = Arc::new(Near::new(planes, size, radius));
+        };
+        let near = Arc::new(near);
         let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(self.grid.px);
         let full_column = FftPlanner::<f32>::new().plan_fft_forward(self.grid.columns.length());
         // Held while the split is built, so that no application starts on

@@ -58,8 +58,7 @@ pub struct Plan {
     kernel: Kernel,
     /// The configuration's threshold, cd/m², for callers that give none.
     threshold: f64,
-    /// Where its f32 engine computes, and that in words.
-    backend: Backend,
+    /// Where its f32 engine computes, in words.
     device: String,
     /// The engine every scene starts in (f32), the kernel's centre weight
     /// applied exactly.
@@ -120,13 +119,7 @@ impl Plan {
     /// by `aureole psf`, read back from a file): kernels are cacheable. Its
     /// threshold is 0 unless the options give one.
     pub fn with_kernel(kernel: Kernel, width: usize, height: usize) -> Result<Plan> {
-        Plan::transform(
-            kernel,
-            (width, height),
-            Device::Cpu,
-            &mut Control::quiet(&Cancel::new()),
-        )
-        .map_err(|failed| failed.1)
+        Plan::with_kernel_on(kernel, (width, height), Device::Cpu)
     }
 
     /// [`Plan::with_kernel`] convolving on `device`: [`Device::Auto`] takes
@@ -155,7 +148,7 @@ impl Plan {
         device: Device,
         control: &mut Control,
     ) -> std::result::Result<Plan, Box<(Kernel, Error)>> {
-        let (mut backend, mut words) = match choose(device) {
+        let (backend, mut words) = match choose(device) {
             Ok(chosen) => chosen,
             Err(error) => return Err(Box::new((kernel, error))),
         };
@@ -174,8 +167,7 @@ impl Plan {
         // largest buffer) leaves the work to the CPU, and says so.
         if let (Err(Error::Gpu(why)), Device::Auto) = (&built, device) {
             words = format!("the CPU: {words} could not hold it ({why})");
-            backend = Backend::Cpu;
-            built = build(backend);
+            built = build(Backend::Cpu);
         }
         match built {
             Ok(engine) => Ok(Plan {
@@ -183,7 +175,6 @@ impl Plan {
                 height,
                 kernel,
                 threshold: 0.0,
-                backend,
                 device: words,
                 engine,
                 exact: OnceLock::new(),
@@ -469,7 +460,7 @@ impl Plan {
             return Err(refused.error());
         }
         let built = engine(
-            (self.backend, Precision::Double),
+            (Backend::Cpu, Precision::Double),
             &kernel_planes(&self.kernel),
             (self.kernel.width(), self.kernel.height()),
             (self.width, self.height),

@@ -14,14 +14,15 @@ pub(super) enum Axis {
     Columns,
 }
 
-/// The radices of a transform of `n` (5-smooth), largest first: fewest
-/// passes, and radix 4's butterflies need no multiplications.
-fn radices(mut n: usize) -> Vec<u32> {
+/// The radices of a transform of `n` (5-smooth) as indices into
+/// [`RADICES`], in its order: radix 4 first, the fewest passes, and its
+/// butterflies need no multiplications.
+fn radices(mut n: usize) -> Vec<usize> {
     let mut found = Vec::new();
-    for radix in RADICES {
-        let r = radix as usize;
+    for (index, radix) in RADICES.iter().enumerate() {
+        let r = *radix as usize;
         while n % r == 0 && n > 1 {
-            found.push(radix);
+            found.push(index);
             n /= r;
         }
     }
@@ -51,12 +52,11 @@ pub(super) fn twiddles(gpu: &Gpu, lengths: &[usize]) -> wgpu::Buffer {
     buffer
 }
 
-/// One pass: its pipeline, bindings and workgroups.
+/// One pass: its pipeline (an index into [`RADICES`]), bindings and
+/// workgroups.
 struct Step {
     radix: usize,
     group: wgpu::BindGroup,
-    /// Kept for the bind group's sake.
-    _uniform: wgpu::Buffer,
     workgroups: (u32, u32),
 }
 
@@ -85,8 +85,8 @@ impl Passes {
         let mut ns = 1usize;
         let mut at = start;
         let mut steps = Vec::new();
-        for radix in radices(n) {
-            let r = radix as usize;
+        for index in radices(n) {
+            let r = RADICES[index] as usize;
             let words: [u32; 8] = [
                 n as u32,
                 ns as u32,
@@ -105,7 +105,6 @@ impl Passes {
             });
             gpu.queue
                 .write_buffer(&uniform, 0, bytemuck::cast_slice(&words));
-            let index = RADICES.iter().position(|&x| x == radix).unwrap_or(0);
             let pipeline = &gpu.radix[index];
             let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("pass"),
@@ -137,7 +136,6 @@ impl Passes {
             steps.push(Step {
                 radix: index,
                 group,
-                _uniform: uniform,
                 workgroups,
             });
             ns *= r;
@@ -165,11 +163,9 @@ mod tests {
     fn radices_multiply_to_the_length() {
         for n in [1usize, 2, 4, 6, 8, 15, 60, 64, 1125, 2160, 4320, 7680] {
             let found = radices(n);
-            assert_eq!(found.iter().map(|&r| r as usize).product::<usize>(), n);
-            assert!(found
-                .windows(2)
-                .all(|w| RADICES.iter().position(|&r| r == w[0])
-                    <= RADICES.iter().position(|&r| r == w[1])));
+            let product: usize = found.iter().map(|&i| RADICES[i] as usize).product();
+            assert_eq!(product, n);
+            assert!(found.windows(2).all(|w| w[0] <= w[1]));
         }
     }
 }

@@ -255,17 +255,7 @@ impl GpuConvolver {
                 .map(|_| Arc::new(spectrum_buffer(&gpu, grid_bytes)))
                 .collect()
         })?;
-        let centres = planes
-            .iter()
-            .map(|plane| {
-                Placement {
-                    plane,
-                    size,
-                    centre,
-                }
-                .left_out()
-            })
-            .collect();
+        let centres = Placement::left_out_of(planes, size, centre);
         Ok(GpuConvolver {
             gpu,
             width,
@@ -353,9 +343,15 @@ impl GpuConvolver {
     /// cancellation while it works.
     fn run(&self, encoder: wgpu::CommandEncoder, control: &Control) -> Result<()> {
         let index = self.gpu.queue.submit([encoder.finish()]);
+        self.wait(Some(index), control)
+    }
+
+    /// Waits for submission `index` (the last one where `None`), and the
+    /// callbacks it fires, checking `control`'s cancellation meanwhile.
+    fn wait(&self, index: Option<wgpu::SubmissionIndex>, control: &Control) -> Result<()> {
         loop {
             let waited = self.gpu.device.poll(wgpu::PollType::Wait {
-                submission_index: Some(index.clone()),
+                submission_index: index.clone(),
                 timeout: Some(std::time::Duration::from_millis(100)),
             });
             match waited {
@@ -438,9 +434,6 @@ impl GpuConvolver {
             );
         }
         let fractions = a.fractions;
-        if let Some(fractions) = fractions {
-            queue.write_buffer(&work.fractions, 0, bytemuck::cast_slice(fractions));
-        }
         let split = split.filter(|_| !a.lamps.is_empty());
         let base = Uniform {
             planes: outputs.len() as u32,
@@ -464,7 +457,9 @@ impl GpuConvolver {
             ],
         );
         self.over_grid(&mut encoder, &self.gpu.load, &load, (self.px, self.height));
-        let lamps = split.map(|split| self.scatter(&mut encoder, (work, split), a.lamps, &uniform));
+        if let Some(split) = split {
+            self.scatter(&mut encoder, (work, split), a.lamps, &uniform);
+        }
         work.rows_forward.encode(&self.gpu, &mut encoder);
         work.columns_forward.encode(&self.gpu, &mut encoder);
         let transformed = &work.planes[work.columns_forward.end];
@@ -482,7 +477,6 @@ impl GpuConvolver {
             let lit = [&split.lit, &split.free][split.lamp_columns.end];
             bands.push((lit, split.far.as_slice()));
         }
-        let mut uniforms = Vec::new();
         let mut centre = [0.0f32; 2];
         let terms = a.terms.len().max(b.map_or(0, |b| b.terms.len()));
         for (band, (frames, kernels)) in bands.iter().enumerate() {
@@ -515,7 +509,6 @@ impl GpuConvolver {
                     ],
                 );
                 self.over_grid(&mut encoder, &self.gpu.multiply, &group, (self.px, self.py));
-                uniforms.push(uniform);
             }
         }
         let result = match split {
@@ -550,7 +543,6 @@ impl GpuConvolver {
         let bytes = (outputs.len() * n * 4) as u64;
         encoder.copy_buffer_to_buffer(&work.results, 0, &work.staging, 0, Some(bytes));
         self.run(encoder, control)?;
-        drop(lamps);
         let read = self.read(&work.staging, bytes, control)?;
         let mut planes = Vec::with_capacity(outputs.len());
         for (values, output) in read.chunks(n.max(1)).zip(&outputs) {
@@ -567,15 +559,14 @@ impl GpuConvolver {
     }
 
     /// Records moving the lamps (`lamps`, frame indices) from the loaded
-    /// grid into the split's own; returns the buffer of their indices,
-    /// which must live until the work is done.
+    /// grid into the split's own.
     fn scatter(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (work, split): (&Work, &Split),
         lamps: &[usize],
         uniform: &wgpu::Buffer,
-    ) -> wgpu::Buffer {
+    ) {
         let indices: Vec<u32> = lamps.iter().map(|&i| i as u32).collect();
         let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lamps"),
@@ -597,7 +588,6 @@ impl GpuConvolver {
             ],
         );
         self.over_grid(encoder, &self.gpu.scatter, &group, (indices.len(), 1));
-        buffer
     }
 
     /// Adds the lamps' near light to `out`, output `output`'s: each term's
@@ -631,16 +621,10 @@ impl GpuConvolver {
         }
     }
 
-    /// The kernel (`planes`) split at `radius`: K_far's spectra and the
-    /// lamps' grid and passes, the last split's dropped first.
-    fn build_split(
-        &self,
-        planes: &[&[f32]],
-        radius: usize,
-        control: &mut Control,
-    ) -> Result<Split> {
+    /// The kernel (`planes`) split at `near`'s radius: K_far's spectra and
+    /// the lamps' grid and passes, the last split's dropped first.
+    fn build_split(&self, planes: &[&[f32]], near: Near, control: &mut Control) -> Result<Split> {
         let size = self.kernel_size;
-        let near = Near::new(planes, size, radius);
         let far_planes: Vec<Vec<f32>> = planes.iter().map(|p| near.far_plane(p, size)).collect();
         let far_slices: Vec<&[f32]> = far_planes.iter().map(Vec::as_slice).collect();
         let work = self.work.lock().unwrap_or_else(PoisonError::into_inner);
@@ -724,12 +708,7 @@ impl GpuConvolver {
         staging.map_async(wgpu::MapMode::Read, 0..bytes, move |mapped| {
             let _ = sender.send(mapped);
         });
-        self.run(
-            self.gpu
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor::default()),
-            control,
-        )?;
+        self.wait(None, control)?;
         receiver
             .recv()
             .map_err(|_| Error::Gpu("the results were not read back".into()))?
@@ -766,16 +745,11 @@ impl Engine for GpuConvolver {
         if self.has_split(radius) {
             return Ok(true);
         }
-        let size = self.kernel_size;
-        let (cx, cy) = (size.0 / 2, size.1 / 2);
-        let fits = radius <= cx.min(cy).min(size.0 - 1 - cx).min(size.1 - 1 - cy);
-        let shaped =
-            planes.len() == self.planes && planes.iter().all(|p| p.len() == size.0 * size.1);
-        if !fits || !shaped {
+        let Some(near) = Near::fitting(planes, self.kernel_size, radius, self.planes) else {
             return Ok(false);
-        }
+        };
         self.prepare(planes, &mut control.part(0.0, 0.5))?;
-        match self.build_split(planes, radius, control) {
+        match self.build_split(planes, near, control) {
             Ok(split) => {
                 *self.split.lock().unwrap_or_else(PoisonError::into_inner) = Some(Arc::new(split));
                 Ok(true)
@@ -842,10 +816,17 @@ impl Engine for GpuConvolver {
             (Some(x), Some(y)) => std::ptr::eq(x, y),
             _ => false,
         };
+        let mut uploaded: Option<&Spread> = None;
         let mut next = 0;
         while next < outputs.len() {
             let a = &outputs[next];
             let b = outputs.get(next + 1).filter(|b| same(a, b));
+            if let (Some(fractions), false) = (a.fractions, uploaded.is_some_and(|u| same(u, a))) {
+                self.gpu
+                    .queue
+                    .write_buffer(&work.fractions, 0, bytemuck::cast_slice(fractions));
+                uploaded = Some(a);
+            }
             let pair = (&self.spectra[..], split.as_deref());
             planes.extend(self.pair(&work, pair, (a, b), &mut recycled, control)?);
             next += 1 + usize::from(b.is_some());
