@@ -4,7 +4,7 @@
 //! compression by `exr`, and handed in order to `exr`'s chunk writer,
 //! which writes the headers and the offset tables.
 
-use std::io::{Seek, Write};
+use std::io::{Seek, SeekFrom, Write};
 
 use exr::block::chunk::TileCoordinates;
 use exr::block::chunk::{Chunk, CompressedBlock, CompressedScanLineBlock, CompressedTileBlock};
@@ -34,14 +34,22 @@ pub(crate) struct Lowered {
 
 /// Writes `image` to `out`: headers, offset tables and every chunk.
 /// Returns the samples lowered so that DWA does not make them infinite.
-pub(crate) fn write(image: &FlatImage, out: impl Write + Seek) -> exr::error::Result<Lowered> {
+pub(crate) fn write(image: &FlatImage, mut out: impl Write + Seek) -> exr::error::Result<Lowered> {
     let headers = image.write().infer_meta_data();
+    // `exr` keeps an image's own attributes in a HashMap, which it writes
+    // in an order that changes from run to run; the headers are written
+    // again afterwards with each one's attributes sorted by name, as
+    // OpenEXR writes them, so that a file's bytes depend on its content
+    // alone. Their length is the same, so the offsets that follow hold.
+    let mut written = Vec::new();
+    Header::write_all(&headers, &mut written, headers.len() > 1)?;
+    let sorted = sorted_attributes(&written, headers.len());
     let layers = image.layer_data.create_writer(&headers);
     let mut lowered = Lowered {
         count: 0,
         ceiling: crate::formats::HALF_MAX,
     };
-    exr::block::write(out, headers, true, |meta, writer| {
+    exr::block::write(&mut out, headers, true, |meta, writer| {
         let order: Vec<(usize, BlockIndex)> =
             exr::block::enumerate_ordered_header_block_indices(&meta.headers).collect();
         let batch = CHUNKS_PER_THREAD * rayon::current_num_threads();
@@ -70,7 +78,45 @@ pub(crate) fn write(image: &FlatImage, out: impl Write + Seek) -> exr::error::Re
         }
         Ok(())
     })?;
+    if let Some(sorted) = sorted {
+        out.seek(SeekFrom::Start(HEADERS_AT))?;
+        out.write_all(&sorted)?;
+        out.flush()?;
+    }
     Ok(lowered)
+}
+
+/// Where the headers start: after the magic number and the version field.
+const HEADERS_AT: u64 = 8;
+
+/// `count` headers as `Header::write_all` wrote them, each one's
+/// attributes (name, type name, size, value) sorted by name; `None` if the
+/// bytes are not such headers.
+fn sorted_attributes(headers: &[u8], count: usize) -> Option<Vec<u8>> {
+    let until_nul = |from: usize| -> Option<usize> {
+        Some(from + headers.get(from..)?.iter().position(|&b| b == 0)?)
+    };
+    let mut sorted = Vec::with_capacity(headers.len());
+    let mut at = 0;
+    for _ in 0..count {
+        let mut attributes: Vec<(&[u8], &[u8])> = Vec::new();
+        while *headers.get(at)? != 0 {
+            let name_end = until_nul(at)?;
+            let size_at = until_nul(name_end + 1)? + 1;
+            let size = i32::from_le_bytes(headers.get(size_at..size_at + 4)?.try_into().ok()?);
+            let end = size_at + 4 + usize::try_from(size).ok()?;
+            attributes.push((headers.get(at..name_end)?, headers.get(at..end)?));
+            at = end;
+        }
+        at += 1;
+        attributes.sort_by(|a, b| a.0.cmp(b.0));
+        for (_, attribute) in attributes {
+            sorted.extend_from_slice(attribute);
+        }
+        sorted.push(0);
+    }
+    sorted.extend_from_slice(headers.get(at..)?);
+    (sorted.len() == headers.len()).then_some(sorted)
 }
 
 /// One block as a chunk: ZIP and ZIPS through libdeflate, DWA within the
@@ -120,4 +166,78 @@ fn compress(
         compressed_block,
     };
     Ok((chunk, none))
+}
+
+#[cfg(test)]
+mod tests {
+    use exr::image::{AnyChannel, AnyChannels, Encoding, Image, Layer};
+    use exr::meta::attribute::{AttributeValue, Text};
+    use exr::meta::header::{ImageAttributes, LayerAttributes};
+    use exr::prelude::FlatSamples;
+
+    use super::*;
+
+    /// A small image with a renderer's worth of custom attributes, built
+    /// anew, so that its attribute maps hash afresh.
+    fn image() -> FlatImage {
+        let channel = AnyChannel::new("R", FlatSamples::F32(vec![0.5; 4]));
+        let mut layer = Layer::new(
+            (2, 2),
+            LayerAttributes::named("ViewLayer"),
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(vec![channel].into()),
+        );
+        for (i, name) in ["Scene", "Frame", "Camera", "Date", "cycles.samples", "Time"]
+            .into_iter()
+            .enumerate()
+        {
+            layer
+                .attributes
+                .other
+                .insert(Text::from(name), AttributeValue::I32(i as i32));
+        }
+        let mut image = Image::from_layers(
+            ImageAttributes::new(exr::prelude::IntegerBounds::from_dimensions(layer.size)),
+            vec![layer],
+        );
+        for name in ["zeta", "alpha", "mu", "beta"] {
+            image
+                .attributes
+                .other
+                .insert(Text::from(name), AttributeValue::F32(1.0));
+        }
+        image
+    }
+
+    fn bytes(image: &FlatImage) -> Vec<u8> {
+        let mut out = std::io::Cursor::new(Vec::new());
+        write(image, &mut out).unwrap();
+        out.into_inner()
+    }
+
+    #[test]
+    fn attributes_are_written_sorted_whatever_the_map_order() {
+        let first = bytes(&image());
+        for _ in 0..8 {
+            assert_eq!(bytes(&image()), first);
+        }
+        let at = |name: &str| {
+            first
+                .windows(name.len() + 1)
+                .position(|w| w[..name.len()] == *name.as_bytes() && w[name.len()] == 0)
+                .unwrap()
+        };
+        let names = [
+            "Camera", "Date", "Frame", "Scene", "Time", "alpha", "beta", "channels",
+        ];
+        assert!(names.windows(2).all(|pair| at(pair[0]) < at(pair[1])));
+        // The file still reads, every attribute in it.
+        let read = exr::prelude::read_all_flat_layers_from_file;
+        let path = std::env::temp_dir().join(format!("aureole-sorted-{}.exr", std::process::id()));
+        std::fs::write(&path, &first).unwrap();
+        let image = read(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        let kept = image.attributes.other.len() + image.layer_data[0].attributes.other.len();
+        assert_eq!(kept, 10);
+    }
 }
