@@ -67,7 +67,8 @@ input's name) or, with --frames, a pattern such as out/shot.%04d.exr",
 
     /// Use this kernel (a .pfm or .exr written by `aureole psf`, centre at
     /// its middle) instead of building one from presets and configs: build
-    /// it once, apply it to every frame.
+    /// it once, apply it to every frame. The camera's threshold comes with
+    /// an EXR kernel (unless --threshold).
     #[arg(long, value_name = "FILE", conflicts_with_all = ["preset", "config", "seed", "max_kernel"])]
     kernel: Option<PathBuf>,
 
@@ -166,16 +167,18 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     output::tidy(jobs.iter().map(|j| j.output.as_path()), quiet);
     let limit = args.max_memory.unwrap_or_else(default_memory_limit);
     let mut kernel_width = None;
+    let mut kernel_threshold = None;
     let session = match &args.kernel {
         Some(path) => {
-            let (kernel, width) = read_kernel_file(path, Limits { max_bytes: limit })?;
-            if width.is_none() && !args.kernel_any_width {
+            let (kernel, record) = read_kernel_file(path, Limits { max_bytes: limit })?;
+            if record.image_width.is_none() && !args.kernel_any_width {
                 return Err(Failure::Usage(anyhow::anyhow!(
                     "{}: the kernel records no image width (a .pfm cannot; `aureole psf -o K.exr` records it), so whether its µm and mm became pixels at these frames' pitch cannot be checked; write it as .exr, or pass --kernel-any-width if it was built for frames this wide (psf --image-width)",
                     path.display()
                 )));
             }
-            kernel_width = width.filter(|_| !args.kernel_any_width);
+            kernel_width = record.image_width.filter(|_| !args.kernel_any_width);
+            kernel_threshold = record.threshold;
             Session::with_kernel(kernel)
         }
         None => {
@@ -221,6 +224,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         args,
         choice,
         kernel_width,
+        kernel_threshold,
         limit,
         quiet,
         batch: jobs.len() > 1,
@@ -271,6 +275,8 @@ struct Run<'a> {
     choice: Choice,
     /// The image width the --kernel was built for, to be held to.
     kernel_width: Option<usize>,
+    /// The threshold of the camera the --kernel was built from.
+    kernel_threshold: Option<f64>,
     limit: u64,
     quiet: bool,
     /// Several jobs: a frame's failure is said at once and the rest go on.
@@ -395,7 +401,7 @@ impl Run<'_> {
             }
         }
         let options = ApplyOptions {
-            threshold: args.threshold,
+            threshold: args.threshold.or(self.kernel_threshold),
             knee: args.knee,
             glare_only: args.glare_only,
             method: match args.method {

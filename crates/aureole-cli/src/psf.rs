@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use aureole::{Cancel, Control, Extent, Sending};
 use aureole_io::formats::{by_extension, extension, kernel_outputs, KernelStorage};
-use aureole_io::kernel::write_kernel_for;
+use aureole_io::kernel::{write_kernel_for, KernelRecord};
 use clap::{ArgMatches, ValueEnum};
 
 use crate::chain::ChainArgs;
@@ -26,8 +26,15 @@ pub struct Args {
 
     /// Kernel extent in pixels: W (square) or WxH. An image of W×H pixels
     /// needs (2W-1)x(2H-1) for light to reach across the whole frame.
-    #[arg(long, value_name = "W[xH]", value_parser = parse_size)]
-    size: (usize, usize),
+    #[arg(long, value_name = "W[xH]", value_parser = parse_size, required_unless_present = "for_image")]
+    size: Option<(usize, usize)>,
+
+    /// The image (a frame of the sequence) the kernel is for: the kernel
+    /// `apply` builds for it, (2W-1)x(2H-1) for W×H pixels at the pitch of
+    /// W (instead of --size and --image-width). `apply --kernel` with it
+    /// gives the same bytes as `apply` building it.
+    #[arg(long, value_name = "IMAGE", conflicts_with_all = ["size", "image_width"])]
+    for_image: Option<PathBuf>,
 
     /// Width in pixels of the image the kernel is meant for: sets the pixel
     /// pitch (sensor width / image width) that turns µm and mm into pixels.
@@ -76,6 +83,19 @@ pub struct Args {
     profile_radius: Option<f64>,
 }
 
+/// The width and height of the image at `path`: from its header where the
+/// format says them there, else by reading it (which says what is wrong
+/// with a file that cannot be read).
+fn image_size(path: &Path) -> Result<(usize, usize), Failure> {
+    let limits = aureole_io::limits::Limits::default_for_machine();
+    let choice = aureole_io::formats::Choice::default();
+    if let Some(shape) = aureole_io::read::probe(path, limits, &choice)? {
+        return Ok((shape.width, shape.height));
+    }
+    let loaded = aureole_io::read::read_image_with(path, limits, &choice)?;
+    Ok((loaded.image.width, loaded.image.height))
+}
+
 /// What sends the light a kernel spreads.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum SentBy {
@@ -116,8 +136,19 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         ),
         None => None,
     };
-    let (width, height) = args.size;
-    let mut extent = Extent::new(width, height)?.sent_by(match args.sent_by {
+    let mut extent = match (&args.for_image, args.size) {
+        (Some(image), _) => {
+            let (width, height) = image_size(image)?;
+            Extent::for_image(width, height)?
+        }
+        (None, Some((width, height))) => Extent::new(width, height)?,
+        (None, None) => {
+            return Err(Failure::Usage(anyhow::anyhow!(
+                "psf needs --size W[xH] or --for-image IMAGE"
+            )))
+        }
+    }
+    .sent_by(match args.sent_by {
         SentBy::Pixel => Sending::Pixel,
         SentBy::Point => Sending::Point,
     });
@@ -134,7 +165,14 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     let built = start.elapsed().as_secs_f64();
     progress.stage("writing");
     crate::interrupt::writing(|| {
-        write_kernel_for(&args.output, &kernel, Some(extent.image_width))
+        write_kernel_for(
+            &args.output,
+            &kernel,
+            KernelRecord {
+                image_width: Some(extent.image_width),
+                threshold: Some(config.threshold),
+            },
+        )
     })?;
     if let Some(plot) = &args.profile {
         let (cx, cy) = kernel.centre();

@@ -435,6 +435,82 @@ fn apply_reuses_a_kernel_written_by_psf() {
         .code(2);
 }
 
+/// What a render farm does: the kernel built once for the sequence's
+/// frames (`psf --for-image`), each chunk applying it; the results are the
+/// bytes of `apply` with the camera, its threshold included.
+#[test]
+fn a_kernel_for_an_image_gives_the_bytes_of_its_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, _) = scene(dir.path(), "night.exr");
+    let config = dir.path().join("lens.toml");
+    std::fs::write(
+        &config,
+        "threshold = 50.0\n[camera]\nsensor_width_mm = 36.0\nfocal_length_mm = 50.0\n\
+         f_number = 8.0\n[[effect]]\ntype = \"aperture\"\nblades = 6\n\
+         [[effect]]\ntype = \"bloom\"\nepsilon = 0.01\nbeta = 3.0\nradius = \"2px\"\n",
+    )
+    .unwrap();
+    let kernel = dir.path().join("k.exr");
+    aureole()
+        .args(["psf", "--config"])
+        .arg(&config)
+        .arg("--for-image")
+        .arg(&input)
+        .arg("-o")
+        .arg(&kernel)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("95x63 kernel"));
+    let built = dir.path().join("built.exr");
+    aureole()
+        .args(["apply", "-q", "--config"])
+        .arg(&config)
+        .arg(&input)
+        .arg("-o")
+        .arg(&built)
+        .assert()
+        .success();
+    let read = dir.path().join("read.exr");
+    aureole()
+        .args(["apply", "--kernel"])
+        .arg(&kernel)
+        .arg(&input)
+        .arg("-o")
+        .arg(&read)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("above 50 cd/m²"));
+    assert!(
+        std::fs::read(&read).unwrap() == std::fs::read(&built).unwrap(),
+        "apply --kernel gave other bytes than apply --config"
+    );
+    // --threshold still decides.
+    aureole()
+        .args(["apply", "--kernel"])
+        .arg(&kernel)
+        .arg(&input)
+        .args(["--threshold", "0", "-o"])
+        .arg(&read)
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("above 0 cd/m²"));
+    aureole()
+        .args([
+            "psf",
+            "--preset",
+            "paper-fig4-bloom",
+            "--size",
+            "9",
+            "--for-image",
+        ])
+        .arg(&input)
+        .arg("-o")
+        .arg(&kernel)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("cannot be used with"));
+}
+
 #[test]
 fn apply_spreads_by_fft_or_splatting_as_asked_and_says_which() {
     let dir = tempfile::tempdir().unwrap();

@@ -16,20 +16,21 @@ use crate::read::read_image;
 /// Decades of weight the picture spans, from its brightest spread pixel down.
 pub const PICTURE_DECADES: f64 = 6.0;
 
-pub use crate::formats::IMAGE_WIDTH_ATTRIBUTE;
+pub use crate::formats::{KernelRecord, IMAGE_WIDTH_ATTRIBUTE, THRESHOLD_ATTRIBUTE};
 
 /// Writes `kernel` to `path` in the format its extension names: its planes
 /// as float32 (`.pfm`: `Pf` or `PF`; `.exr`: `Y` or `R`, `G`, `B`,
 /// uncompressed), or a log-scaled picture (`.png`). The file appears whole
 /// or not at all.
 pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
-    write_kernel_for(path, kernel, None)
+    write_kernel_for(path, kernel, KernelRecord::default())
 }
 
-/// [`write_kernel`], recording in an EXR the width of the images the
-/// kernel was built for ([`IMAGE_WIDTH_ATTRIBUTE`]), so that applying it to
-/// another width can be refused (PFM has no room for it).
-pub fn write_kernel_for(path: &Path, kernel: &Kernel, image_width: Option<usize>) -> Result<()> {
+/// [`write_kernel`], recording in an EXR what the kernel was built for: the
+/// width of its images ([`IMAGE_WIDTH_ATTRIBUTE`]), so that applying it to
+/// another width can be refused, and its camera's threshold
+/// ([`THRESHOLD_ATTRIBUTE`]). PFM has no room for them.
+pub fn write_kernel_for(path: &Path, kernel: &Kernel, record: KernelRecord) -> Result<()> {
     let refuse = || Error::OutputFormat {
         path: path.to_path_buf(),
         extension: extension(path),
@@ -51,7 +52,7 @@ pub fn write_kernel_for(path: &Path, kernel: &Kernel, image_width: Option<usize>
                 // so kernels are stored as they are.
                 compression: Some(crate::compression::Compression::None),
                 original: Default::default(),
-                image_width,
+                kernel: record,
             };
             encode(path, planes).map(drop)
         }
@@ -73,11 +74,11 @@ pub fn read_kernel(path: &Path, limits: Limits) -> Result<Kernel> {
     read_kernel_file(path, limits).map(|(kernel, _)| kernel)
 }
 
-/// [`read_kernel`], with the width of the images the kernel was built for
-/// when the file records it ([`write_kernel_for`]).
-pub fn read_kernel_file(path: &Path, limits: Limits) -> Result<(Kernel, Option<usize>)> {
+/// [`read_kernel`], with what the file records of what the kernel was
+/// built for ([`write_kernel_for`]).
+pub fn read_kernel_file(path: &Path, limits: Limits) -> Result<(Kernel, KernelRecord)> {
     let loaded = read_image(path, limits)?;
-    let image_width = loaded.original.recorded_image_width();
+    let record = loaded.original.recorded_kernel();
     let image = loaded.image;
     let kernel = Kernel::from_planes(image.width, image.height, image.planes).map_err(|error| {
         Error::Content {
@@ -85,7 +86,7 @@ pub fn read_kernel_file(path: &Path, limits: Limits) -> Result<(Kernel, Option<u
             error,
         }
     })?;
-    Ok((kernel, image_width))
+    Ok((kernel, record))
 }
 
 /// 8-bit RGB levels where grey ∝ log₁₀ K over [`PICTURE_DECADES`] decades

@@ -148,7 +148,7 @@ pub fn write_linear_into(
             samples: options.samples,
             compression: options.compression,
             original,
-            image_width: None,
+            kernel: Default::default(),
         },
     )
 }

@@ -127,9 +127,12 @@ impl Original {
         self.glare = layers;
     }
 
-    /// The image width a kernel file records ([`crate::kernel::write_kernel_for`]).
-    pub fn recorded_image_width(&self) -> Option<usize> {
-        self.exr.as_ref().and_then(|k| k.recorded_image_width())
+    /// What a kernel file records of what it was built for
+    /// ([`crate::kernel::write_kernel_for`]).
+    pub fn recorded_kernel(&self) -> KernelRecord {
+        self.exr
+            .as_ref()
+            .map_or_else(KernelRecord::default, |k| k.recorded_kernel())
     }
 }
 
@@ -159,9 +162,21 @@ pub(crate) struct LinearPlanes<'a> {
     pub compression: Option<Compression>,
     /// The file the image was read from, to write the result back into.
     pub original: Original,
-    /// For a kernel: the width of the images it was built for, recorded
-    /// where the format can (EXR).
+    /// For a kernel: what it was built for, recorded where the format can
+    /// (EXR).
+    pub kernel: KernelRecord,
+}
+
+/// What a kernel file records of the camera it was built from, so that
+/// applying it gives what applying that camera gives.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct KernelRecord {
+    /// The width of the images it was built for: its µm and mm became
+    /// pixels at that pitch.
     pub image_width: Option<usize>,
+    /// The camera's threshold, cd/m², which `apply --kernel` uses unless
+    /// told another.
+    pub threshold: Option<f64>,
 }
 
 /// What a writer could not keep, for the user.
@@ -414,6 +429,10 @@ fn sorted_depths(format: &Format) -> Vec<Depth> {
 /// The EXR attribute that records the width of the images a kernel was
 /// built for: its µm and mm became pixels at that pitch.
 pub const IMAGE_WIDTH_ATTRIBUTE: &str = "aureoleImageWidth";
+
+/// The EXR attribute that records the threshold (cd/m²) of the camera a
+/// kernel was built from.
+pub const THRESHOLD_ATTRIBUTE: &str = "aureoleThreshold";
 
 /// Which of a file's layers and parts to read (OpenEXR); by default the
 /// beauty, as compositors find it.

@@ -243,7 +243,7 @@ mod tests {
                 samples: None,
                 compression: None,
                 original: Default::default(),
-                image_width: None,
+                kernel: Default::default(),
             };
             encode(&path, borrowed).unwrap();
             let back = decode(&std::fs::read(&path).unwrap()).unwrap();

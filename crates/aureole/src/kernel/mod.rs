@@ -135,7 +135,8 @@ pub struct Kernel {
 impl Kernel {
     /// A kernel from planes (1 or 3, row-major, top row first, centre at
     /// column `width/2` and row `height/2`), e.g. a measured PSF. Each plane
-    /// is normalised to ΣK = 1; planes must be finite and non-negative with a
+    /// is normalised to ΣK = 1 (one that sums to 1 within f32 rounding is
+    /// kept as it is); planes must be finite and non-negative with a
     /// positive sum.
     pub fn from_planes(width: usize, height: usize, planes: Vec<Vec<f32>>) -> Result<Kernel> {
         Extent::new(width, height)?;
@@ -170,9 +171,15 @@ impl Kernel {
             if sum <= 0.0 {
                 return Err(refuse("a plane of zeros"));
             }
-            plane
-                .par_iter_mut()
-                .for_each(|v| *v = (f64::from(*v) / sum) as f32);
+            // A plane normalised before (a kernel `psf` wrote) sums to 1 to
+            // within its own rounding; dividing again would move weights by
+            // an ulp, and `apply --kernel` would no longer give the bytes of
+            // the camera the kernel was built from.
+            if (sum - 1.0).abs() > f64::from(f32::EPSILON) {
+                plane
+                    .par_iter_mut()
+                    .for_each(|v| *v = (f64::from(*v) / sum) as f32);
+            }
             normalised.push(plane);
         }
         Ok(Kernel {

@@ -85,20 +85,29 @@ impl Kept {
             .map(|v| (v.name.as_str(), &mut v.image))
     }
 
-    /// The image width a kernel file records.
-    pub(crate) fn recorded_image_width(&self) -> Option<usize> {
+    /// What a kernel file records of what it was built for.
+    pub(crate) fn recorded_kernel(&self) -> crate::formats::KernelRecord {
+        use exr::meta::attribute::AttributeValue as V;
         // A custom attribute may be read as the file's or as its part's.
-        let key = x::Text::from(crate::formats::IMAGE_WIDTH_ATTRIBUTE);
         let part = self.image.layer_data.get(self.part);
-        let value = self
-            .image
-            .attributes
-            .other
-            .get(&key)
-            .or_else(|| part.and_then(|l| l.attributes.other.get(&key)));
-        match value {
-            Some(exr::meta::attribute::AttributeValue::I32(n)) => usize::try_from(*n).ok(),
-            _ => None,
+        let value = |name: &str| {
+            let key = x::Text::from(name);
+            self.image
+                .attributes
+                .other
+                .get(&key)
+                .or_else(|| part.and_then(|l| l.attributes.other.get(&key)))
+                .cloned()
+        };
+        crate::formats::KernelRecord {
+            image_width: match value(crate::formats::IMAGE_WIDTH_ATTRIBUTE) {
+                Some(V::I32(n)) => usize::try_from(n).ok(),
+                _ => None,
+            },
+            threshold: match value(crate::formats::THRESHOLD_ATTRIBUTE) {
+                Some(V::F64(t)) if t.is_finite() && t >= 0.0 => Some(t),
+                _ => None,
+            },
         }
     }
 
@@ -1383,10 +1392,20 @@ fn new_image(planes: &LinearPlanes, clamped: &mut usize) -> FlatImage {
                 blue: x::Vec2(p.blue[0], p.blue[1]),
                 white: x::Vec2(p.white[0], p.white[1]),
             });
-    if let Some(width) = planes.image_width.and_then(|w| i32::try_from(w).ok()) {
+    if let Some(width) = planes
+        .kernel
+        .image_width
+        .and_then(|w| i32::try_from(w).ok())
+    {
         image.attributes.other.insert(
             crate::formats::IMAGE_WIDTH_ATTRIBUTE.into(),
             exr::meta::attribute::AttributeValue::I32(width),
+        );
+    }
+    if let Some(threshold) = planes.kernel.threshold {
+        image.attributes.other.insert(
+            crate::formats::THRESHOLD_ATTRIBUTE.into(),
+            exr::meta::attribute::AttributeValue::F64(threshold),
         );
     }
     let mut layers = Layers::new();
