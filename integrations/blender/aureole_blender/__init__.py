@@ -65,8 +65,8 @@ EFFECT_ITEMS = _effect_items()
 class AureoleSettings(bpy.types.PropertyGroup):
     after_render: BoolProperty(
         name="Apply after rendering",
-        description="Apply the camera to every frame a render writes (an animation, or a "
-                    "frame rendered with -f): EXR frames only, the results in the output folder",
+        description="Apply the camera after every render: each frame an animation writes "
+                    "(OpenEXR only), or a still's Render Result; the results in the output folder",
         default=False)
     stop_from_camera: BoolProperty(
         name="Stop from the scene camera",
@@ -220,11 +220,59 @@ def _say(job):
         print(f"aureole: {job.source}: {job.state}: {job.message}", file=sys.stderr)
 
 
+def apply_render_result(scene):
+    """The Render Result (a still render, F12) written as Blender writes a
+    multilayer float EXR, every pass scene-linear, and submitted."""
+    result = bpy.data.images.get("Render Result")
+    nothing = lens.LensError("no render to apply to: render a frame first (F12)")
+    if result is None:
+        raise nothing
+    source = pathlib.Path(bpy.app.tempdir or ".") / f"render.{scene.frame_current:04d}.exr"
+    image_settings = scene.render.image_settings
+    kept = (image_settings.file_format, image_settings.color_depth)
+    try:
+        image_settings.file_format = "OPEN_EXR_MULTILAYER"
+        image_settings.color_depth = "32"
+        result.save_render(str(source), scene=scene)
+    except RuntimeError:
+        raise nothing from None
+    finally:
+        image_settings.file_format, image_settings.color_depth = kept
+    return submit(scene, source, scene.frame_current)
+
+
 EXR_FORMATS = {"OPEN_EXR", "OPEN_EXR_MULTILAYER"}
+# Whether the render under way wrote a frame: one that did not was a still.
+_RENDER = {"wrote": False}
+
+
+@persistent
+def _render_started(scene, *_):
+    _RENDER["wrote"] = False
+
+
+@persistent
+def _render_ended(scene, *_):
+    if _RENDER["wrote"] or not settings(scene).after_render:
+        return
+
+    def still():
+        try:
+            apply_render_result(scene)
+        except (lens.LensError, ValueError, OSError) as error:
+            print(f"aureole: not applied: {error}", file=sys.stderr)
+
+    if bpy.app.background:
+        still()
+    else:
+        # An interactive render ends on the render's own thread: the Render
+        # Result is saved from the main thread, by a timer.
+        bpy.app.timers.register(still, first_interval=0.0)
 
 
 @persistent
 def _after_write(scene, *_):
+    _RENDER["wrote"] = True
     s = settings(scene)
     if not s.after_render:
         return
@@ -281,28 +329,8 @@ class AUREOLE_OT_apply_render(bpy.types.Operator):
     bl_label = "Apply to Render Result"
 
     def execute(self, context):
-        scene = context.scene
-        result = bpy.data.images.get("Render Result")
-        nothing = "aureole: no render to apply to: render a frame first (F12)"
-        if result is None:
-            self.report({"ERROR"}, nothing)
-            return {"CANCELLED"}
-        folder = pathlib.Path(bpy.app.tempdir or ".")
-        source = folder / f"render.{scene.frame_current:04d}.exr"
-        image_settings = scene.render.image_settings
-        kept = (image_settings.file_format, image_settings.color_depth)
         try:
-            # Every pass, scene-linear and float, as an animation would write it.
-            image_settings.file_format = "OPEN_EXR_MULTILAYER"
-            image_settings.color_depth = "32"
-            result.save_render(str(source), scene=scene)
-        except RuntimeError:
-            self.report({"ERROR"}, nothing)
-            return {"CANCELLED"}
-        finally:
-            image_settings.file_format, image_settings.color_depth = kept
-        try:
-            submit(scene, source, scene.frame_current)
+            apply_render_result(context.scene)
         except (lens.LensError, ValueError, OSError) as error:
             self.report({"ERROR"}, f"aureole: {error}")
             return {"CANCELLED"}
@@ -411,13 +439,18 @@ def register():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.Scene.aureole = PointerProperty(type=AureoleSettings)
+    bpy.app.handlers.render_init.append(_render_started)
     bpy.app.handlers.render_write.append(_after_write)
+    bpy.app.handlers.render_complete.append(_render_ended)
 
 
 def unregister():
     RUNNER.cancel_all()
-    if _after_write in bpy.app.handlers.render_write:
-        bpy.app.handlers.render_write.remove(_after_write)
+    for handlers, handler in ((bpy.app.handlers.render_init, _render_started),
+                              (bpy.app.handlers.render_write, _after_write),
+                              (bpy.app.handlers.render_complete, _render_ended)):
+        if handler in handlers:
+            handlers.remove(handler)
     if bpy.app.timers.is_registered(_poll):
         bpy.app.timers.unregister(_poll)
     del bpy.types.Scene.aureole

@@ -2,8 +2,9 @@
 this -- ADDON_ZIP OUT): installs the add-on from its zip, makes a night
 scene (one emissive lamp of known luminance, a camera of 7 blades at f/8),
 renders frame 1 with Cycles into OUT/render.0001.exr with the add-on
-applying after the render (into OUT/aureole/), renders it as a still and
-applies to the Render Result (into OUT/still/), then turns the stop to 6
+applying after the render (into OUT/aureole/), renders it as a still
+(applied after it, into OUT/after-still/; and from the Render Result, into
+OUT/still/), then turns the stop to 6
 blades and applies to the written frame again (into OUT/six/). test_blender.py checks the files."""
 
 import math
@@ -84,7 +85,10 @@ settings.threshold = 0.0
 settings.device = "CPU"
 bpy.ops.render.render(animation=True)
 
-# A still render (F12), applied from the Render Result.
+# A still render (F12): applied after it by itself, and from the Render
+# Result by the panel's button.
+settings.output_dir = str(out / "after-still")
+bpy.ops.render.render()
 settings.after_render = False
 settings.output_dir = str(out / "still")
 bpy.ops.render.render()

@@ -193,10 +193,21 @@ def test_the_other_passes_are_kept(rendered):
                               before["ViewLayer.Combined"].pixels)
 
 
-def test_a_still_is_applied_from_the_render_result(rendered):
-    """F12, then Apply to Render Result: the still's result is the written
-    frame's (Cycles renders the same pixels with the same seed)."""
+def test_each_render_is_applied_once(rendered):
+    """The animation's frame, the still after its render, the still from the
+    Render Result, the written frame again: four results, no more."""
+    _, said = rendered
+    written = [line.split()[2] for line in said.splitlines() if line.startswith("aureole: wrote")]
+    assert [pathlib.Path(p.rstrip(":")).parent.name for p in written] == [
+        "aureole", "after-still", "still", "six"], said[-3000:]
+
+
+@pytest.mark.parametrize("folder", ["after-still", "still"])
+def test_a_still_is_applied_from_the_render_result(rendered, folder):
+    """F12 with Apply after rendering, or then Apply to Render Result: the
+    still's result is the written frame's (Cycles renders the same pixels
+    with the same seed)."""
     out, _ = rendered
-    still, _ = aureole.read(out / "still" / "render.0001.exr")
+    still, _ = aureole.read(out / folder / "render.0001.exr")
     frame, _ = aureole.read(out / "aureole" / "render.0001.exr")
     np.testing.assert_array_equal(still, frame)
