@@ -52,14 +52,14 @@ def sequence(tmp_path_factory):
     return folder / "shot.%04d.exr"
 
 
-def run_job(openjd, cli, sequence, out, camera, chunk, threshold=""):
+def run_job(openjd, cli, sequence, out, camera, chunk, threshold="", resume="no"):
     kernel = out.parent / f"{out.name}-kernel.exr"
     done = subprocess.run(
         [openjd, "run", str(TEMPLATE),
          "-p", f"Input={sequence}", "-p", f"Output={out}",
          "-p", f"Frames=1-{FRAMES}", "-p", f"ChunkSize={chunk}",
          "-p", f"Camera={camera}", "-p", f"Threshold={threshold}",
-         "-p", f"Kernel={kernel}", "-p", f"Aureole={cli}"],
+         "-p", f"Kernel={kernel}", "-p", f"Aureole={cli}", "-p", f"Resume={resume}"],
         capture_output=True, text=True, timeout=600)
     return done, kernel
 
@@ -122,15 +122,23 @@ def test_a_threshold_and_a_failing_chunk(openjd, cli, sequence, tmp_path):
     # The chunk holding the damaged frame fails the job, and says why.
     assert done.returncode != 0
     assert "shot.0005.exr" in done.stdout
-    # The good frames of the run are the batch's; a rerun once the frame is
-    # mended writes only what is missing.
+    # The good frames of the run are the batch's; a rerun with Resume once
+    # the frame is mended writes only what is missing, one without writes
+    # everything again.
     shutil.copy(sequence.parent / "shot.0005.exr", damaged)
     written = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
+    assert written and len(written) < FRAMES
     done, _ = run_job(openjd, cli, frames / sequence.name, out, "camera-f8-7blade", chunk=4,
-                      threshold="1000")
+                      threshold="1000", resume="yes")
     assert done.returncode == 0, done.stdout[-3000:]
     for name, mtime in written.items():
         assert (out / name).stat().st_mtime_ns == mtime, f"{name} was written again"
+    assert len(list(out.iterdir())) == FRAMES
+    resumed = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
+    done, _ = run_job(openjd, cli, frames / sequence.name, out, "camera-f8-7blade", chunk=4,
+                      threshold="1000")
+    assert done.returncode == 0, done.stdout[-3000:]
+    assert all((out / name).stat().st_mtime_ns != mtime for name, mtime in resumed.items())
     expected = tmp_path / "batch"
     batch(cli, frames / sequence.name, expected, "camera-f8-7blade", threshold=1000)
     for path in expected.iterdir():
