@@ -10,11 +10,11 @@ import sys
 
 import bpy
 
-zip_path = pathlib.Path(sys.argv[sys.argv.index("--") + 1])
-bpy.ops.preferences.addon_install(filepath=str(zip_path), overwrite=True)
-bpy.ops.preferences.addon_enable(module="aureole_blender")
-import aureole_blender  # noqa: E402 - installed just above
-from aureole_blender import lens  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from blender_install import install  # noqa: E402 - beside this script
+
+aureole_blender = install(pathlib.Path(sys.argv[sys.argv.index("--") + 1]))
+lens = aureole_blender.lens
 
 scene = bpy.context.scene
 camera = scene.camera.data

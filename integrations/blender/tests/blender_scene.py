@@ -1,5 +1,6 @@
 """Run inside Blender (blender -b --factory-startup --python-exit-code 1 -P
-this -- ADDON_ZIP OUT): installs the add-on from its zip, makes a night
+this -- ADDON_ZIP OUT, or with Blender as a Python module: python this --
+ADDON_ZIP OUT): installs the add-on from its zip, makes a night
 scene (one emissive lamp of known luminance, a camera of 7 blades at f/8),
 renders frame 1 with Cycles into OUT/render.0001.exr with the add-on
 applying after the render (into OUT/aureole/), renders it as a still
@@ -13,15 +14,11 @@ import sys
 
 import bpy
 
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from blender_install import install  # noqa: E402 - beside this script
+
 zip_path, out = (pathlib.Path(a) for a in sys.argv[sys.argv.index("--") + 1:][:2])
-
-bpy.ops.preferences.addon_install(filepath=str(zip_path), overwrite=True)
-bpy.ops.preferences.addon_enable(module="aureole_blender")
-import aureole_blender  # noqa: E402 - installed just above
-
-assert aureole_blender.aureole is not None, (
-    "the add-on found no aureole package: the wheel must suit Blender's Python "
-    f"{sys.version_info.major}.{sys.version_info.minor}")
+install(zip_path)
 
 scene = bpy.context.scene
 for thing in list(bpy.data.objects):

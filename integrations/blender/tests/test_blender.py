@@ -1,6 +1,9 @@
-"""The Blender add-on in a real Blender, headless: blender_scene.py renders a
-lamp through a 7-blade f/8 camera with Cycles and the add-on applies
-aureole after the render; these tests read what it wrote."""
+"""The Blender add-on in real Blenders, headless: Debian's Blender 3.4 with
+the legacy add-on (`blender -b`), and Blender 4.5 as a Python module (PyPI's
+bpy, which scripts/test installs into target/bpyvenv) with the 4.2+
+extension, its wheel installed by Blender. blender_scene.py renders a lamp
+through a 7-blade f/8 camera with Cycles and the add-on applies aureole
+after the render; these tests read what it wrote."""
 
 import os
 import pathlib
@@ -43,30 +46,42 @@ def wheel():
     return found[-1] if found else None
 
 
-@pytest.fixture(scope="module")
-def addon(tmp_path_factory):
-    """Blender, and the legacy add-on zip packed with the wheel."""
-    blender = shutil.which("blender")
-    if blender is None:
-        pytest.skip("Blender is not installed (Debian: apt-get install blender python3-numpy)")
+def blender(kind):
+    """How to run a script in a Blender, and which zip it installs."""
+    if kind == "legacy":
+        found = shutil.which("blender")
+        if found is None:
+            pytest.skip("Blender is not installed (Debian: apt-get install blender python3-numpy)")
+        return [found, "-b", "--factory-startup", "--python-exit-code", "1", "-P"]
+    python = pathlib.Path(os.environ.get("AUREOLE_BPY_PYTHON")
+                          or ROOT / "target" / "bpyvenv" / "bin" / "python")
+    if not python.is_file():
+        pytest.skip("no Blender 4.2+ module: python3 -m venv target/bpyvenv && "
+                    "target/bpyvenv/bin/pip install 'bpy>=4.5,<4.6'")
+    return [str(python)]
+
+
+@pytest.fixture(scope="module", params=["legacy", "extension"])
+def addon(request, tmp_path_factory):
+    """A Blender, and the add-on zip it installs, packed with the wheel."""
+    command = blender(request.param)
     built = wheel()
     if built is None:
         pytest.skip("no aureole wheel: pip wheel --no-deps -w target/wheels ./crates/aureole-py")
     folder = tmp_path_factory.mktemp("addon")
     subprocess.run([sys.executable, HERE.parent / "package.py", "--wheel", built,
                     "--out", folder], check=True, capture_output=True)
-    return blender, next(folder.glob("*-legacy.zip"))
+    return command, next(folder.glob(f"*-{request.param}.zip"))
 
 
 def in_blender(addon, folder, script, *args):
-    """Runs `script` in a headless Blender with the add-on installed in a
-    folder of the test's own."""
-    blender, zip_path = addon
-    env = dict(os.environ, BLENDER_USER_SCRIPTS=str(folder / "scripts"))
-    done = subprocess.run(
-        [blender, "-b", "--factory-startup", "--python-exit-code", "1",
-         "-P", HERE / script, "--", zip_path, *args],
-        capture_output=True, text=True, env=env, timeout=600)
+    """Runs `script` in a headless Blender with the add-on installed in
+    folders of the test's own."""
+    command, zip_path = addon
+    env = dict(os.environ, BLENDER_USER_SCRIPTS=str(folder / "scripts"),
+               BLENDER_USER_RESOURCES=str(folder / "resources"))
+    done = subprocess.run([*command, HERE / script, "--", zip_path, *args],
+                          capture_output=True, text=True, env=env, timeout=600)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     return done.stdout
 
