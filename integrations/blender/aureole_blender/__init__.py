@@ -203,7 +203,9 @@ def submit(scene, source, frame):
         print(f"aureole: note: {note}")
     if bpy.app.background:
         job.run()
+        job.reported = True
         RUNNER.jobs.append(job)
+        RUNNER.trim(keep=8)
         _say(job)
     else:
         RUNNER.submit(job)
@@ -299,17 +301,15 @@ def _show(path):
     return image
 
 
-_shown = set()
-
-
 def _poll():
     """The timer that follows the jobs from Blender's main thread."""
-    for job in RUNNER.jobs:
-        if job.finished and id(job) not in _shown:
-            _shown.add(id(job))
+    for job in list(RUNNER.jobs):
+        if job.finished and not job.reported:
+            job.reported = True
             _say(job)
             if job.state == "done":
                 _show(job.output)
+    RUNNER.trim(keep=8)
     for window in bpy.context.window_manager.windows:
         for area in window.screen.areas:
             if area.type == "PROPERTIES":

@@ -29,6 +29,7 @@ class Job:
     fraction: float = 0.0
     message: str = ""
     result: Optional[dict] = None
+    reported: bool = False  # said and shown by the add-on, once finished
     cancel: threading.Event = field(default_factory=threading.Event)
 
     @property
@@ -100,6 +101,9 @@ class Runner:
         if thread is not None:
             thread.join(timeout)
 
-    def forget_finished(self):
+    def trim(self, keep):
+        """Forgets the oldest reported jobs beyond the last `keep`, so that
+        a long session does not hold every frame it ever applied."""
         with self._lock:
-            self.jobs = [job for job in self.jobs if not job.finished]
+            old = [job for job in self.jobs if job.reported][:-keep or None]
+            self.jobs = [job for job in self.jobs if job not in old]

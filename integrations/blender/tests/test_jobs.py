@@ -81,3 +81,14 @@ def test_a_failure_is_one_line(tmp_path):
     job.run()
     assert job.state == "failed"
     assert "render.0001.exr" in job.message and "\n" not in job.message
+
+
+def test_a_long_session_keeps_only_the_last_jobs(tmp_path):
+    runner = jobs.Runner()
+    for n in range(12):
+        job = jobs.Job(source=tmp_path / f"{n}.exr", output=tmp_path / "out" / f"{n}.exr",
+                       camera=None, options={}, state="done", reported=n < 10)
+        runner.jobs.append(job)
+    runner.trim(keep=8)
+    # The two not yet reported stay, with the last eight reported.
+    assert [job.source.stem for job in runner.jobs] == [str(n) for n in range(2, 12)]
