@@ -7,7 +7,6 @@ mod noise;
 
 use aureole::control::{Cancel, Control};
 use aureole::convolve::{engine, Backend, Centre, Precision, Spread, Term};
-use aureole::image::REC709_LUMINANCE;
 use aureole::{ApplyOptions, Arithmetic, Config, Device, Error, Image, Layout, Plan};
 use noise::pseudo_random;
 
@@ -35,14 +34,7 @@ fn luminance<'a>(plane: &'a [f32], lamps: &'a [usize]) -> Spread<'a> {
     Spread {
         plane,
         fractions: None,
-        terms: REC709_LUMINANCE
-            .iter()
-            .enumerate()
-            .map(|(kernel_plane, &weight)| Term {
-                kernel_plane,
-                weight,
-            })
-            .collect(),
+        terms: Term::luminance(),
         lamps,
     }
 }

@@ -19,6 +19,7 @@ bl_info = {
 
 import pathlib
 import sys
+import tomllib
 
 import bpy
 from bpy.app.handlers import persistent
@@ -142,7 +143,6 @@ def lens_of(scene):
 
 
 def _has_stop(camera):
-    import tomllib
     effects = tomllib.loads(camera.toml()).get("effect", [])
     return any(effect.get("type") == "aperture" for effect in effects)
 
@@ -172,6 +172,20 @@ def build_camera(scene):
     return aureole.Camera.compose(*parts), notes
 
 
+# The camera last applied, by its TOML: the frames of an animation apply
+# the same object, whose sessions keep the kernel built for the first.
+_LAST = {"toml": None, "camera": None}
+
+
+def camera_for(scene):
+    """build_camera's camera, the one applied before where it is the same."""
+    camera, notes = build_camera(scene)
+    text = camera.toml()
+    if _LAST["toml"] != text:
+        _LAST.update(toml=text, camera=camera)
+    return _LAST["camera"], notes
+
+
 def input_scale(scene):
     """cd/m² per unit of the frames Blender writes: Cycles' film exposure
     multiplies what it renders."""
@@ -193,12 +207,12 @@ def output_for(scene, source):
     return base / source.name
 
 
-def submit(scene, source, frame):
+def submit(scene, source):
     """A job for the frame at `source`; in the background (blender -b, a
     farm) it runs at once, so that Blender does not quit before it ends."""
-    camera, notes = build_camera(scene)
+    camera, notes = camera_for(scene)
     job = jobs.Job(source=source, output=output_for(scene, source), camera=camera,
-                   options=apply_options(scene), frame=frame)
+                   options=apply_options(scene))
     for note in notes:
         print(f"aureole: note: {note}")
     if bpy.app.background:
@@ -240,7 +254,7 @@ def apply_render_result(scene):
         raise nothing from None
     finally:
         image_settings.file_format, image_settings.color_depth = kept
-    return submit(scene, source, scene.frame_current)
+    return submit(scene, source)
 
 
 EXR_FORMATS = {"OPEN_EXR", "OPEN_EXR_MULTILAYER"}
@@ -285,7 +299,7 @@ def _after_write(scene, *_):
         return
     source = pathlib.Path(bpy.path.abspath(scene.render.frame_path(frame=scene.frame_current)))
     try:
-        submit(scene, source, scene.frame_current)
+        submit(scene, source)
     except (lens.LensError, ValueError, OSError) as error:
         print(f"aureole: not applied: {error}", file=sys.stderr)
 
@@ -352,7 +366,7 @@ class AUREOLE_OT_apply_frames(bpy.types.Operator):
             if not source.is_file():
                 continue
             try:
-                submit(scene, source, frame)
+                submit(scene, source)
             except (lens.LensError, ValueError, OSError) as error:
                 self.report({"ERROR"}, f"aureole: {error}")
                 return {"CANCELLED"}

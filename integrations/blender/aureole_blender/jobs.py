@@ -23,7 +23,6 @@ class Job:
     output: pathlib.Path
     camera: object  # aureole.Camera
     options: dict  # apply_file's keyword arguments
-    frame: Optional[int] = None
     state: str = "queued"  # queued, running, done, failed, cancelled
     stage: str = ""
     fraction: float = 0.0

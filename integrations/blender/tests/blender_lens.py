@@ -75,4 +75,10 @@ except lens.LensError as error:
 render.pixel_aspect_x = 1.0
 camera.dof.aperture_ratio = 1.5
 assert any("ratio 1.5" in note for note in aureole_blender.lens_of(scene).notes())
+# Frames applied with unchanged settings share one camera, and with it the
+# kernel its sessions built; a changed stop is another camera.
+first, _ = aureole_blender.camera_for(scene)
+assert aureole_blender.camera_for(scene)[0] is first
+camera.dof.aperture_blades = 9
+assert aureole_blender.camera_for(scene)[0] is not first
 print(f"aureole lens: {checked} sensor fits agree with Blender's frame")

@@ -48,6 +48,21 @@ pub struct Term {
     pub weight: f32,
 }
 
+impl Term {
+    /// A luminance plane through a coloured kernel: Y = Σ w_k K_k ⊛ Y, the
+    /// Rec.709 weights of its R, G and B planes.
+    pub fn luminance() -> Vec<Term> {
+        crate::image::REC709_LUMINANCE
+            .iter()
+            .enumerate()
+            .map(|(kernel_plane, &weight)| Term {
+                kernel_plane,
+                weight,
+            })
+            .collect()
+    }
+}
+
 /// One output plane: O = (I − B) + Σ over `terms` of w·K_k ⊛ B, with
 /// B = I·fractions (or all of I), the centre weights applied exactly.
 #[derive(Debug, Clone)]

@@ -15,7 +15,7 @@ use crate::config::Config;
 use crate::control::{Cancel, Control};
 use crate::convolve::{choose, engine, Backend, Centre, Device, Engine, Precision, Spread, Term};
 use crate::error::{Error, Fit, Result};
-use crate::image::{Image, Layout, PixelLuminance, REC709_LUMINANCE};
+use crate::image::{Image, Layout, PixelLuminance};
 use crate::kernel::{Extent, Kernel};
 
 /// How a scene is spread by FFT: the fraction of each pixel spread (none
@@ -491,14 +491,7 @@ fn kernel_planes(kernel: &Kernel) -> Vec<&[f32]> {
 /// through its own kernel plane (or the one plane).
 fn terms(layout: Layout, kernel_planes: usize, c: usize) -> Vec<Term> {
     match (layout, kernel_planes) {
-        (Layout::Luminance, k) if k > 1 => REC709_LUMINANCE
-            .iter()
-            .enumerate()
-            .map(|(kernel_plane, &weight)| Term {
-                kernel_plane,
-                weight,
-            })
-            .collect(),
+        (Layout::Luminance, k) if k > 1 => Term::luminance(),
         (_, k) => vec![Term {
             kernel_plane: c.min(k - 1),
             weight: 1.0,
