@@ -13,6 +13,9 @@ import pytest
 
 import aureole
 
+# Its module fixtures run once: on one worker under pytest-xdist.
+pytestmark = pytest.mark.xdist_group("openjd")
+
 TEMPLATE = pathlib.Path(__file__).resolve().parents[1] / "aureole-sequence" / "template.yaml"
 FRAMES = 7
 

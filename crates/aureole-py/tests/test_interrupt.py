@@ -11,6 +11,9 @@ import pytest
 
 import aureole
 
+# Timed: run alone (scripts/test), not beside other tests.
+pytestmark = pytest.mark.latency
+
 
 def interrupted(call, after):
     """Sends SIGINT `after` seconds into `call`; the seconds from the

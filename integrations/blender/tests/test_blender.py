@@ -16,6 +16,9 @@ import pytest
 
 import aureole
 
+# Its module fixtures run once: on one worker under pytest-xdist.
+pytestmark = pytest.mark.xdist_group("blender")
+
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parents[2]
 REC709 = np.array([0.2126, 0.7152, 0.0722])

@@ -47,6 +47,7 @@ def test_a_frame_is_applied_off_the_calling_thread(tmp_path):
     assert job.output.read_bytes() == expected.read_bytes()
 
 
+@pytest.mark.latency
 def test_cancel_stops_a_long_frame_within_a_second(tmp_path):
     source = frame(tmp_path / "render.0001.exr", 1600, 1200)
     runner = jobs.Runner()
