@@ -3,11 +3,12 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use aureole::{Cancel, Control, Extent, Sending};
+use aureole::{Cancel, Composing, Control, Extent, Sending};
 use aureole_io::formats::{by_extension, extension, kernel_outputs, KernelStorage};
 use aureole_io::kernel::{write_kernel_for, KernelRecord};
 use clap::{ArgMatches, ValueEnum};
 
+use crate::apply::DeviceArg;
 use crate::chain::ChainArgs;
 use crate::progress::Progress;
 use crate::values::{parse_positive, parse_size};
@@ -58,6 +59,14 @@ pub struct Args {
     /// noise, and the light kept above the floor.
     #[arg(long, value_name = "FILE", requires = "pitch_um")]
     from_image: Option<PathBuf>,
+
+    /// Where the effects convolve one another (an optical chain, a star
+    /// filter's orders): `auto` takes a hardware GPU where there is one,
+    /// else the CPU; `gpu` insists (a software adapter too) and stops
+    /// without one. A composition the GPU cannot hold runs on the CPU. A
+    /// kernel composed on a GPU differs from the CPU's in the last bits.
+    #[arg(long, value_enum, default_value_t = DeviceArg::Auto)]
+    device: DeviceArg,
 
     /// The pixel pitch of --from-image on the sensor, µm.
     #[arg(long, value_name = "UM", requires = "from_image", value_parser = parse_positive)]
@@ -156,12 +165,17 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         extent = extent.with_image_width(n as usize);
     }
 
+    let mut composing = Composing::on(args.device.into())?;
     let start = Instant::now();
     let progress = Progress::new(quiet);
     progress.stage("building kernel");
     let cancel = Cancel::new();
     let mut report = |fraction| progress.set(fraction);
-    let kernel = config.kernel_with(&extent, &mut Control::new(&cancel, &mut report))?;
+    let kernel = config.kernel_on(
+        &extent,
+        &mut composing,
+        &mut Control::new(&cancel, &mut report),
+    )?;
     let built = start.elapsed().as_secs_f64();
     progress.stage("writing");
     crate::interrupt::writing(|| {
@@ -192,7 +206,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             .map(|c| format!("{:.6}", kernel.sum(c)))
             .collect();
         eprintln!(
-            "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, built in {:.2} s, {:.2} s in all",
+            "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, built in {:.2} s (composed on {}), {:.2} s in all",
             args.output.display(),
             kernel.width(),
             kernel.height(),
@@ -202,6 +216,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             kernel.centre().0,
             kernel.centre().1,
             built,
+            composing.words(),
             start.elapsed().as_secs_f64()
         );
     }

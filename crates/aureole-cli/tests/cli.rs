@@ -854,3 +854,38 @@ fn device_chooses_where_the_light_is_spread() {
     assert!(line.contains("no GPU to compute on"), "{line}");
     assert!(!dir.path().join("none.pfm").exists());
 }
+
+/// `psf --device`: where the chain's effects convolve one another, said in
+/// the last line; one clear line and no file when the GPU is asked for
+/// and there is no Vulkan driver.
+#[test]
+fn psf_composes_on_the_device_chosen() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |device: &str, name: &str| {
+        let mut command = aureole();
+        command
+            .args(["psf", "--preset", "paper-fig5-both", "--size", "101x61"])
+            .args(["--device", device, "-o"])
+            .arg(dir.path().join(name));
+        command
+    };
+    run("cpu", "cpu.exr")
+        .assert()
+        .success()
+        .stderr(predicate::str::contains("(composed on the CPU)"));
+    let gpu = run("gpu", "gpu.exr").assert();
+    if gpu.get_output().status.success() {
+        gpu.stderr(predicate::str::contains("(composed on the GPU "));
+    } else {
+        eprintln!("no GPU here: the GPU run is not checked");
+    }
+    let refused = run("gpu", "none.exr")
+        .arg("-q")
+        .env("VK_ICD_FILENAMES", "/nonexistent.json")
+        .env("VK_DRIVER_FILES", "/nonexistent.json")
+        .assert()
+        .failure();
+    let line = one_line(&refused.get_output().stderr);
+    assert!(line.contains("no GPU to compute on"), "{line}");
+    assert!(!dir.path().join("none.exr").exists());
+}

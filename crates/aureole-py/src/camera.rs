@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use aureole::{ApplyOptions, Cancel, Config, ConfigFile, Control, Extent, Frame, FrameOptions};
-use aureole::{Device, Method, Sending, Session, Stage};
+use aureole::{Composing, Device, Method, Sending, Session, Stage};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -204,8 +204,12 @@ impl Camera {
     /// width) that turns µm and mm into pixels; by default the kernel's
     /// width. `sent_by` is "pixel" (the kernel an image is convolved with:
     /// each pixel's light leaves its whole square) or "point" (the PSF of
-    /// a point of light, as an optics program gives it).
-    #[pyo3(signature = (width, height, image_width = None, progress = None, sent_by = "pixel"))]
+    /// a point of light, as an optics program gives it). `device` is where
+    /// the effects convolve one another, as for `apply`: "auto", "cpu" or
+    /// "gpu" (a kernel composed on a GPU differs in the last bits).
+    #[pyo3(signature = (width, height, image_width = None, progress = None, sent_by = "pixel",
+                        device = "auto"))]
+    #[allow(clippy::too_many_arguments)]
     fn kernel<'py>(
         &self,
         py: Python<'py>,
@@ -214,7 +218,9 @@ impl Camera {
         image_width: Option<usize>,
         progress: Option<&Bound<'py, PyAny>>,
         sent_by: &str,
+        device: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let mut composing = Composing::on(self::device(device)?).map_err(value_error)?;
         let sending = match sent_by {
             "pixel" => Sending::Pixel,
             "point" => Sending::Point,
@@ -234,7 +240,11 @@ impl Camera {
         let config = &self.config;
         let kernel = interruptible(py, &cancel, progress, |latest| {
             let mut building = |fraction| report(&latest, Stage::BuildingKernel, fraction);
-            config.kernel_with(&extent, &mut Control::new(&cancel, &mut building))
+            config.kernel_on(
+                &extent,
+                &mut composing,
+                &mut Control::new(&cancel, &mut building),
+            )
         })?
         .map_err(value_error)?;
         let planes = kernel.planes();

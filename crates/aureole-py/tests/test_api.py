@@ -132,6 +132,23 @@ def test_the_device_is_chosen_and_reported(tmp_path):
     assert report["device"] == "the CPU"
 
 
+
+def test_a_kernel_composes_on_the_device_chosen():
+    # Bloom ⊛ corona: on the GPU (lavapipe in CI) within f32 round-off of
+    # the CPU's; refused in one line where there is no Vulkan driver.
+    camera = aureole.Camera.preset("paper-fig5-both")
+    on_cpu = camera.kernel(301, 201, device="cpu")
+    try:
+        on_gpu = camera.kernel(301, 201, device="gpu")
+    except ValueError as refused:
+        assert "no GPU to compute on" in str(refused)
+    else:
+        assert not np.array_equal(on_gpu, on_cpu)
+        assert np.linalg.norm(on_gpu - on_cpu) <= 1e-5 * np.linalg.norm(on_cpu)
+        assert abs(on_gpu.sum(dtype=np.float64) - 1.0) < 1e-6
+    with pytest.raises(ValueError, match="device = \"tpu\" is not allowed"):
+        camera.kernel(31, 31, device="tpu")
+
 def test_threshold_glare_only_and_input_scale():
     camera = aureole.Camera.preset("paper-fig5-both")
     image = lamp()

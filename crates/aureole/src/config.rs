@@ -12,6 +12,7 @@ use serde::Deserialize;
 use crate::camera::Camera;
 use crate::check;
 use crate::control::{Cancel, Control};
+use crate::convolve::Composing;
 use crate::error::{Error, Result};
 use crate::kernel::{self, Extent, Kernel};
 use crate::optics::Effect;
@@ -388,7 +389,25 @@ impl Config {
     /// [`Config::kernel`], reporting to `control` and stopping when it is
     /// cancelled.
     pub fn kernel_with(&self, extent: &Extent, control: &mut Control) -> Result<Kernel> {
-        kernel::build(&self.camera, &self.effects, self.seed, extent, control)
+        self.kernel_on(extent, &mut Composing::cpu(), control)
+    }
+
+    /// [`Config::kernel_with`], its effects convolving one another where
+    /// `composing` says (on a GPU, bits apart from the CPU's).
+    pub fn kernel_on(
+        &self,
+        extent: &Extent,
+        composing: &mut Composing,
+        control: &mut Control,
+    ) -> Result<Kernel> {
+        kernel::build(
+            &self.camera,
+            &self.effects,
+            self.seed,
+            extent,
+            composing,
+            control,
+        )
     }
 }
 

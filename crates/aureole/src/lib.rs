@@ -87,7 +87,7 @@ pub mod units;
 pub use camera::Camera;
 pub use config::{Config, ConfigFile};
 pub use control::{Cancel, Control};
-pub use convolve::Device;
+pub use convolve::{Composing, Device};
 pub use error::{Error, Result};
 pub use image::{Image, Layout, Shape};
 pub use kernel::{Extent, Kernel, Sending};

@@ -302,3 +302,105 @@ fn auto_never_takes_a_software_adapter() {
     let (cpu, said) = aureole::convolve::choose(Device::Cpu).unwrap();
     assert_eq!((cpu, said.as_str()), (Backend::Cpu, "the CPU"));
 }
+
+/// A star filter's two families of lines on a round stop, in one
+/// wavelength: its orders are spread over the kernel by one convolution.
+const STAR_FILTER: &str = r#"
+[camera]
+sensor_width_mm = 36.0
+focal_length_mm = 50.0
+f_number = 5.6
+
+[[effect]]
+type = "aperture"
+blades = 0
+spectral = false
+wavelength_nm = 550.0
+
+[[effect.filter]]
+angle_deg = 45.0
+spacing_um = 150.0
+width_um = 15.0
+
+[[effect.filter]]
+angle_deg = 135.0
+spacing_um = 150.0
+width_um = 15.0
+"#;
+
+#[test]
+fn kernels_compose_on_the_gpu_as_on_the_cpu() {
+    if !gpu_present("kernels_compose_on_the_gpu_as_on_the_cpu") {
+        return;
+    }
+    let preset = |name: &str| aureole::presets::find(name).unwrap().config().unwrap();
+    let street =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/night-street.toml");
+    // Bloom ⊛ corona; bloom ⊛ a spectral 7-blade stop (the night street's
+    // lens); a star filter's orders.
+    let chains = [
+        ("paper-fig5-both", preset("paper-fig5-both")),
+        (
+            "night-street.toml",
+            aureole::ConfigFile::load(&street).unwrap(),
+        ),
+        (
+            "a star filter",
+            aureole::ConfigFile::parse(STAR_FILTER, "star filter").unwrap(),
+        ),
+    ];
+    let extent = aureole::Extent::for_image(121, 71).unwrap();
+    let cancel = Cancel::new();
+    for (name, file) in chains {
+        let mut config = Config::default();
+        config.apply(file);
+        let build = |composing: &mut aureole::Composing| {
+            config
+                .kernel_on(&extent, composing, &mut Control::quiet(&cancel))
+                .unwrap()
+        };
+        let mut on_gpu = aureole::Composing::on(Device::Gpu).unwrap();
+        let gpu = build(&mut on_gpu);
+        assert!(on_gpu.words().starts_with("the GPU"), "{}", on_gpu.words());
+        let cpu = build(&mut aureole::Composing::cpu());
+        assert_eq!(gpu.planes().len(), cpu.planes().len(), "{name}");
+        assert!(
+            gpu.planes() != cpu.planes(),
+            "{name}: nothing composed on the GPU"
+        );
+        for (c, (g, k)) in gpu.planes().iter().zip(cpu.planes()).enumerate() {
+            let error = relative_l2(g, k);
+            assert!(error < 1e-5, "{name}, plane {c}: relative L2 {error:e}");
+            assert!(g.iter().all(|v| *v >= 0.0), "{name}: negative light");
+            assert!(
+                (gpu.sum(c) - 1.0).abs() < 1e-6,
+                "{name}: Σ = {}",
+                gpu.sum(c)
+            );
+        }
+    }
+}
+
+#[test]
+fn a_composition_on_the_gpu_gives_the_same_bytes_every_time() {
+    if !gpu_present("a_composition_on_the_gpu_gives_the_same_bytes_every_time") {
+        return;
+    }
+    let (w, h) = (241, 141);
+    let plane = pseudo_random(w * h, 11);
+    let kernel = pseudo_random(61 * 45, 12);
+    let cancel = Cancel::new();
+    let compose = || {
+        aureole::convolve::compose(
+            &kernel,
+            (61, 45),
+            &plane,
+            (w, h),
+            &mut aureole::Composing::on(Device::Gpu).unwrap(),
+            &mut Control::quiet(&cancel),
+        )
+        .unwrap()
+    };
+    let first = compose();
+    assert!(compose() == first, "two compositions on one device differ");
+}

@@ -52,13 +52,15 @@ class Camera:
         image_width: Optional[int] = None,
         progress: Optional[Progress] = None,
         sent_by: Literal["pixel", "point"] = "pixel",
+        device: Literal["auto", "cpu", "gpu"] = "auto",
     ) -> npt.NDArray[np.float32]:
         """The kernel (PSF) of the chain, float32 (H, W) or (H, W, 3),
         each channel summing to 1, its centre at (height // 2, width // 2).
         `image_width` sets the pixel pitch (sensor width / image width).
         `sent_by`: "pixel", the kernel an image is convolved with (each
         pixel's light leaves its whole square), or "point", the PSF of a
-        point of light as an optics program gives it."""
+        point of light as an optics program gives it. `device`: where the
+        effects convolve one another, as for `apply`."""
     def pupil(
         self, x: npt.NDArray[np.float64], y: npt.NDArray[np.float64]
     ) -> npt.NDArray[np.complex128]:

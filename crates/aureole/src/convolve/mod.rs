@@ -223,17 +223,60 @@ pub fn footprint((backend, precision): (Backend, Precision), load: &Load) -> Foo
     }
 }
 
+/// Where the kernels of an optical chain convolve one another: the device
+/// a user chose, found once for the chain. A GPU that cannot hold a
+/// composition (one of two kernel-sized planes, larger than an image's
+/// convolution) leaves it, and the rest, to the CPU, and says so: the
+/// kernel is built either way.
+#[derive(Debug, Clone)]
+pub struct Composing {
+    backend: Backend,
+    words: String,
+}
+
+impl Composing {
+    /// On `device`, chosen as the convolutions are ([`choose`]):
+    /// [`Device::Gpu`] without an adapter is an error.
+    pub fn on(device: Device) -> Result<Composing> {
+        let (backend, words) = choose(device)?;
+        Ok(Composing { backend, words })
+    }
+
+    /// On the processor.
+    pub fn cpu() -> Composing {
+        Composing {
+            backend: Backend::Cpu,
+            words: "the CPU".into(),
+        }
+    }
+
+    /// Where the compositions ran, in words ("the GPU …", "the CPU: why").
+    pub fn words(&self) -> &str {
+        &self.words
+    }
+}
+
 /// `plane` (the `extent`'s width × height) convolved whole with one
 /// kernel plane of `size`, centre at its middle, in f32: how kernels
-/// compose (an optical chain, a filter's orders), through the engine
-/// chosen here as applications are.
+/// compose (an optical chain, a filter's orders), on the CPU or, as
+/// `composing` says, the GPU.
 pub fn compose(
     kernel: &[f32],
     size: (usize, usize),
     plane: &[f32],
     (width, height): (usize, usize),
+    composing: &mut Composing,
     control: &mut Control,
 ) -> Result<Vec<f32>> {
+    if composing.backend == Backend::Gpu {
+        match compose_on_gpu(kernel, size, plane, (width, height), control) {
+            Err(Error::Gpu(why)) => {
+                composing.words = format!("the CPU: {} could not hold it ({why})", composing.words);
+                composing.backend = Backend::Cpu;
+            }
+            done => return done,
+        }
+    }
     let convolver = single::Convolver::new(
         &[kernel],
         size,
@@ -243,6 +286,39 @@ pub fn compose(
         &mut control.part(0.0, 0.5),
     )?;
     convolver.convolve(plane, 0, &mut control.part(0.5, 1.0))
+}
+
+/// [`compose`] through the GPU engine: all of `plane` spread, the kernel's
+/// centre transformed with the rest.
+fn compose_on_gpu(
+    kernel: &[f32],
+    size: (usize, usize),
+    plane: &[f32],
+    (width, height): (usize, usize),
+    control: &mut Control,
+) -> Result<Vec<f32>> {
+    let engine = engine(
+        (Backend::Gpu, Precision::Single),
+        &[kernel],
+        size,
+        (width, height),
+        Centre::Include,
+        control,
+    )?;
+    engine.prepare(&[kernel], &mut control.part(0.0, 0.5))?;
+    let whole = Spread {
+        plane,
+        fractions: None,
+        terms: vec![Term {
+            kernel_plane: 0,
+            weight: 1.0,
+        }],
+        lamps: &[],
+    };
+    let mut spread = engine.spread(&[whole], Vec::new(), &mut control.part(0.5, 1.0))?;
+    spread
+        .pop()
+        .ok_or_else(|| Error::Gpu("the composition did not come back".into()))
 }
 
 /// The bytes [`compose`] holds beside its plane and result: the kernel's

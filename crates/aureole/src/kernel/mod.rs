@@ -15,6 +15,7 @@ use crate::camera::Camera;
 use rayon::prelude::*;
 
 use crate::control::{Cancel, Control};
+use crate::convolve::Composing;
 use crate::error::{Error, Result};
 use crate::image::sum_f64;
 use crate::optics::{Context, Effect, Source};
@@ -267,13 +268,15 @@ impl Kernel {
 }
 
 /// Builds the kernel of the optical chain `effects`, in order, at `extent`;
-/// `seed` drives the random parts (corona rays). `control` hears the
-/// fraction built and may cancel.
+/// `seed` drives the random parts (corona rays), and the effects convolve
+/// one another where `composing` says. `control` hears the fraction built
+/// and may cancel.
 pub fn build(
     camera: &Camera,
     effects: &[Effect],
     seed: u64,
     extent: &Extent,
+    composing: &mut Composing,
     control: &mut Control,
 ) -> Result<Kernel> {
     if effects.is_empty() {
@@ -309,16 +312,22 @@ pub fn build(
                 light,
                 pitch_mm,
             } => SplitKernel::from_pattern(
-                diffraction::pattern(&optics, light, extent, pitch_mm, &mut rasterising)?,
+                diffraction::pattern(
+                    &optics,
+                    light,
+                    (extent, pitch_mm),
+                    composing,
+                    &mut rasterising,
+                )?,
                 extent,
             ),
         };
-        let mut composing = control.part(start + 0.8 * share, start + share);
+        let mut part = control.part(start + 0.8 * share, start + share);
         chain = Some(match chain {
             None => psf,
-            Some(before) => before.then(&psf, &mut composing)?,
+            Some(before) => before.then(&psf, composing, &mut part)?,
         });
-        composing.report(1.0);
+        part.report(1.0);
     }
     chain.map(SplitKernel::into_kernel).ok_or(Error::NoEffect)
 }
@@ -336,8 +345,8 @@ pub fn diffraction_kernel(
     let pattern = diffraction::pattern(
         optics,
         light,
-        extent,
-        pitch_mm,
+        (extent, pitch_mm),
+        &mut Composing::cpu(),
         &mut Control::quiet(&cancel),
     )?;
     Ok(SplitKernel::from_pattern(pattern, extent).into_kernel())

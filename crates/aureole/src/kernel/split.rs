@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use super::raster::{plane_sum, shape_plane};
 use super::{Extent, Kernel};
 use crate::control::Control;
-use crate::convolve;
+use crate::convolve::{self, Composing};
 use crate::error::Result;
 use crate::optics::shape::SpreadShape;
 
@@ -98,7 +98,12 @@ impl SplitKernel {
     /// (a δ + S) ⊛ (b δ + T) = ab δ + a T + b S + S ⊛ T, where S ⊛ T keeps the
     /// mass ΣS·ΣT within the extent, like any spread light. A plane of a
     /// one-plane PSF pairs with every plane of the other.
-    pub fn then(&self, next: &SplitKernel, control: &mut Control) -> Result<SplitKernel> {
+    pub fn then(
+        &self,
+        next: &SplitKernel,
+        composing: &mut Composing,
+        control: &mut Control,
+    ) -> Result<SplitKernel> {
         let count = self.planes.len().max(next.planes.len());
         let mut planes = Vec::with_capacity(count);
         for c in 0..count {
@@ -109,7 +114,7 @@ impl SplitKernel {
             let share = 1.0 / count as f64;
             let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
             let mut twice = if mass > 0.0 {
-                compose(&a.spread, &b.spread, &self.extent, &mut part)?
+                compose(&a.spread, &b.spread, &self.extent, composing, &mut part)?
             } else {
                 vec![0.0; a.spread.len()]
             };
@@ -166,7 +171,13 @@ impl SplitKernel {
 /// the kernel, cut to its reach: the transforms then pad the extent by
 /// that reach rather than by the whole extent (a corona's rays of a few
 /// hundred pixels over a full-frame bloom: a third of the samples).
-fn compose(s: &[f32], t: &[f32], extent: &Extent, control: &mut Control) -> Result<Vec<f32>> {
+fn compose(
+    s: &[f32],
+    t: &[f32],
+    extent: &Extent,
+    composing: &mut Composing,
+    control: &mut Control,
+) -> Result<Vec<f32>> {
     let (rs, rt) = (reach(s, extent), reach(t, extent));
     let area = |(x, y): (usize, usize)| (2 * x + 1) * (2 * y + 1);
     let (image, kernel, (rx, ry)) = if area(rt) <= area(rs) {
@@ -194,7 +205,7 @@ fn compose(s: &[f32], t: &[f32], extent: &Extent, control: &mut Control) -> Resu
         Some(cut)
     };
     let kernel = cut.as_deref().unwrap_or(kernel);
-    convolve::compose(kernel, (kw, kh), image, (w, h), control)
+    convolve::compose(kernel, (kw, kh), image, (w, h), composing, control)
 }
 
 /// How far from the centre a plane of the extent holds light, columns and
@@ -253,7 +264,8 @@ mod tests {
                     }
                 })
                 .collect();
-            let fast = compose(&s, &t, &Extent::new(w, h).unwrap(), &mut quiet).unwrap();
+            let extent = Extent::new(w, h).unwrap();
+            let fast = compose(&s, &t, &extent, &mut Composing::cpu(), &mut quiet).unwrap();
             let (cx, cy) = ((w / 2) as i64, (h / 2) as i64);
             for oy in -cy..h as i64 - cy {
                 for ox in -cx..w as i64 - cx {

@@ -13,7 +13,9 @@ use super::splat::{copies, splat};
 use super::threshold::{Survey, Threshold};
 use crate::config::Config;
 use crate::control::{Cancel, Control};
-use crate::convolve::{choose, engine, Backend, Centre, Device, Engine, Precision, Spread, Term};
+use crate::convolve::{
+    choose, engine, Backend, Centre, Composing, Device, Engine, Precision, Spread, Term,
+};
 use crate::error::{Error, Fit, Result};
 use crate::image::{Image, Layout, PixelLuminance};
 use crate::kernel::{Extent, Kernel};
@@ -107,7 +109,11 @@ impl Plan {
         control: &mut Control,
     ) -> Result<Plan> {
         let extent = Extent::for_image_within(width, height, max_extent)?;
-        let kernel = config.kernel_with(&extent, &mut control.part(0.0, 0.9))?;
+        let kernel = config.kernel_on(
+            &extent,
+            &mut Composing::on(device)?,
+            &mut control.part(0.0, 0.9),
+        )?;
         let mut plan =
             Plan::transform(kernel, (width, height), device, &mut control.part(0.9, 1.0))
                 .map_err(|failed| failed.1)?;

@@ -15,6 +15,7 @@ mod orders;
 
 use super::{Extent, Sending};
 use crate::control::{for_each_interleaved, Control};
+use crate::convolve::Composing;
 use crate::error::Result;
 use crate::optics::aperture::spectrum::Light;
 use crate::optics::aperture::Optics;
@@ -32,27 +33,34 @@ pub(crate) type Spectrum = Vec<(f64, Vec<f64>)>;
 
 /// The pattern of `optics` integrated over `light` at `pitch_mm` per pixel:
 /// one plane per colour (one for monochrome light), each normalised to
-/// Σ = 1.
+/// Σ = 1; a filter's orders are spread where `composing` says.
 pub(crate) fn pattern(
     optics: &Optics,
     light: Light,
-    extent: &Extent,
-    pitch_mm: f64,
+    (extent, pitch_mm): (&Extent, f64),
+    composing: &mut Composing,
     control: &mut Control,
 ) -> Result<Vec<Vec<f64>>> {
     let spectrum = light.wavelengths();
     let longest = spectrum.iter().map(|(l, _)| *l).fold(0.0, f64::max) * 1e-6;
     let far_from = (48.0 * pitch_mm).max(60.0 * longest * optics.focal_mm / optics.diameter_mm);
-    pattern_with(optics, &spectrum, extent, pitch_mm, far_from, control)
+    pattern_with(
+        optics,
+        &spectrum,
+        (extent, pitch_mm),
+        far_from,
+        composing,
+        control,
+    )
 }
 
 /// As [`pattern`], with the far field from `far_from` mm out.
 fn pattern_with(
     optics: &Optics,
     spectrum: &Spectrum,
-    extent: &Extent,
-    pitch_mm: f64,
+    (extent, pitch_mm): (&Extent, f64),
     far_from: f64,
+    composing: &mut Composing,
     control: &mut Control,
 ) -> Result<Vec<Vec<f64>>> {
     let planes = spectrum.first().map_or(1, |(_, w)| w.len());
@@ -205,9 +213,9 @@ fn pattern_with(
             optics,
             spectrum,
             result,
-            extent,
-            pitch_mm,
+            (extent, pitch_mm),
             &weights_total,
+            composing,
             &mut control.part(0.8, 1.0),
         )?;
     }
@@ -442,7 +450,15 @@ mod tests {
     ) -> Vec<Vec<f64>> {
         let cancel = Cancel::new();
         let mut control = Control::quiet(&cancel);
-        pattern_with(optics, spectrum, extent, pitch_mm, far_from, &mut control).unwrap()
+        pattern_with(
+            optics,
+            spectrum,
+            (extent, pitch_mm),
+            far_from,
+            &mut Composing::cpu(),
+            &mut control,
+        )
+        .unwrap()
     }
 
     /// The green plane of a stop's PSF on a 141-px square of pixels
@@ -504,8 +520,8 @@ mod tests {
             let planes = pattern(
                 &optics,
                 Light::Spectral,
-                &extent,
-                pitch,
+                (&extent, pitch),
+                &mut Composing::cpu(),
                 &mut Control::quiet(&cancel),
             )
             .unwrap();
@@ -970,9 +986,15 @@ mod tests {
             let extent = Extent::new(side, side).unwrap().sent_by(Sending::Point);
             let cancel = Cancel::new();
             let mut control = Control::quiet(&cancel);
-            let fast = pattern(&optics, light, &extent, pitch, &mut control)
-                .unwrap()
-                .swap_remove(0);
+            let fast = pattern(
+                &optics,
+                light,
+                (&extent, pitch),
+                &mut Composing::cpu(),
+                &mut control,
+            )
+            .unwrap()
+            .swap_remove(0);
             let spectrum = light.wavelengths();
             let exact =
                 rasterise_with(&optics, &spectrum, &extent, pitch, f64::INFINITY).swap_remove(0);

@@ -6,7 +6,7 @@
 use super::near::NearField;
 use super::Spectrum;
 use crate::control::{for_each_row, Control};
-use crate::convolve;
+use crate::convolve::{self, Composing};
 use crate::error::Result;
 use crate::kernel::{Extent, Kernel, Sending};
 use crate::optics::aperture::Optics;
@@ -24,9 +24,9 @@ pub(super) fn through_filter(
     optics: &Optics,
     spectrum: &Spectrum,
     planes: Vec<Vec<f64>>,
-    extent: &Extent,
-    pitch_mm: f64,
+    (extent, pitch_mm): (&Extent, f64),
     weights_total: &[f64],
+    composing: &mut Composing,
     control: &mut Control,
 ) -> Result<Vec<Vec<f64>>> {
     let zero: f64 = optics
@@ -53,7 +53,13 @@ pub(super) fn through_filter(
         };
         let comb = comb(&orders, extent);
         let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
-        let mut moved = spread_orders(&comb, &windows[c], extent, &mut part.part(0.0, 0.9))?;
+        let mut moved = spread_orders(
+            &comb,
+            &windows[c],
+            extent,
+            composing,
+            &mut part.part(0.0, 0.9),
+        )?;
         cores.correct(c, &orders, extent, &mut moved, &mut part.part(0.9, 1.0))?;
         filtered.push(
             plane
@@ -76,6 +82,7 @@ fn spread_orders(
     comb: &[f64],
     window: &Window,
     extent: &Extent,
+    composing: &mut Composing,
     control: &mut Control,
 ) -> Result<Vec<f64>> {
     let entries = comb.iter().filter(|v| **v != 0.0).count() as f64;
@@ -94,8 +101,14 @@ fn spread_orders(
         Ok(kernel) => {
             let comb: Vec<f32> = comb.iter().map(|&v| v as f32).collect();
             let size = (extent.width, extent.height);
-            let composed =
-                convolve::compose(&kernel.planes()[0], (side, side), &comb, size, control)?;
+            let composed = convolve::compose(
+                &kernel.planes()[0],
+                (side, side),
+                &comb,
+                size,
+                composing,
+                control,
+            )?;
             Ok(composed
                 .into_iter()
                 .map(|v| f64::from(v).max(0.0))
@@ -520,8 +533,15 @@ mod tests {
         let plane: Vec<f32> = window.values.iter().map(|&v| v as f32).collect();
         let kernel = Kernel::from_planes(7, 7, vec![plane]).unwrap();
         let comb32: Vec<f32> = comb.iter().map(|&v| v as f32).collect();
-        let fft =
-            convolve::compose(&kernel.planes()[0], (7, 7), &comb32, (47, 33), &mut quiet).unwrap();
+        let fft = convolve::compose(
+            &kernel.planes()[0],
+            (7, 7),
+            &comb32,
+            (47, 33),
+            &mut Composing::cpu(),
+            &mut quiet,
+        )
+        .unwrap();
         for (a, b) in direct.iter().zip(&fft) {
             assert!((a - f64::from(*b)).abs() < 1e-6, "{a} vs {b}");
         }
