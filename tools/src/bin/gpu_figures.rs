@@ -1,6 +1,8 @@
 //! The GPU engine's figures (issue 30) beside the CPU's, in one run on one
 //! machine: for the issue-5 workload and the demo night street
-//! (`camera-f8-7blade`, its lamps apart), at each size, the plan's build
+//! (`camera-f8-7blade`, its lamps apart), the latter also in half floats
+//! as a half EXR decodes (its planes go up to a GPU as halves), at each
+//! size, the plan's build
 //! (kernel and spectra), the steady-state frame from planes in memory to
 //! result planes (upload and download included; median, min and max of
 //! `RUNS` after one warm-up) and the GPU result against the CPU's
@@ -44,13 +46,15 @@ fn main() {
                 .and_then(|p| p.config())
                 .expect("preset"),
         );
+        let street = aureole_io::demo::night_street(w, h);
         let scenes = [
             (
                 "issue-5 workload",
                 workload::config(),
                 workload::image(w, h),
             ),
-            ("night street", lens, aureole_io::demo::night_street(w, h)),
+            ("night street", lens.clone(), street.clone()),
+            ("night street in halves", lens, in_halves(street)),
         ];
         for (name, config, image) in scenes {
             let kernel = Plan::for_image(&config, w, h, None)
@@ -117,4 +121,16 @@ fn main() {
             }
         }
     }
+}
+
+/// `image` as a half-float EXR holds it: in units of 16 cd/m², so that
+/// its 10⁵ cd/m² lamps stay below the halves' 65504, every value rounded
+/// to a half.
+fn in_halves(mut image: Image) -> Image {
+    for plane in &mut image.planes {
+        for v in plane.iter_mut() {
+            *v = half::f16::from_f32(*v / 16.0).to_f32();
+        }
+    }
+    image
 }

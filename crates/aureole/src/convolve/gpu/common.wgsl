@@ -45,4 +45,25 @@ struct Grid {
     lamps: u32,
     // Each plane's weight in the multiply.
     weights: vec2<f32>,
+    // 1: the frame's planes came up as half floats, two to a word.
+    halves_up: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
+}
+
+// Frame planes go up as f32, one to a word, or, where every value is a
+// half float exactly, as halves, two to a word (value i in word i/2, the
+// even one low): the same f32 either way. The word that holds value i:
+fn word_of(i: u32, halves_up: u32) -> u32 {
+    return select(i, i / 2u, halves_up == 1u);
+}
+
+// Value i from its word.
+fn value_in(word: u32, i: u32, halves_up: u32) -> f32 {
+    if halves_up == 1u {
+        let pair = unpack2x16float(word);
+        return select(pair.x, pair.y, (i & 1u) == 1u);
+    }
+    return bitcast<f32>(word);
 }

@@ -1,7 +1,11 @@
 @group(0) @binding(0) var<uniform> grid: Grid;
-@group(0) @binding(1) var<storage, read> planes: array<f32>;
+@group(0) @binding(1) var<storage, read> planes: array<u32>;
 @group(0) @binding(2) var<storage, read> fractions: array<f32>;
 @group(0) @binding(3) var<storage, read_write> packed: array<vec2<f32>>;
+
+fn value(i: u32, halves_up: u32) -> f32 {
+    return value_in(planes[word_of(i, halves_up)], i, halves_up);
+}
 
 // The bright parts of one or two frame planes, packed as real and
 // imaginary parts into the first `height` rows of the grid.
@@ -19,9 +23,9 @@ fn load(@builtin(global_invocation_id) id: vec3<u32>) {
         if grid.fractions == 1u {
             f = fractions[i];
         }
-        z.x = planes[i] * f;
+        z.x = value(i, grid.halves_up) * f;
         if grid.planes == 2u {
-            z.y = planes[grid.width * grid.height + i] * f;
+            z.y = value(grid.width * grid.height + i, grid.halves_up) * f;
         }
     }
     packed[y * grid.px + x] = z;
@@ -43,9 +47,9 @@ fn place(@builtin(global_invocation_id) id: vec3<u32>) {
     let centre = u == 0u && v == 0u && grid.leave_centre == 1u;
     if i < grid.width && j < grid.height && !centre {
         let at = j * grid.width + i;
-        z.x = planes[at];
+        z.x = value(at, 0u);
         if grid.planes == 2u {
-            z.y = planes[grid.width * grid.height + at];
+            z.y = value(grid.width * grid.height + at, 0u);
         }
     }
     packed[v * grid.px + u] = z;
