@@ -206,7 +206,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             .map(|c| format!("{:.6}", kernel.sum(c)))
             .collect();
         eprintln!(
-            "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, built in {:.2} s (composed on {}), {:.2} s in all",
+            "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, built in {:.2} s{}, {:.2} s in all",
             args.output.display(),
             kernel.width(),
             kernel.height(),
@@ -216,7 +216,10 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             kernel.centre().0,
             kernel.centre().1,
             built,
-            composing.words(),
+            composing
+                .words()
+                .map(|words| format!(" (composed on {words})"))
+                .unwrap_or_default(),
             start.elapsed().as_secs_f64()
         );
     }

@@ -140,10 +140,7 @@ fn planes_convolved_together_match_planes_convolved_alone() {
         .map(|(c, plane)| Spread {
             plane,
             fractions: (c == 1).then_some(fractions.as_slice()),
-            terms: vec![Term {
-                kernel_plane: 2 - c,
-                weight: 1.0,
-            }],
+            terms: Term::alone(2 - c),
             lamps: &[],
         })
         .collect();

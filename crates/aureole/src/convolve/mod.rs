@@ -49,6 +49,16 @@ pub struct Term {
 }
 
 impl Term {
+    /// Kernel plane `kernel_plane` alone, at weight 1: a colour plane
+    /// through its own kernel plane, or any plane through a one-plane
+    /// kernel.
+    pub fn alone(kernel_plane: usize) -> Vec<Term> {
+        vec![Term {
+            kernel_plane,
+            weight: 1.0,
+        }]
+    }
+
     /// A luminance plane through a coloured kernel: Y = Σ w_k K_k ⊛ Y, the
     /// Rec.709 weights of its R, G and B planes.
     pub fn luminance() -> Vec<Term> {
@@ -224,35 +234,42 @@ pub fn footprint((backend, precision): (Backend, Precision), load: &Load) -> Foo
 }
 
 /// Where the kernels of an optical chain convolve one another: the device
-/// a user chose, found once for the chain. A GPU that cannot hold a
-/// composition (one of two kernel-sized planes, larger than an image's
-/// convolution) leaves it, and the rest, to the CPU, and says so: the
-/// kernel is built either way.
+/// a user chose, found ([`choose`]) when the first composition comes, so
+/// that a chain with nothing to compose never opens a GPU. A GPU that
+/// cannot hold a composition (one of two kernel-sized planes, larger than
+/// an image's convolution) leaves it, and the rest, to the CPU, and says
+/// so: the kernel is built either way.
 #[derive(Debug, Clone)]
 pub struct Composing {
-    backend: Backend,
-    words: String,
+    device: Device,
+    /// Where, and in words, once a composition has asked.
+    chosen: Option<(Backend, String)>,
 }
 
 impl Composing {
-    /// On `device`, chosen as the convolutions are ([`choose`]):
-    /// [`Device::Gpu`] without an adapter is an error.
+    /// On `device`; [`Device::Gpu`] without an adapter is an error at once.
     pub fn on(device: Device) -> Result<Composing> {
-        let (backend, words) = choose(device)?;
-        Ok(Composing { backend, words })
+        if device == Device::Gpu {
+            choose(device)?;
+        }
+        Ok(Composing {
+            device,
+            chosen: None,
+        })
     }
 
     /// On the processor.
     pub fn cpu() -> Composing {
         Composing {
-            backend: Backend::Cpu,
-            words: "the CPU".into(),
+            device: Device::Cpu,
+            chosen: None,
         }
     }
 
-    /// Where the compositions ran, in words ("the GPU …", "the CPU: why").
-    pub fn words(&self) -> &str {
-        &self.words
+    /// Where the compositions ran, in words ("the GPU …", "the CPU: why");
+    /// `None` where nothing was composed.
+    pub fn words(&self) -> Option<&str> {
+        self.chosen.as_ref().map(|(_, words)| words.as_str())
     }
 }
 
@@ -268,11 +285,17 @@ pub fn compose(
     composing: &mut Composing,
     control: &mut Control,
 ) -> Result<Vec<f32>> {
-    if composing.backend == Backend::Gpu {
+    let chosen = match &mut composing.chosen {
+        Some(chosen) => chosen,
+        empty => empty.insert(choose(composing.device)?),
+    };
+    if chosen.0 == Backend::Gpu {
         match compose_on_gpu(kernel, size, plane, (width, height), control) {
             Err(Error::Gpu(why)) => {
-                composing.words = format!("the CPU: {} could not hold it ({why})", composing.words);
-                composing.backend = Backend::Cpu;
+                *chosen = (
+                    Backend::Cpu,
+                    format!("the CPU: {} could not hold it ({why})", chosen.1),
+                );
             }
             done => return done,
         }
@@ -309,10 +332,7 @@ fn compose_on_gpu(
     let whole = Spread {
         plane,
         fractions: None,
-        terms: vec![Term {
-            kernel_plane: 0,
-            weight: 1.0,
-        }],
+        terms: Term::alone(0),
         lamps: &[],
     };
     let mut spread = engine.spread(&[whole], Vec::new(), &mut control.part(0.5, 1.0))?;

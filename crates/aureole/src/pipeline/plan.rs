@@ -498,9 +498,6 @@ fn kernel_planes(kernel: &Kernel) -> Vec<&[f32]> {
 fn terms(layout: Layout, kernel_planes: usize, c: usize) -> Vec<Term> {
     match (layout, kernel_planes) {
         (Layout::Luminance, k) if k > 1 => Term::luminance(),
-        (_, k) => vec![Term {
-            kernel_plane: c.min(k - 1),
-            weight: 1.0,
-        }],
+        (_, k) => Term::alone(c.min(k - 1)),
     }
 }

@@ -47,6 +47,7 @@ struct Grid {
     weights: vec2<f32>,
     // 1: the frame's planes came up as half floats, two to a word.
     halves_up: u32,
+    // To 80 bytes, a whole number of the uniform layout's 16.
     pad_a: u32,
     pad_b: u32,
     pad_c: u32,

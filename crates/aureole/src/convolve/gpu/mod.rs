@@ -509,11 +509,7 @@ impl GpuConvolver {
         let n = self.width * self.height;
         let outputs: Vec<&Spread> = std::iter::once(a).chain(b).collect();
         let planes: Vec<&[f32]> = outputs.iter().map(|output| output.plane).collect();
-        let halves = if self.halves_up {
-            as_halves(&planes)
-        } else {
-            None
-        };
+        let halves = self.halves_up.then(|| as_halves(&planes)).flatten();
         match &halves {
             Some(halves) => queue.write_buffer(&work.frame, 0, bytemuck::cast_slice(halves)),
             None => {
@@ -1014,10 +1010,7 @@ mod tests {
             let outputs = [&plane, &plane].map(|plane| Spread {
                 plane,
                 fractions: None,
-                terms: vec![Term {
-                    kernel_plane: 0,
-                    weight: 1.0,
-                }],
+                terms: Term::alone(0),
                 lamps: &[],
             });
             engine.spread(&outputs, Vec::new(), &mut control).unwrap()
