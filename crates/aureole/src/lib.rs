@@ -76,6 +76,7 @@ pub mod convolve;
 pub mod error;
 pub mod image;
 pub mod kernel;
+mod math;
 pub mod memory;
 pub mod optics;
 pub mod pipeline;

@@ -10,7 +10,7 @@ use super::{Extent, Sending};
 use crate::control::{for_each, for_each_row, Control};
 use crate::error::Result;
 use crate::image::sum_f64;
-use crate::optics::shape::{SpreadShape, Supersampling};
+use crate::optics::shape::{Sample, SpreadShape, Supersampling};
 
 /// Pixels of a row rasterised together where f has no mirror symmetry.
 const PIECE: usize = 256;
@@ -117,10 +117,11 @@ fn pixel_mean(shape: &dyn SpreadShape, x: f64, y: f64, centre: bool) -> f64 {
         };
         return pixel_average(shape, x, y, grid);
     }
-    if shape.vanishes_over_pixel(x, y) {
-        return 0.0;
+    match shape.sample(x, y) {
+        Sample::Dark => 0.0,
+        Sample::One(f) => f,
+        Sample::Grid(grid) => pixel_average(shape, x, y, grid),
     }
-    pixel_average(shape, x, y, shape.grid(x, y))
 }
 
 /// A unit square's light under each of its corner pixels' tents: top
@@ -268,13 +269,29 @@ fn rasterise_bands(
                     .par_chunks_mut(PIECE)
                     .enumerate()
                     .for_each(|(p, piece)| {
-                        for (m, c) in piece.iter_mut().enumerate() {
-                            let x = x0 + (range.start + p * PIECE + m) as f64;
-                            let lit = spans
+                        let start = x0 + (range.start + p * PIECE) as f64;
+                        let lit = |m: usize| {
+                            let x = start + m as f64;
+                            spans
                                 .as_ref()
-                                .is_none_or(|s| s.iter().any(|&(a, b)| a <= x && x <= b));
-                            if lit {
-                                *c = corners(shape, x, y);
+                                .is_none_or(|s| s.iter().any(|&(a, b)| a <= x && x <= b))
+                        };
+                        let mut samples = [Sample::Dark; PIECE];
+                        // Runs of lit squares, sampled a run at a time.
+                        let mut m = 0;
+                        while m < piece.len() {
+                            if !lit(m) {
+                                m += 1;
+                                continue;
+                            }
+                            let run = m;
+                            while m < piece.len() && lit(m) {
+                                m += 1;
+                            }
+                            let x = start + run as f64;
+                            shape.sample_row(x, y, &mut samples[run..m]);
+                            for (i, c) in (run..m).zip(&mut piece[run..m]) {
+                                *c = corners(shape, start + i as f64, y, samples[i]);
                             }
                         }
                     });
@@ -308,18 +325,27 @@ fn rasterise_bands(
 /// The light of the unit square centred at (x, y) under each corner
 /// pixel's tent, bilinear, 1 at the corner and 0 at the far side: the
 /// midpoint rule on the shape's grid, at least 16 × 16 where the centre is
-/// a corner of the square (its midpoints never fall on r = 0).
-fn corners(shape: &dyn SpreadShape, x: f64, y: f64) -> Corners {
-    if shape.vanishes_over_pixel(x, y) {
-        return [0.0; 4];
-    }
-    let mut grid = shape.grid(x, y);
-    if x.abs() <= 0.5 && y.abs() <= 0.5 {
-        grid = Supersampling {
+/// a corner of the square (its midpoints never fall on r = 0). `sample` is
+/// the shape's [`SpreadShape::sample`] there.
+fn corners(shape: &dyn SpreadShape, x: f64, y: f64, sample: Sample) -> Corners {
+    let grid = if x.abs() <= 0.5 && y.abs() <= 0.5 {
+        if shape.vanishes_over_pixel(x, y) {
+            return [0.0; 4];
+        }
+        let grid = shape.grid(x, y);
+        Supersampling {
             x: grid.x.max(16),
             y: grid.y.max(16),
-        };
-    }
+        }
+    } else {
+        match sample {
+            Sample::Dark => return [0.0; 4],
+            // The one midpoint is the square's centre: a quarter under
+            // each corner's tent.
+            Sample::One(f) => return [0.25 * f; 4],
+            Sample::Grid(grid) => grid,
+        }
+    };
     let (mx, my) = (grid.x.max(1), grid.y.max(1));
     let (step_x, step_y) = (1.0 / f64::from(mx), 1.0 / f64::from(my));
     let mut sums = [0.0; 4];

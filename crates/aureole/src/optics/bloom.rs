@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
-use super::shape::{SpreadShape, Supersampling};
+use super::shape::{Sample, SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -85,9 +85,17 @@ impl Bloom {
             radius >= 1e-3,
             "at least 0.001 px once converted to pixels",
         )?;
+        // The grid is one point where the curvature bound 2β(2β + 1)/(R² +
+        // r²) at the pixel's nearest point is at most 0.024 px⁻²
+        // (Supersampling::for_curvature); a pixel beyond one more pixel
+        // from that radius needs no test.
+        let beta = self.beta;
+        let flat = (2.0 * beta * (2.0 * beta + 1.0) / 0.024 - radius * radius).max(0.0);
+        let one_point = flat.sqrt() + std::f64::consts::FRAC_1_SQRT_2 + 1.0;
         Ok(BloomShape {
             radius,
-            beta: self.beta,
+            beta,
+            one_point_squared: one_point * one_point,
         })
     }
 }
@@ -95,6 +103,8 @@ impl Bloom {
 struct BloomShape {
     radius: f64,
     beta: f64,
+    /// Beyond this squared distance a pixel's grid is one point.
+    one_point_squared: f64,
 }
 
 impl SpreadShape for BloomShape {
@@ -105,6 +115,20 @@ impl SpreadShape for BloomShape {
     fn density(&self, x: f64, y: f64) -> f64 {
         let q2 = (x * x + y * y) / (self.radius * self.radius);
         power(1.0 + q2, -self.beta)
+    }
+
+    /// Most of a full-frame bloom is sampled once per pixel: there the
+    /// grid is not asked for.
+    fn sample(&self, x: f64, y: f64) -> Sample {
+        if x * x + y * y > self.one_point_squared {
+            return Sample::One(self.density(x, y));
+        }
+        let grid = self.grid(x, y);
+        if grid.x <= 1 && grid.y <= 1 {
+            Sample::One(self.density(x, y))
+        } else {
+            Sample::Grid(grid)
+        }
     }
 
     fn grid(&self, x: f64, y: f64) -> Supersampling {
@@ -142,7 +166,37 @@ fn power(base: f64, exponent: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::power;
+    use super::*;
+
+    #[test]
+    fn one_sample_where_the_grid_is_one_point_and_f_is_the_density() {
+        for (beta, radius) in [(2.0, 10.0), (1.01, 0.3), (4.5, 120.0), (100.0, 2.0)] {
+            let shape = Bloom {
+                epsilon: 0.05,
+                beta,
+                radius: Length::px(radius),
+            }
+            .shape(None)
+            .unwrap();
+            let mut ones = 0;
+            for j in 0..400 {
+                for i in 0..400 {
+                    let (x, y) = (f64::from(i) * 4.1 - 3.0, f64::from(j) * 3.3);
+                    let grid = shape.grid(x, y);
+                    match shape.sample(x, y) {
+                        Sample::One(f) => {
+                            ones += 1;
+                            assert_eq!(grid, Supersampling::square(1), "({x}, {y})");
+                            assert_eq!(f, shape.density(x, y));
+                        }
+                        Sample::Grid(g) => assert_eq!(g, grid),
+                        Sample::Dark => panic!("a bloom lights every pixel"),
+                    }
+                }
+            }
+            assert!(ones > 50_000, "β {beta}: {ones}");
+        }
+    }
 
     #[test]
     fn whole_powers_by_squaring_agree_with_pow() {

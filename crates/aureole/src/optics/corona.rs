@@ -14,10 +14,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
-use super::shape::{SpreadShape, Supersampling};
+use super::shape::{Sample, SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
+use crate::math;
 use crate::units::Length;
 
 /// The most rays a corona may have.
@@ -248,13 +249,24 @@ impl Corona {
         self.validate()?;
         let length = self.length.to_px(pitch_mm, "corona length")?;
         let width = self.width.to_px(pitch_mm, "corona width")?;
+        let rotation = self.rotation_deg.to_radians().rem_euclid(TAU);
+        let period = TAU / f64::from(self.rays);
         let rays = self
             .ray_factors(seed, corona_index)
             .into_iter()
-            .map(|f| Ray {
-                fade_per_px: self.fadeout / (length * f.length),
-                width: width * f.width,
-                intensity: f.intensity,
+            .enumerate()
+            .map(|(m, f)| {
+                let fade_per_px = self.fadeout / (length * f.length);
+                let axis = rotation + m as f64 * period;
+                Ray {
+                    fade_per_px,
+                    width: width * f.width,
+                    intensity: f.intensity,
+                    // Along the ray, l(r) changes by a factor e^(σ/l_m)
+                    // per pixel.
+                    along: ((6.5 * fade_per_px).ceil() as u32).clamp(1, 64),
+                    horizontal: libm::fabs(libm::cos(axis)) >= libm::fabs(libm::sin(axis)),
+                }
             })
             .collect::<Vec<Ray>>();
         let slowest_fade = rays
@@ -271,9 +283,9 @@ impl Corona {
             widest: rays.iter().map(|r| r.width).fold(0.0, f64::max),
             narrowest: rays.iter().map(|r| r.width).fold(f64::INFINITY, f64::min),
             k: f64::from(self.rays),
-            rotation: self.rotation_deg.to_radians(),
+            rotation,
             spread: self.spread,
-            unit_spread_exponent: 1.0 / neg_ln_cos(1.0),
+            unit_spread_exponent: 1.0 / math::neg_ln_cos(1.0),
             dark_radius,
             lobes_never_dark: false,
             faded_radius: (libm::log(brightest) - libm::log(FADED)) / slowest_fade,
@@ -327,6 +339,10 @@ struct Ray {
     /// w_m in px.
     width: f64,
     intensity: f64,
+    /// Samples along the ray that a pixel needs for its fade.
+    along: u32,
+    /// Whether the ray's axis is nearer the x axis than the y axis.
+    horizontal: bool,
 }
 
 struct CoronaShape {
@@ -338,6 +354,7 @@ struct CoronaShape {
     widest: f64,
     narrowest: f64,
     k: f64,
+    /// φ₀ in [0, 2π).
     rotation: f64,
     spread: f64,
     /// n for s = 1, the same at every radius and for every ray.
@@ -380,10 +397,20 @@ impl CoronaShape {
     /// axis, in (−π/k, π/k].
     fn nearest_ray(&self, phi: f64) -> (&Ray, f64) {
         let period = TAU / self.k;
-        let u = (phi - self.rotation).rem_euclid(TAU);
-        let m = (u / period).round();
+        // φ ∈ [−π, π] and φ₀ ∈ [0, 2π): two turns at most bring u into
+        // [0, 2π], without fmod's division.
+        let mut u = phi - self.rotation;
+        if u < 0.0 {
+            u += TAU;
+        }
+        if u < 0.0 {
+            u += TAU;
+        }
+        let m = math::nearest(u / period);
         let offset = u - m * period;
-        let index = (m as usize) % self.rays.len();
+        // u ≤ 2π: m ≤ k, and ray k is ray 0.
+        let index = m as usize;
+        let index = if index >= self.rays.len() { 0 } else { index };
         (&self.rays[index], offset)
     }
 
@@ -401,7 +428,7 @@ impl CoronaShape {
         if omega >= FRAC_PI_2 || omega.is_nan() {
             return 0.0;
         }
-        let g = neg_ln_cos(omega);
+        let g = math::neg_ln_cos(omega);
         if g <= 0.0 {
             f64::INFINITY
         } else {
@@ -461,26 +488,6 @@ impl CoronaShape {
     }
 }
 
-/// −ln cos x for |x| ≤ π/2. Where x is small (the far, thin parts of the
-/// rays, millions of samples) its Taylor series, whose next term is below
-/// 10⁻¹⁸ of the sum there; up to 1, ln(1 − 2 sin²(x/2)), which keeps the
-/// digits a cosine near 1 loses; beyond, ln cos x itself, exact where cos x
-/// nears 0.
-fn neg_ln_cos(x: f64) -> f64 {
-    let x2 = x * x;
-    if x2 <= 0.0025 {
-        x2 * (1.0 / 2.0
-            + x2 * (1.0 / 12.0
-                + x2 * (1.0 / 45.0
-                    + x2 * (17.0 / 2520.0 + x2 * (31.0 / 14175.0 + x2 * (691.0 / 467_775.0))))))
-    } else if x2 <= 1.0 {
-        let half = libm::sin(0.5 * x);
-        -libm::log1p(-2.0 * half * half)
-    } else {
-        -libm::log(libm::fabs(libm::cos(x)))
-    }
-}
-
 impl SpreadShape for CoronaShape {
     fn lit_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
         if y.abs() > self.dark_radius {
@@ -515,15 +522,8 @@ impl SpreadShape for CoronaShape {
 
     fn density(&self, x: f64, y: f64) -> f64 {
         let r = (x * x + y * y).sqrt();
-        let (ray, offset) = self.nearest_ray(libm::atan2(y, x));
-        let n = self.exponent(r, ray.width);
-        // |cos(kδ/2)|^n·e^(−σr/l) as one exponential.
-        let lobe = if n == 0.0 {
-            0.0
-        } else {
-            n * neg_ln_cos(0.5 * self.k * offset)
-        };
-        ray.intensity * libm::exp(-ray.fade_per_px * r - lobe)
+        let (ray, offset) = self.nearest_ray(math::atan2(y, x));
+        self.value(ray, r, offset)
     }
 
     fn grid(&self, x: f64, y: f64) -> Supersampling {
@@ -532,6 +532,94 @@ impl SpreadShape for CoronaShape {
             // Every ray meets here, within a pixel or two.
             return Supersampling::square(8);
         }
+        let (ray, offset) = self.nearest_ray(math::atan2(y, x));
+        self.grid_at(r, ray, offset)
+    }
+
+    fn sample(&self, x: f64, y: f64) -> Sample {
+        let mut one = [Sample::Dark];
+        self.sample_row(x, y, &mut one);
+        one[0]
+    }
+
+    /// The test, the grid and f with one direction and one nearest ray per
+    /// point, in three passes over the row (distance and direction; ray,
+    /// test and grid; the lobe and the fade), each of independent points.
+    fn sample_row(&self, x0: f64, y: f64, out: &mut [Sample]) {
+        const CHUNK: usize = 64;
+        for (c, chunk) in out.chunks_mut(CHUNK).enumerate() {
+            let first = x0 + (c * CHUNK) as f64;
+            let mut r = [0.0; CHUNK];
+            let mut phi = [0.0; CHUNK];
+            for (i, (r, phi)) in r.iter_mut().zip(&mut phi).take(chunk.len()).enumerate() {
+                let x = first + i as f64;
+                *r = (x * x + y * y).sqrt();
+                *phi = math::atan2(y, x);
+            }
+            // Per point sampled once: I_m, σr/l_m, n and kδ/2.
+            let mut once = [(0.0, 0.0, 0.0, 0.0); CHUNK];
+            for ((sample, once), (&r, &phi)) in
+                chunk.iter_mut().zip(&mut once).zip(r.iter().zip(&phi))
+            {
+                *sample = Sample::Dark;
+                if r > self.dark_radius {
+                    continue;
+                }
+                if r < 2.0 {
+                    // Every ray meets here, within a pixel or two.
+                    *sample = Sample::Grid(Supersampling::square(8));
+                    continue;
+                }
+                let (ray, offset) = self.nearest_ray(phi);
+                if !self.lobes_never_dark {
+                    let n = self.least_exponent(r - FRAC_1_SQRT_2, r + FRAC_1_SQRT_2);
+                    if offset.abs() > self.dark_angle(n, r) {
+                        continue;
+                    }
+                }
+                let grid = self.grid_at(r, ray, offset);
+                if grid.x > 1 || grid.y > 1 {
+                    *sample = Sample::Grid(grid);
+                    continue;
+                }
+                *once = (
+                    ray.intensity,
+                    ray.fade_per_px * r,
+                    self.exponent(r, ray.width),
+                    0.5 * self.k * offset,
+                );
+                *sample = Sample::One(0.0);
+            }
+            for (sample, &(intensity, fade, n, half_angle)) in chunk.iter_mut().zip(&once) {
+                if let Sample::One(f) = sample {
+                    *f = intensity * math::exp(-fade - Self::lobe(n, half_angle));
+                }
+            }
+        }
+    }
+}
+
+impl CoronaShape {
+    /// f at distance r from the centre and `offset` from the axis of its
+    /// nearest ray `ray`.
+    fn value(&self, ray: &Ray, r: f64, offset: f64) -> f64 {
+        let lobe = Self::lobe(self.exponent(r, ray.width), 0.5 * self.k * offset);
+        ray.intensity * math::exp(-(ray.fade_per_px * r) - lobe)
+    }
+
+    /// −ln |cos(kδ/2)|^n, so that |cos(kδ/2)|^n·e^(−σr/l) is one
+    /// exponential; 0 in the isotropic core (n = 0).
+    fn lobe(n: f64, half_angle: f64) -> f64 {
+        if n == 0.0 {
+            0.0
+        } else {
+            n * math::neg_ln_cos(half_angle)
+        }
+    }
+
+    /// The grid of the pixel at distance r ≥ 2 from the centre and `offset`
+    /// from the axis of its nearest ray `ray`.
+    fn grid_at(&self, r: f64, ray: &Ray, offset: f64) -> Supersampling {
         // The same test as exp(−σr/l)·brightest < FADED, its exp taken
         // only within a hair of the radius where it turns.
         let faded = if (r - self.faded_radius).abs() > 1e-6 * self.faded_radius {
@@ -542,18 +630,14 @@ impl SpreadShape for CoronaShape {
         if faded {
             return Supersampling::square(1);
         }
-        let phi = libm::atan2(y, x);
-        let (ray, offset) = self.nearest_ray(phi);
-        // Along the ray, l(r) changes by a factor e^(σ/l_m) per pixel.
-        let along = ((6.5 * ray.fade_per_px).ceil() as u32).clamp(1, 64);
+        let along = ray.along;
         // Across it, |cos(kδ/2)|^n ≈ exp(−n k² δ²/8): a Gaussian of standard
         // deviation t = 2r / (k √n) pixels across the ray. A spacing of t/6.5
         // keeps the midpoint rule within 10⁻³ of the pixel's mean (and sums
         // the profile far better).
         let n = self.exponent(r, ray.width).max(1.0);
         let t = 2.0 * r / (self.k * n.sqrt());
-        let distance = r * libm::fabs(libm::sin(offset));
-        let across = if distance > 0.75 + 6.0 * t {
+        let across = if self.farther_than(r, offset, 0.75 + 6.0 * t) {
             1
         } else if t.is_finite() && t > 0.0 {
             ((6.5 / t).ceil() as u32).clamp(1, 64)
@@ -569,11 +653,25 @@ impl SpreadShape for CoronaShape {
         // still crosses the whole profile.
         let fine = ((f64::from(across) * std::f64::consts::SQRT_2).ceil() as u32).min(96);
         let coarse = along.max(2);
-        let axis = phi - offset;
-        if libm::fabs(libm::cos(axis)) >= libm::fabs(libm::sin(axis)) {
+        if ray.horizontal {
             Supersampling { x: coarse, y: fine }
         } else {
             Supersampling { x: fine, y: coarse }
+        }
+    }
+
+    /// Whether a point at distance r and `offset` from a ray's axis lies
+    /// farther than `limit` from it, r·|sin δ| > limit: decided by the
+    /// bounds |δ|(1 − δ²/6) ≤ |sin δ| ≤ |δ| where they settle it, which
+    /// is almost everywhere, by the sine where they do not.
+    fn farther_than(&self, r: f64, offset: f64, limit: f64) -> bool {
+        let d = offset.abs();
+        if r * d <= limit {
+            false
+        } else if r * (d * (1.0 - d * d / 6.0)) > limit {
+            true
+        } else {
+            r * libm::fabs(libm::sin(offset)) > limit
         }
     }
 }
@@ -594,25 +692,6 @@ mod tests {
             }
         }
         assert!(worst < 2e-5, "{worst}");
-    }
-
-    #[test]
-    fn neg_ln_cos_is_minus_the_log_of_the_cosine() {
-        for x in [1e-9, 1e-4, 0.01, 0.0499, 0.05, 0.0501, 0.3, 1.0, 1.5] {
-            // ln(1 − 2 sin²(x/2)) within an ulp or two where ln(cos x)
-            // loses the digits of a cosine near 1.
-            let exact = if x <= 1.0 {
-                -libm::log1p(-2.0 * libm::sin(0.5 * x).powi(2))
-            } else {
-                -libm::log(libm::cos(x))
-            };
-            for v in [x, -x] {
-                let g = neg_ln_cos(v);
-                assert!((g - exact).abs() <= 4e-15 * exact, "{v}: {g} vs {exact}");
-            }
-        }
-        assert_eq!(neg_ln_cos(FRAC_PI_2), -libm::log(libm::cos(FRAC_PI_2)));
-        assert_eq!(neg_ln_cos(0.0), 0.0);
     }
 
     /// f is 0, or below [`DARK`] of the brightest ray's start, at 5×5
@@ -715,6 +794,62 @@ mod tests {
             // Thin rays (s ≤ 0) leave most of the plane dark.
             if spread <= 0.0 {
                 assert!(vanished > 10_000, "s = {spread}: {vanished}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_rows_samples_are_what_the_test_the_grid_and_the_density_give() {
+        for (spread, width_jitter, rays) in [
+            (-0.5, 0.3, 14),
+            (0.0, 0.0, 6),
+            (0.5, 0.3, 7),
+            (1.0, 0.0, 14),
+            (1.0, 0.2, 3),
+            (1.5, 0.3, 8),
+        ] {
+            let c = Corona {
+                spread,
+                rays,
+                width_jitter,
+                intensity_jitter: 0.3,
+                rotation_deg: 200.0,
+                length: Length::px(60.0),
+                ..corona()
+            };
+            let shape = c.shape(None, 9, 0).unwrap();
+            let (mut ones, mut grids, mut dark) = (0, 0, 0);
+            for j in -130..130 {
+                let y = f64::from(j) + 0.5;
+                let x0 = -200.5;
+                let mut row = vec![Sample::Dark; 401];
+                shape.sample_row(x0, y, &mut row);
+                for (i, sample) in row.into_iter().enumerate() {
+                    let x = x0 + i as f64;
+                    assert_eq!(sample, shape.sample(x, y));
+                    match sample {
+                        Sample::Dark => {
+                            dark += 1;
+                            assert_dark(&shape, x, y, spread);
+                        }
+                        Sample::One(f) => {
+                            ones += 1;
+                            assert_eq!(shape.grid(x, y), Supersampling::square(1));
+                            assert_eq!(f, shape.density(x, y), "s = {spread} ({x}, {y})");
+                        }
+                        Sample::Grid(g) => {
+                            grids += 1;
+                            assert_eq!(g, shape.grid(x, y));
+                        }
+                    }
+                }
+            }
+            assert!(
+                ones > 1000 && grids > 10,
+                "s = {spread}: {ones} {grids} {dark}"
+            );
+            if spread <= 0.0 {
+                assert!(dark > 10_000, "s = {spread}: {dark}");
             }
         }
     }

@@ -31,6 +31,33 @@ pub(crate) trait SpreadShape: Sync {
         false
     }
 
+    /// What the rasteriser needs of the pixel (or unit square) centred at
+    /// (x, y), in one call: whether f vanishes over it, else its grid, and
+    /// where that grid is a single point f there. A shape whose test, grid
+    /// and density share work (a direction, the nearest ray) computes it
+    /// once here; the answer must be the one the three calls would give.
+    fn sample(&self, x: f64, y: f64) -> Sample {
+        if self.vanishes_over_pixel(x, y) {
+            return Sample::Dark;
+        }
+        let grid = self.grid(x, y);
+        if grid.x <= 1 && grid.y <= 1 {
+            Sample::One(self.density(x, y))
+        } else {
+            Sample::Grid(grid)
+        }
+    }
+
+    /// [`SpreadShape::sample`] at the points (x₀ + i, y) for each i of
+    /// `out`: a shape whose answer takes long chains of dependent
+    /// operations computes them stage by stage over the row, so that the
+    /// processor overlaps the points' chains.
+    fn sample_row(&self, x0: f64, y: f64, out: &mut [Sample]) {
+        for (i, sample) in out.iter_mut().enumerate() {
+            *sample = self.sample(x0 + i as f64, y);
+        }
+    }
+
     /// On the row of pixels centred at height y: ranges of x (pixel
     /// centres, inclusive) outside which f is exactly 0 over every pixel,
     /// or `None` where any pixel may be lit. Like
@@ -38,6 +65,17 @@ pub(crate) trait SpreadShape: Sync {
     fn lit_spans(&self, _y: f64) -> Option<Vec<(f64, f64)>> {
         None
     }
+}
+
+/// [`SpreadShape::sample`]'s answer for one pixel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Sample {
+    /// f is exactly 0 over the pixel.
+    Dark,
+    /// One point is enough: f at the pixel's centre.
+    One(f64),
+    /// f is averaged over this grid.
+    Grid(Supersampling),
 }
 
 /// A supersampling grid: `x` columns by `y` rows of sample points in a

@@ -1,0 +1,375 @@
+//! Elementary functions for the kernel rasterisers' inner loops, where a
+//! full-frame 4K kernel evaluates them tens of millions of times: each a
+//! few multiplications and additions with no branch on the hot path, within
+//! a few ulp of the correctly rounded value (the tests bound each against
+//! `libm`), and deterministic as `libm` is: IEEE `+ − × ÷` in f64 only, no
+//! fused multiply-add and no platform library, so every machine computes
+//! the same bits.
+
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Adding and subtracting this rounds an f64 below 2⁵¹ in magnitude to the
+/// nearest whole number (ties to even) in the default rounding mode,
+/// without a call to `round`.
+const ROUNDER: f64 = 6_755_399_441_055_744.0;
+
+/// ln 2 split so that k·[`LN2_HI`] is exact for |k| < 2²⁰ (its low 32 bits
+/// are zero; fdlibm's split).
+const LN2_HI: f64 = 0.6931471803691238;
+const LN2_LO: f64 = 1.9082149292705877e-10;
+
+/// π/2 = [`HALF_PI_HI`] + [`HALF_PI_LO`] to about 2⁻¹⁰⁶.
+const HALF_PI_HI: f64 = FRAC_PI_2;
+const HALF_PI_LO: f64 = 6.123_233_995_736_766e-17;
+
+/// The nearest whole number to `v` (|v| < 2⁵¹), ties to even.
+#[inline]
+fn round_even(v: f64) -> f64 {
+    (v + ROUNDER) - ROUNDER
+}
+
+/// 2^k for −1022 ≤ k ≤ 1023.
+#[inline]
+fn two_to(k: i64) -> f64 {
+    f64::from_bits(((k + 1023) as u64) << 52)
+}
+
+/// eˣ within 2 ulp; 0 below −745.2 (where it underflows), ∞ above 709.8.
+#[inline]
+pub fn exp(x: f64) -> f64 {
+    if !(x > -745.2 && x < 709.78) {
+        return if x.is_nan() {
+            x
+        } else if x > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        };
+    }
+    let k = round_even(x * std::f64::consts::LOG2_E);
+    // |r| ≤ ln2/2: the Taylor series to r¹³/13! leaves 4·10⁻¹⁸. Its terms
+    // from r² on are summed by Estrin's scheme, products of independent
+    // pairs rather than one chain of thirteen, then added to 1 + r.
+    let r = (x - k * LN2_HI) - k * LN2_LO;
+    let r2 = r * r;
+    let r4 = r2 * r2;
+    let r8 = r4 * r4;
+    let pair = |a: f64, b: f64| a + b * r;
+    let tail = pair(1.0 / 2.0, 1.0 / 6.0)
+        + r2 * pair(1.0 / 24.0, 1.0 / 120.0)
+        + r4 * (pair(1.0 / 720.0, 1.0 / 5040.0) + r2 * pair(1.0 / 40320.0, 1.0 / 362_880.0))
+        + r8 * (pair(1.0 / 3_628_800.0, 1.0 / 39_916_800.0)
+            + r2 * pair(1.0 / 479_001_600.0, 1.0 / 6_227_020_800.0));
+    let p = 1.0 + (r + r2 * tail);
+    let k = k as i64;
+    if k < -1021 {
+        // Subnormal results: scaled in two steps, rounded once at the end.
+        p * two_to(k + 1000) * two_to(-1000)
+    } else if k > 1023 {
+        p * two_to(k - 1) * 2.0
+    } else {
+        p * two_to(k)
+    }
+}
+
+/// ln x within 2 ulp for positive finite x; −∞ at 0, NaN below.
+#[inline]
+pub fn ln(x: f64) -> f64 {
+    if !(f64::MIN_POSITIVE..f64::INFINITY).contains(&x) {
+        return if x > 0.0 {
+            // Subnormal, or ∞.
+            if x == f64::INFINITY {
+                x
+            } else {
+                ln(x * two_to(54)) - 54.0 * std::f64::consts::LN_2
+            }
+        } else if x == 0.0 {
+            f64::NEG_INFINITY
+        } else {
+            f64::NAN
+        };
+    }
+    let bits = x.to_bits();
+    let mut e = ((bits >> 52) & 0x7ff) as i64 - 1023;
+    let mut m = f64::from_bits((bits & 0x000f_ffff_ffff_ffff) | (1023 << 52));
+    if m > std::f64::consts::SQRT_2 {
+        m *= 0.5;
+        e += 1;
+    }
+    let e = e as f64;
+    // ln m = 2 atanh s with s = f/(2 + f), |s| ≤ 0.172, written as
+    // f − s(f − R) (f exact) with R ≈ Σ 2s²ʲ/(2j + 1): fdlibm's minimax
+    // coefficients (error below 2⁻⁵⁸·⁴⁵), its even and odd terms summed
+    // apart.
+    const LG: [f64; 7] = [
+        0.6666666666666735,
+        0.3999999999940942,
+        0.2857142874366239,
+        0.22222198432149784,
+        0.1818357216161805,
+        0.15313837699209373,
+        0.14798198605116586,
+    ];
+    let f = m - 1.0;
+    let s = f / (2.0 + f);
+    let z = s * s;
+    let w = z * z;
+    let odd = z * (LG[0] + w * (LG[2] + w * (LG[4] + w * LG[6])));
+    let even = w * (LG[1] + w * (LG[3] + w * LG[5]));
+    let big_r = odd + even;
+    e * LN2_HI + (f - (s * (f - big_r) - e * LN2_LO))
+}
+
+/// ln(1 + v) for v > −1, within 3 ulp: the digits of a v far below 1 are
+/// kept by correcting for the rounding of 1 + v.
+#[inline]
+pub fn ln_1p(v: f64) -> f64 {
+    let u = 1.0 + v;
+    if u == 1.0 {
+        return v;
+    }
+    ln(u) + (v - (u - 1.0)) / u
+}
+
+/// sin x for |x| ≤ π/4, within 1 ulp (Taylor to x¹⁹/19!, by Estrin's
+/// scheme in x²).
+#[inline]
+pub fn sin_quarter(x: f64) -> f64 {
+    let z = x * x;
+    let z2 = z * z;
+    let z4 = z2 * z2;
+    let pair = |a: f64, b: f64| a + b * z;
+    let tail = pair(-1.0 / 6.0, 1.0 / 120.0)
+        + z2 * pair(-1.0 / 5040.0, 1.0 / 362_880.0)
+        + z4 * (pair(-1.0 / 39_916_800.0, 1.0 / 6_227_020_800.0)
+            + z2 * pair(-1.0 / 1_307_674_368_000.0, 1.0 / 355_687_428_096_000.0))
+        + z4 * z4 * (-1.0 / 121_645_100_408_832_000.0);
+    x + x * z * tail
+}
+
+/// −ln cos x for |x| ≤ π/2, to within 6 ulp of its own value: where x is
+/// small (the far, thin parts of a corona's rays, millions of samples) its
+/// Taylor series, whose next term is below 10⁻¹⁸ of the sum there;
+/// ln(1 − 2 sin²(x/2)) up to 1 (the digits a cosine near 1 loses);
+/// −ln sin(π/2 − |x|) nearer π/2 (the difference taken in two parts, so
+/// that a small cosine keeps its digits).
+#[inline]
+pub fn neg_ln_cos(x: f64) -> f64 {
+    let a = x.abs();
+    let x2 = a * a;
+    if x2 <= 0.0025 {
+        x2 * (1.0 / 2.0
+            + x2 * (1.0 / 12.0
+                + x2 * (1.0 / 45.0
+                    + x2 * (17.0 / 2520.0 + x2 * (31.0 / 14175.0 + x2 * (691.0 / 467_775.0))))))
+    } else if a <= 1.0 {
+        let h = sin_quarter(0.5 * a);
+        -ln_1p(-2.0 * h * h)
+    } else {
+        // HALF_PI_HI − a is exact by Sterbenz's lemma (a ∈ [1, π/2]); an a
+        // an ulp beyond π/2 is a cosine of 0.
+        let d = ((HALF_PI_HI - a) + HALF_PI_LO).max(0.0);
+        -ln(sin_quarter(d))
+    }
+}
+
+/// atan(yᵢ/xᵢ)'s eight anchors, atan((2i + 1)/16), correctly rounded.
+const ATAN_ANCHORS: [f64; 8] = [
+    0.062_418_809_995_957_35,
+    0.185_347_949_995_694_76,
+    0.302_884_868_374_971_4,
+    0.412_410_441_597_387_3,
+    0.512_389_460_310_737_7,
+    0.602_287_346_134_964_2,
+    0.682_316_554_874_748_1,
+    0.753_151_280_962_194_4,
+];
+
+/// atan2(y, x) within 2 ulp of π (in absolute terms, 5·10⁻¹⁶ rad), with
+/// `libm`'s results at zeros, infinities and NaN.
+#[inline]
+pub fn atan2(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let (small, large) = if ay > ax { (ax, ay) } else { (ay, ax) };
+    if !(small > 0.0 && large < f64::INFINITY) || large > 1e300 || small < 1e-300 {
+        return libm::atan2(y, x);
+    }
+    let z = small / large;
+    // z ∈ (0, 1]: atan z = atan c + atan((z − c)/(1 + zc)) about the
+    // nearest anchor c = (2i + 1)/16, |t| ≤ 1/16; atan t by its series to
+    // t¹⁷ (Estrin's scheme in t²) leaves 10⁻²⁴.
+    let i = ((z * 8.0) as usize).min(7);
+    let c = (2 * i + 1) as f64 / 16.0;
+    let t = (z - c) / (1.0 + z * c);
+    let u = t * t;
+    let u2 = u * u;
+    let u4 = u2 * u2;
+    let pair = |a: f64, b: f64| a + b * u;
+    let tail = pair(-1.0 / 3.0, 1.0 / 5.0)
+        + u2 * pair(-1.0 / 7.0, 1.0 / 9.0)
+        + u4 * (pair(-1.0 / 11.0, 1.0 / 13.0) + u2 * pair(-1.0 / 15.0, 1.0 / 17.0));
+    let series = t + t * u * tail;
+    let mut a = ATAN_ANCHORS[i] + series;
+    if ay > ax {
+        a = (HALF_PI_HI - a) + HALF_PI_LO;
+    }
+    if x < 0.0 {
+        a = (PI - a) + 2.0 * HALF_PI_LO;
+    }
+    if y < 0.0 {
+        -a
+    } else {
+        a
+    }
+}
+
+/// The nearest whole number to v (|v| < 2⁵¹, ties to even), as an f64.
+#[inline]
+pub fn nearest(v: f64) -> f64 {
+    round_even(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// |a − b| in units of b's last place.
+    fn ulps(a: f64, b: f64) -> f64 {
+        if a == b {
+            return 0.0;
+        }
+        let ulp = f64::from_bits(b.abs().to_bits() + 1) - b.abs();
+        (a - b).abs() / ulp.max(f64::from_bits(1))
+    }
+
+    #[test]
+    fn atan_anchors_are_the_arctangents() {
+        for (i, &a) in ATAN_ANCHORS.iter().enumerate() {
+            let c = (2 * i + 1) as f64 / 16.0;
+            assert!(ulps(a, libm::atan(c)) <= 1.0, "{i}");
+        }
+    }
+
+    #[test]
+    fn exp_is_within_two_ulp_across_its_range() {
+        let mut worst = 0f64;
+        for i in 0..200_000 {
+            let x = -745.0 + 1454.7 * i as f64 / 200_000.0;
+            let e = libm::exp(x);
+            if e >= f64::MIN_POSITIVE {
+                worst = worst.max(ulps(exp(x), e));
+            } else {
+                // Subnormal: as many digits as the format keeps.
+                assert!((exp(x) - e).abs() <= 2.0 * f64::from_bits(1), "{x}");
+            }
+        }
+        assert!(worst <= 2.0, "{worst}");
+        assert_eq!(exp(0.0), 1.0);
+        assert_eq!(exp(-800.0), 0.0);
+        assert_eq!(exp(800.0), f64::INFINITY);
+        assert_eq!(exp(f64::NEG_INFINITY), 0.0);
+        assert!(exp(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn ln_is_within_two_ulp_across_its_range() {
+        let mut worst = 0f64;
+        for i in 0..200_000 {
+            let x = libm::exp(-740.0 + 1449.0 * i as f64 / 200_000.0);
+            worst = worst.max(ulps(ln(x), libm::log(x)));
+        }
+        for i in 1..100_000 {
+            let x = 0.5 + i as f64 / 50_000.0;
+            worst = worst.max(ulps(ln(x), libm::log(x)));
+        }
+        assert!(worst <= 2.0, "{worst}");
+        assert_eq!(ln(1.0), 0.0);
+        assert_eq!(ln(0.0), f64::NEG_INFINITY);
+        assert!(ln(-1.0).is_nan());
+        assert!(ulps(ln(1e-310), libm::log(1e-310)) <= 2.0);
+    }
+
+    #[test]
+    fn ln_1p_keeps_the_digits_of_small_arguments() {
+        let mut worst = 0f64;
+        for i in 1..100_000 {
+            let v = -libm::exp(-40.0 + 40.0 * i as f64 / 100_000.0) * 0.999_999;
+            worst = worst.max(ulps(ln_1p(v), libm::log1p(v)));
+            worst = worst.max(ulps(ln_1p(-v), libm::log1p(-v)));
+        }
+        assert!(worst <= 3.0, "{worst}");
+    }
+
+    #[test]
+    fn neg_ln_cos_is_minus_the_log_of_the_cosine() {
+        let mut worst = 0f64;
+        let small = (1..2000).map(|i| 1e-9 * 1.01f64.powi(i));
+        let spread = (1..200_000).map(|i| FRAC_PI_2 * i as f64 / 200_000.0);
+        for x in small.filter(|&x| x < 1.0).chain(spread) {
+            // Near π/2 the cosine of the rounded x is what both take.
+            let exact = if x <= 1.0 {
+                // Within an ulp or two where ln(cos x) loses the digits of
+                // a cosine near 1.
+                -libm::log1p(-2.0 * libm::sin(0.5 * x).powi(2))
+            } else {
+                -libm::log(libm::sin((HALF_PI_HI - x) + HALF_PI_LO))
+            };
+            worst = worst.max(ulps(neg_ln_cos(x), exact));
+            assert_eq!(neg_ln_cos(x), neg_ln_cos(-x));
+        }
+        assert!(worst <= 6.0, "{worst}");
+        assert_eq!(neg_ln_cos(0.0), 0.0);
+        // cos of the f64 nearest π/2 is 6.1·10⁻¹⁷, not 0.
+        let edge = -libm::log(libm::cos(FRAC_PI_2));
+        assert!(ulps(neg_ln_cos(FRAC_PI_2), edge) <= 2.0);
+    }
+
+    proptest! {
+        #[test]
+        fn atan2_is_within_two_ulp_of_pi(y in -1e6f64..1e6, x in -1e6f64..1e6, scale in -300i32..300) {
+            let s = 10f64.powi(scale / 2);
+            let (y, x) = (y * s, x * s);
+            let d = (atan2(y, x) - libm::atan2(y, x)).abs();
+            prop_assert!(d <= 5e-16, "atan2({y}, {x}): {d}");
+        }
+
+        #[test]
+        fn exp_and_ln_agree_with_libm_anywhere(x in -700f64..700.0) {
+            prop_assert!(ulps(exp(x), libm::exp(x)) <= 2.0, "exp({x})");
+            let y = libm::exp(x);
+            prop_assert!(ulps(ln(y), libm::log(y)) <= 2.0, "ln({y})");
+        }
+    }
+
+    #[test]
+    fn atan2_has_libms_results_on_the_axes_and_at_infinity() {
+        for (y, x) in [
+            (0.0, 1.0),
+            (0.0, -1.0),
+            (-0.0, -1.0),
+            (1.0, 0.0),
+            (-1.0, 0.0),
+            (0.0, 0.0),
+            (1.0, f64::INFINITY),
+            (f64::INFINITY, 1.0),
+            (1.0, -1.0),
+            (-1.0, -1.0),
+        ] {
+            let (ours, theirs) = (atan2(y, x), libm::atan2(y, x));
+            assert!(
+                (ours - theirs).abs() <= 5e-16,
+                "({y}, {x}): {ours} vs {theirs}"
+            );
+        }
+        assert!(atan2(f64::NAN, 1.0).is_nan());
+    }
+
+    #[test]
+    fn nearest_rounds_ties_to_even() {
+        assert_eq!(nearest(2.5), 2.0);
+        assert_eq!(nearest(3.5), 4.0);
+        assert_eq!(nearest(-1.4), -1.0);
+        assert_eq!(nearest(1e15 + 0.75), 1e15 + 1.0);
+    }
+}
