@@ -709,22 +709,25 @@ impl Aperture {
                     -(e / d) * z.sin() / z
                 }
             };
-            let mut next = Vec::new();
+            // Each order's share and shift once, not once per order it
+            // multiplies: a star filter's families make millions of pairs.
+            let steps: Vec<(f64, [f64; 2], bool)> = (-count..=count)
+                .map(|m| {
+                    let shift = m as f64 / d;
+                    (coefficient(m).powi(2), [shift * c, shift * s], m != 0)
+                })
+                .collect();
+            // An order already moved by two families stays where it is
+            // (m = 0 only), without a pass over the others.
+            let unmoved = &steps[count as usize..=count as usize];
+            let mut next = Vec::with_capacity(orders.len() * 3);
             for &(nu, weight, used) in &orders {
-                for m in -count..=count {
-                    if m != 0 && used >= 2 {
-                        continue;
-                    }
-                    let w = weight * coefficient(m).powi(2);
+                for &(share, [dx, dy], moved) in if used >= 2 { unmoved } else { &steps } {
+                    let w = weight * share;
                     if w < 1e-12 {
                         continue;
                     }
-                    let shift = m as f64 / d;
-                    next.push((
-                        [nu[0] + shift * c, nu[1] + shift * s],
-                        w,
-                        used + u8::from(m != 0),
-                    ));
+                    next.push(([nu[0] + dx, nu[1] + dy], w, used + u8::from(moved)));
                 }
             }
             orders = next;
