@@ -341,6 +341,15 @@ pub(crate) fn sum_f64(values: &[f32]) -> f64 {
     lanes.iter().sum::<f64>() + rest
 }
 
+/// n zeros, written: calloc's untouched pages map the kernel's shared zero
+/// page when first read, and a write after that read copies the page and
+/// flushes every core's TLB (an interrupt to each, costly in a virtual
+/// machine). A plane that is read whole (summed) before it is written
+/// whole (scaled) is written first, on every core.
+pub(crate) fn zeros<T: Copy + Default + Send + Sync>(n: usize) -> Vec<T> {
+    (0..n).into_par_iter().map(|_| T::default()).collect()
+}
+
 /// For each of `to` cells spanning `from` old ones, the old cells it
 /// covers and the fraction of the new cell each fills (summing to 1).
 fn area_weights(from: usize, to: usize) -> Vec<Vec<(usize, f64)>> {

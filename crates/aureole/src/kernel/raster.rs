@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::{Extent, Sending};
 use crate::control::{for_each, for_each_row, Control};
 use crate::error::Result;
-use crate::image::sum_f64;
+use crate::image::{sum_f64, zeros};
 use crate::optics::shape::{Sample, SpreadShape, Supersampling};
 
 /// Pixels of a row rasterised together where f has no mirror symmetry.
@@ -49,11 +49,11 @@ fn point_plane(
 ) -> Result<Vec<f32>> {
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = extent.centre();
-    let mut plane = vec![0f32; width * height];
+    let mut plane = zeros(width * height);
     if shape.mirror_symmetric() {
         // Offsets 0..=reach along each axis cover both sides of the centre.
         let (reach_x, reach_y) = (cx.max(width - 1 - cx), cy.max(height - 1 - cy));
-        let mut quarter = vec![0.0; (reach_x + 1) * (reach_y + 1)];
+        let mut quarter = zeros((reach_x + 1) * (reach_y + 1));
         for_each_row(&mut quarter, reach_x + 1, control, |dy, row| {
             for (dx, value) in row.iter_mut().enumerate() {
                 *value = pixel_mean(shape, dx as f64, dy as f64, (dx, dy) == (0, 0)) as f32;
@@ -142,7 +142,7 @@ const BAND: usize = 32;
 fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -> Result<Vec<f32>> {
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = extent.centre();
-    let mut plane = vec![0f32; width * height];
+    let mut plane = zeros(width * height);
     if shape.mirror_symmetric() {
         // Squares at (p + ½, q + ½) for p, q ≥ 0; the one at −½ is the
         // mirror of the one at +½. A pixel at offset d ≥ 0 takes the inner
@@ -150,7 +150,7 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
         // or for d = 0 the inner corner of the square at ½ twice.
         let (reach_x, reach_y) = (cx.max(width - 1 - cx), cy.max(height - 1 - cy));
         let sides = |d: usize| [(d, false), (d.saturating_sub(1), d > 0)];
-        let mut quarter = vec![0.0; (reach_x + 1) * (reach_y + 1)];
+        let mut quarter = zeros((reach_x + 1) * (reach_y + 1));
         rasterise_bands(
             shape,
             (&mut quarter, reach_x + 1),
@@ -251,11 +251,15 @@ fn rasterise_bands(
             lo..hi.max(lo)
         }
     };
+    // One band's squares at a time, in one buffer: a band of a 4K kernel
+    // holds 8 MB of them, and fresh memory for each band cost more than
+    // the squares of a small spread. Each band clears what it lit.
+    let mut held = vec![[0.0; 4]; (BAND + 2) * per_row];
     for (b, band) in out.chunks_mut(BAND * width.max(1)).enumerate() {
         control.check()?;
         let first = b * BAND;
         let (k0, k1) = (first.saturating_sub(1), first + band.len() / width);
-        let mut squares = vec![[0.0; 4]; (k1 + 1 - k0) * per_row];
+        let squares = &mut held[..(k1 + 1 - k0) * per_row];
         // Per square row, the squares that may hold light; the rest are
         // dark and their pixels stay 0.
         let ranges: Vec<std::ops::Range<usize>> = squares
@@ -317,6 +321,10 @@ fn rasterise_bands(
                 row[i] = combine(r, i, &lookup) as f32;
             }
         });
+        squares
+            .par_chunks_mut(per_row)
+            .zip(&ranges)
+            .for_each(|(row, range)| row[range.clone()].fill([0.0; 4]));
         control.report((b + 1) as f64 / bands as f64);
     }
     Ok(())

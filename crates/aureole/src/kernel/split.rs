@@ -10,6 +10,7 @@ use super::{Extent, Kernel};
 use crate::control::Control;
 use crate::convolve::{self, Composing};
 use crate::error::Result;
+use crate::image::zeros;
 use crate::optics::shape::SpreadShape;
 
 /// A PSF on the kernel grid, split into centre weight and spread plane.
@@ -51,7 +52,7 @@ impl SplitKernel {
             // light stays.
             None => Layer {
                 centre: 1.0,
-                spread: vec![0.0; extent.width * extent.height],
+                spread: zeros(extent.width * extent.height),
             },
         };
         Ok(SplitKernel {
@@ -116,7 +117,7 @@ impl SplitKernel {
             let mut twice = if mass > 0.0 {
                 compose(&a.spread, &b.spread, &self.extent, composing, &mut part)?
             } else {
-                vec![0.0; a.spread.len()]
+                zeros(a.spread.len())
             };
             // FFT round-off leaves tiny negatives where the true value is
             // ~0; light is never negative.
