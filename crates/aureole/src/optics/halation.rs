@@ -25,10 +25,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{fraction, length, Default, Kind, Parameter};
 
-use super::shape::{SpreadShape, Supersampling};
+use super::shape::{Sample, SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
+use crate::math;
 use crate::units::Length;
 
 /// Halation parameters, as in an `[[effect]]` table with
@@ -215,11 +216,7 @@ impl Model for Halation {
         let mut planes: Vec<(f64, Box<dyn SpreadShape>)> = Vec::with_capacity(3);
         for (depth, what, transmission) in layers {
             let depth = depth.to_px(context.pitch_mm, what)?;
-            let shape = HaloShape {
-                path: 2.0 * (base + depth),
-                back: self.back(),
-                transmission,
-            };
+            let shape = HaloShape::new(2.0 * (base + depth), self.back(), transmission);
             check::range(
                 "halation",
                 "base_thickness",
@@ -318,7 +315,7 @@ fn share(back: Back, transmission: f64) -> f64 {
         if u <= 0.0 {
             0.0
         } else {
-            2.0 * u * back.reflectance(u) * transmission.powf(1.0 / u)
+            2.0 * u * back.reflectance(u) * oblique(math::ln(transmission), u)
         }
     };
     let simpson = |a: f64, b: f64| {
@@ -335,28 +332,49 @@ fn share(back: Back, transmission: f64) -> f64 {
     }
 }
 
+/// T^(1/cos θ), the transmission along a path at θ, from ln T: the
+/// crate's own exp rather than the platform's pow, so that every machine
+/// computes the same bits (and one exp, not pow's log and exp, per
+/// pixel).
+fn oblique(log_transmission: f64, cos: f64) -> f64 {
+    math::exp(log_transmission / cos)
+}
+
 /// One layer's halo in pixels.
 struct HaloShape {
     /// L = 2(d + z) in pixels: a ray at θ returns L tan θ away.
     path: f64,
     back: Back,
-    transmission: f64,
+    /// ln T of the emulsion's transmission at normal incidence.
+    log_transmission: f64,
+    /// The radius of the total-reflection ring in pixels, if there is one.
+    ring: Option<f64>,
+    /// The grid away from the ring, the same at every radius.
+    smooth: Supersampling,
 }
 
 impl HaloShape {
+    fn new(path: f64, back: Back, transmission: f64) -> HaloShape {
+        let log_transmission = math::ln(transmission);
+        // Away from the ring h is smooth on the scale L: |h''/h| is at
+        // most about 24/L², plus the oblique transmission's (ln T / L)².
+        let log_t = log_transmission.max(-690.775_527_898_213_7);
+        let curvature = (24.0 + log_t * log_t) / (path * path);
+        HaloShape {
+            path,
+            back,
+            log_transmission,
+            ring: back.critical_cos().map(|c| path * (1.0 - c * c).sqrt() / c),
+            smooth: Supersampling::for_curvature(curvature, 32),
+        }
+    }
+
     /// h(r) up to the constant 1/(πL²).
     fn at(&self, r: f64) -> f64 {
         let q = r / self.path;
         let cos = 1.0 / (1.0 + q * q).sqrt();
         let cos2 = cos * cos;
-        self.back.reflectance(cos) * self.transmission.powf(1.0 / cos) * cos2 * cos2
-    }
-
-    /// The radius of the total-reflection ring in pixels, if there is one.
-    fn ring(&self) -> Option<f64> {
-        self.back
-            .critical_cos()
-            .map(|c| self.path * (1.0 - c * c).sqrt() / c)
+        self.back.reflectance(cos) * oblique(self.log_transmission, cos) * cos2 * cos2
     }
 }
 
@@ -372,16 +390,39 @@ impl SpreadShape for HaloShape {
     fn grid(&self, x: f64, y: f64) -> Supersampling {
         let r = (x * x + y * y).sqrt();
         // The step at the ring is sampled finely in the pixels it crosses.
-        if let Some(ring) = self.ring() {
+        if let Some(ring) = self.ring {
             if (r - ring).abs() <= std::f64::consts::SQRT_2 {
                 return Supersampling::square(32);
             }
         }
-        // Elsewhere h is smooth on the scale L: |h''/h| is at most about
-        // 24/L², plus the oblique transmission's (ln T / L)².
-        let log_t = self.transmission.max(1e-300).ln();
-        let curvature = (24.0 + log_t * log_t) / (self.path * self.path);
-        Supersampling::for_curvature(curvature, 32)
+        self.smooth
+    }
+
+    /// The grid and h a row at a time: the distances first, then h where
+    /// one point is enough, each pass of independent points.
+    fn sample_row(&self, x0: f64, y: f64, out: &mut [Sample]) {
+        const CHUNK: usize = 64;
+        let one = self.smooth == Supersampling::square(1);
+        for (c, chunk) in out.chunks_mut(CHUNK).enumerate() {
+            let first = x0 + (c * CHUNK) as f64;
+            let mut r = [0.0; CHUNK];
+            for (i, r) in r.iter_mut().take(chunk.len()).enumerate() {
+                let x = first + i as f64;
+                *r = (x * x + y * y).sqrt();
+            }
+            for (sample, &r) in chunk.iter_mut().zip(&r) {
+                let near_ring = self
+                    .ring
+                    .is_some_and(|ring| (r - ring).abs() <= std::f64::consts::SQRT_2);
+                *sample = if near_ring {
+                    Sample::Grid(Supersampling::square(32))
+                } else if one {
+                    Sample::One(self.at(r))
+                } else {
+                    Sample::Grid(self.smooth)
+                };
+            }
+        }
     }
 }
 
