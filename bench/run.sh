@@ -71,6 +71,9 @@ work=$(mktemp -d)
 ./target/release/aureole apply "$work/street.exr" --preset camera-f8-7blade -o "$work/camera.exr" -q
 "$venv/bin/python" bench/codec.py target/release/bench_codec "$work/camera.exr" "$work/codec" >> bench/RESULTS.md
 rm -rf "$work"
+# Lens kernels: every preset, the dusty lens and issue 42's bloom with
+# corona at 4K, the build alone as `psf` reports it and with writing.
+{ echo "## Lens kernels (\`python3 bench/kernels.py\`, medians of 3)"; echo; python3 bench/kernels.py target/release/aureole; echo; } >> bench/RESULTS.md
 # The --max-memory estimate against the measured peaks of whole runs.
 { echo "## Memory: the estimate against measured peaks"; echo; python3 bench/memory.py target/release/aureole; echo; } >> bench/RESULTS.md
 cat bench/RESULTS.md

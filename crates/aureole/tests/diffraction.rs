@@ -1,6 +1,10 @@
 //! Diffraction kernels against the closed-form results of optics
 //! (paper §2, docs/physics.md §6).
 
+// References and workloads, not the library: the platform's maths
+// (clippy.toml refuses it in the core) is as good as libm here.
+#![allow(clippy::disallowed_methods)]
+
 use std::f64::consts::TAU;
 
 use aureole::kernel::diffraction_kernel;

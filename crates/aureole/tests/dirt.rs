@@ -4,6 +4,10 @@
 //! Their kernels against hcipy are in
 //! crates/aureole-py/tests/test_diffraction_reference.py.
 
+// References and workloads, not the library: the platform's maths
+// (clippy.toml refuses it in the core) is as good as libm here.
+#![allow(clippy::disallowed_methods)]
+
 use std::f64::consts::{PI, TAU};
 
 use aureole::optics::aperture::{first_optics, pupil::Pupil};

@@ -3,6 +3,10 @@
 //! is what rays traced through the base one by one give; its radius follows
 //! the base; the backing leaves a trace; the colour warms outward.
 
+// References and workloads, not the library: the platform's maths
+// (clippy.toml refuses it in the core) is as good as libm here.
+#![allow(clippy::disallowed_methods)]
+
 use aureole::{Camera, Config, Effect, Extent, Halation, Kernel, Length, Sending};
 use proptest::prelude::*;
 

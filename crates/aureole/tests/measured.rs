@@ -2,6 +2,10 @@
 //! resampled between pitches with the light conserved, their background
 //! and noise removed.
 
+// References and workloads, not the library: the platform's maths
+// (clippy.toml refuses it in the core) is as good as libm here.
+#![allow(clippy::disallowed_methods)]
+
 use aureole::optics::measured::Picture;
 use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel, Measured, Sending};
 

@@ -12,6 +12,10 @@
 //! aureole computes shows here first. `AUREOLE_BLESS=1 cargo test -p
 //! aureole --test reference` rewrites them, for a change that means to.
 
+// References and workloads, not the library: the platform's maths
+// (clippy.toml refuses it in the core) is as good as libm here.
+#![allow(clippy::disallowed_methods)]
+
 use std::path::PathBuf;
 
 use aureole::{presets, ApplyOptions, Config, ConfigFile, Extent, Frame, FrameOptions};

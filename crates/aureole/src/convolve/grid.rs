@@ -103,7 +103,7 @@ impl ColumnTransform {
     /// The cheaper of a full and a pruned column transform for `height`
     /// image rows and a period of at least `needed`, by the n·log₂n count.
     fn cheaper(needed: usize, height: usize) -> ColumnTransform {
-        let cost = |n: usize| n as f64 * (n as f64).log2();
+        let cost = |n: usize| n as f64 * libm::log2(n as f64);
         let full = fast_size(needed);
         let half = fast_size(needed.div_ceil(2).max(height));
         if 4.0 * cost(half) < 2.0 * cost(full) {

@@ -265,7 +265,7 @@ impl Convolver {
             ColumnTransform::Full(_) => Vec::new(),
             ColumnTransform::Halves(n) => (0..n)
                 .map(|k| {
-                    let (sin, cos) = (-std::f64::consts::PI * k as f64 / n as f64).sin_cos();
+                    let (sin, cos) = libm::sincos(-std::f64::consts::PI * k as f64 / n as f64);
                     Complex::new(cos as f32, sin as f32)
                 })
                 .collect(),

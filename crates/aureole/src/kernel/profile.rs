@@ -45,7 +45,7 @@ pub fn angular_profile(
     (0..samples)
         .map(|s| {
             let angle = 360.0 * s as f64 / samples as f64;
-            let (sin, cos) = angle.to_radians().sin_cos();
+            let (sin, cos) = libm::sincos(angle.to_radians());
             (angle, bilinear(kernel, plane, radius * cos, radius * sin))
         })
         .collect()

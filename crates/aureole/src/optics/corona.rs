@@ -423,7 +423,7 @@ impl CoronaShape {
         } else if self.spread == 1.0 {
             return self.unit_spread_exponent;
         } else {
-            libm::pow(r / width, self.spread - 1.0)
+            math::exp(math::ln(r / width) * (self.spread - 1.0))
         };
         if omega >= FRAC_PI_2 || omega.is_nan() {
             return 0.0;
@@ -686,7 +686,7 @@ mod tests {
         for i in 0..20_000 {
             let a = i as f64 * TAU / 20_000.0;
             for r in [0.5, 3.0, 1e4] {
-                let (y, x) = (r * a.sin(), r * a.cos());
+                let (y, x) = (r * libm::sin(a), r * libm::cos(a));
                 let d = (fast_atan2(y, x) - libm::atan2(y, x)).abs();
                 worst = worst.max(d.min(TAU - d));
             }

@@ -67,7 +67,7 @@ pub(super) fn fft(
     convolutions: usize,
 ) -> f64 {
     let (px, py) = padded;
-    let n_log = |n: usize| n as f64 * (n as f64).log2();
+    let n_log = |n: usize| n as f64 * libm::log2(n as f64);
     let h = height as f64;
     let columns = (px / 2 + 1) as f64;
     let per_plane = 2.0 * h * n_log(px) + 2.0 * columns * n_log(py);

@@ -22,7 +22,7 @@ const DARK_TOLERANCE: f64 = 1e-3;
 /// than the typical one (checked against direct sums in tests/apply.rs).
 pub fn f32_round_off(bright_l2: f64, moved: f64, padded: (usize, usize)) -> f64 {
     let n = (padded.0 * padded.1) as f64;
-    4.0 * f64::from(f32::EPSILON) / 2.0 * n.log2().sqrt() * bright_l2 * moved / n.sqrt()
+    4.0 * f64::from(f32::EPSILON) / 2.0 * libm::log2(n).sqrt() * bright_l2 * moved / n.sqrt()
 }
 
 /// How an FFT application computes, from the scene's range.

@@ -36,7 +36,7 @@ pub(super) fn twiddles(gpu: &Gpu, lengths: &[usize]) -> wgpu::Buffer {
         .iter()
         .flat_map(|&n| {
             (0..n).flat_map(move |k| {
-                let (sin, cos) = (-2.0 * std::f64::consts::PI * k as f64 / n as f64).sin_cos();
+                let (sin, cos) = libm::sincos(-2.0 * std::f64::consts::PI * k as f64 / n as f64);
                 [cos as f32, sin as f32]
             })
         })

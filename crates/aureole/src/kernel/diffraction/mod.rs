@@ -70,7 +70,7 @@ fn pattern_with(
         .map(|c| spectrum.iter().map(|(_, w)| w[c]).sum::<f64>())
         .collect();
     let near = NearField::new(optics, spectrum, (pitch_mm, extent.sending));
-    let reach = pitch_mm * (width as f64).hypot(height as f64) / 2.0;
+    let reach = pitch_mm * libm::hypot(width as f64, height as f64) / 2.0;
     let far = FarField::new(
         optics,
         spectrum,
@@ -489,9 +489,10 @@ mod tests {
         let centre = (side / 2) as f64;
         for (i, v) in plane.iter().enumerate() {
             let (dx, dy) = ((i % side) as f64 - centre, centre - (i / side) as f64);
-            let r = dx.hypot(dy);
+            let r = libm::hypot(dx, dy);
             if r >= r0 && r < r1 {
-                let turn = dy.atan2(dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
+                let turn =
+                    libm::atan2(dy, dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
                 out[((turn * bins as f64) as usize).min(bins - 1)] += v;
             }
         }
@@ -888,8 +889,9 @@ mod tests {
         for j in -reach..=reach {
             for i in -reach..=reach {
                 let (dx, dy) = (i as f64, j as f64);
-                if (dx.hypot(dy) - r).abs() < 0.5 {
-                    let t = dy.atan2(dx).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU;
+                if (libm::hypot(dx, dy) - r).abs() < 0.5 {
+                    let t = libm::atan2(dy, dx).rem_euclid(std::f64::consts::TAU)
+                        / std::f64::consts::TAU;
                     pixels.push((dx, dy, ((t * bins as f64) as usize).min(bins - 1)));
                 }
             }

@@ -321,7 +321,7 @@ fn tent(n: usize) -> (Vec<f64>, Vec<f64>) {
 pub(super) fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
     let (mut nodes, mut weights) = (vec![0.0; n], vec![0.0; n]);
     for i in 0..n.div_ceil(2) {
-        let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut x = libm::cos(std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5));
         let mut derivative = 1.0;
         for _ in 0..100 {
             let (p, dp) = legendre(n, x);

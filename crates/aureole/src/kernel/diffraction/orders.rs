@@ -92,7 +92,7 @@ fn spread_orders(
     // FFT route ~1.8 s per plane of a 4K kernel, as much as 0.3·P·log₂P
     // multiply-adds for P padded pixels.
     let padded = (2 * extent.width) as f64 * (2 * extent.height) as f64;
-    let fft = 0.3 * padded * padded.log2();
+    let fft = 0.3 * padded * libm::log2(padded);
     if direct <= fft {
         return scatter(comb, window, extent, control);
     }
@@ -456,13 +456,13 @@ struct Placed<'a> {
 /// it belongs. Found by the shares' binary exponents, in one pass.
 fn weakest_corrected(orders: &Orders) -> f64 {
     let mut light = vec![0.0; 1100];
-    let exponent = |w: f64| (-w.log2().floor()).clamp(0.0, 1099.0) as usize;
+    let exponent = |w: f64| (-libm::log2(w).floor()).clamp(0.0, 1099.0) as usize;
     orders.each(|order| light[exponent(order.weight)] += order.weight);
     let mut held = 0.0;
     for (e, l) in light.iter().enumerate().rev() {
         held += l;
         if held > UNCORRECTED {
-            return (-(e as f64)).exp2();
+            return libm::exp2(-(e as f64));
         }
     }
     f64::INFINITY

@@ -610,7 +610,7 @@ impl Aperture {
             radius
         } else {
             let n = self.blades as usize;
-            let apothem = radius * (PI / n as f64).cos();
+            let apothem = radius * libm::cos(PI / n as f64);
             let segments = if self.roundness > 0.0 {
                 ARC_SEGMENTS
             } else {
@@ -622,9 +622,9 @@ impl Aperture {
                 let middle = start + PI / n as f64;
                 for s in 0..segments {
                     let theta = start + TAU / n as f64 * s as f64 / segments as f64;
-                    let straight = apothem / (theta - middle).cos();
+                    let straight = apothem / libm::cos(theta - middle);
                     let r = (1.0 - self.roundness) * straight + self.roundness * radius;
-                    vertices.push([r * theta.cos(), r * theta.sin()]);
+                    vertices.push([r * libm::cos(theta), r * libm::sin(theta)]);
                 }
             }
             pupil.add_sampled_polygon(&vertices, true, segments);
@@ -641,7 +641,7 @@ impl Aperture {
         let mut vanes = Vec::new();
         for v in 0..self.vanes {
             let angle = rotation + TAU * v as f64 / self.vanes as f64;
-            let (s, c) = angle.sin_cos();
+            let (s, c) = libm::sincos(angle);
             let corner = |along: f64, across: f64| [along * c - across * s, along * s + across * c];
             if inner_radius > start {
                 pupil.add_polygon(
@@ -698,7 +698,7 @@ impl Aperture {
         for family in &self.filters {
             let (d, e) = (family.spacing_um * 1e-3, family.width_um * 1e-3);
             let normal = (family.angle_deg + 90.0).to_radians();
-            let (s, c) = normal.sin_cos();
+            let (s, c) = libm::sincos(normal);
             // Order m lands at m·λf/d mm: keep those within reach at 380 nm.
             let count = ((reach_mm * d / (380e-6 * focal)).ceil() as i64).min(4000);
             let coefficient = |m: i64| {
@@ -706,7 +706,7 @@ impl Aperture {
                     1.0 - e / d
                 } else {
                     let z = PI * m as f64 * e / d;
-                    -(e / d) * z.sin() / z
+                    -(e / d) * libm::sin(z) / z
                 }
             };
             // Each order's share and shift once, not once per order it

@@ -181,7 +181,7 @@ impl Pupil {
             // The normal's turn at vertex k, from edge k − 1 to edge k.
             let turn = |k: usize| {
                 let (p, q) = (edges[(k + n - 1) % n].normal, edges[k].normal);
-                (p[0] * q[1] - p[1] * q[0]).atan2(p[0] * q[0] + p[1] * q[1])
+                libm::atan2(p[0] * q[1] - p[1] * q[0], p[0] * q[0] + p[1] * q[1])
             };
             let fans: Vec<Option<[f64; 2]>> = (0..n)
                 .map(|k| {
@@ -857,8 +857,8 @@ mod tests {
                 let (x, y) = (-half + (i as f64 + 0.5) * h, -half + (j as f64 + 0.5) * h);
                 if pupil_inside(x, y) {
                     let p = -TAU * (nu[0] * x + nu[1] * y);
-                    s[0] += p.cos() * h * h;
-                    s[1] += p.sin() * h * h;
+                    s[0] += libm::cos(p) * h * h;
+                    s[1] += libm::sin(p) * h * h;
                 }
             }
         }
@@ -938,7 +938,7 @@ mod tests {
                 for j in 0..n {
                     let (x, y) = (-1.2 + (i as f64 + 0.5) * h, -1.2 + (j as f64 + 0.5) * h);
                     let a = pupil.transmission([x, y]);
-                    let (sin, cos) = (-TAU * (nu[0] * x + nu[1] * y)).sin_cos();
+                    let (sin, cos) = libm::sincos(-TAU * (nu[0] * x + nu[1] * y));
                     sum[0] += (a[0] * cos - a[1] * sin) * h * h;
                     sum[1] += (a[0] * sin + a[1] * cos) * h * h;
                 }
@@ -959,7 +959,7 @@ mod tests {
         let stop: Vec<[f64; 2]> = (0..7)
             .map(|k| {
                 let a = TAU * k as f64 / 7.0;
-                [3.0 * a.cos(), 3.0 * a.sin()]
+                [3.0 * libm::cos(a), 3.0 * libm::sin(a)]
             })
             .collect();
         pupil.add_polygon(&stop, true);
@@ -967,7 +967,11 @@ mod tests {
         for k in 0..40 {
             let (a, r) = (k as f64 * 2.4, 0.3 + 0.05 * k as f64);
             let radius = 0.005 + 0.07 * ((k * 7) % 40) as f64 / 40.0;
-            pupil.add_spot([r * a.cos() - 0.5, r * a.sin() - 0.5], radius, [0.0, 0.0]);
+            pupil.add_spot(
+                [r * libm::cos(a) - 0.5, r * libm::sin(a) - 0.5],
+                radius,
+                [0.0, 0.0],
+            );
         }
         // A 10 µm pixel at λf = 0.0275 mm: 7×7 Gauss-like offsets.
         let scale = 1.0 / 0.0275;

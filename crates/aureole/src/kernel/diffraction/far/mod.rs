@@ -248,7 +248,7 @@ impl Cumulative {
         let mut out = [0.0; PLANES];
         if a >= self.end {
             let last = self.values.len() - p;
-            let log = (a / self.end).ln();
+            let log = libm::log(a / self.end);
             for (c, o) in out[..p].iter_mut().enumerate() {
                 let slope = self.values[last + c] + self.tail[c] * self.inverse_end;
                 *o = self.seconds[last + c] + slope * (a - self.end) - self.tail[c] * log;
@@ -398,7 +398,7 @@ impl FarField {
                 (before + after > 0.0).then(|| {
                     (
                         e.length / (before + after),
-                        e.normal[1].atan2(e.normal[0]),
+                        libm::atan2(e.normal[1], e.normal[0]),
                         [before, after],
                     )
                 })
@@ -461,7 +461,7 @@ impl FarField {
             // over the angle the pixel spans.
             let mut curved = 0.0;
             if !self.fans.is_empty() {
-                let phi = y.atan2(x);
+                let phi = libm::atan2(y, x);
                 let half = 0.5 * pitch * (x.abs() + y.abs()) / r2;
                 curved += self.fans.between(phi - half, phi + half, &mut hints) / (2.0 * half);
             }
@@ -664,48 +664,6 @@ impl Pair {
     }
 }
 
-/// (sin x, cos x) to within 4·10⁻¹⁶ for |x| < 10⁵ in plain arithmetic,
-/// so that rows of them vectorise and give the same bytes everywhere:
-/// x less the nearest multiple n of π/2, in two parts, then the Taylor
-/// series on [−π/4, π/4], turned by n quarter turns.
-fn sin_cos(x: f64) -> (f64, f64) {
-    const ROUND: f64 = 6_755_399_441_055_744.0;
-    const HIGH: f64 = 1.570_796_326_734_125_6;
-    const LOW: f64 = 6.077_100_506_506_192e-11;
-    let shifted = x * std::f64::consts::FRAC_2_PI + ROUND;
-    let quarter = shifted.to_bits();
-    let n = shifted - ROUND;
-    let y = (x - n * HIGH) - n * LOW;
-    let y2 = y * y;
-    let sin = y
-        * (1.0
-            + y2 * (-1.0 / 6.0
-                + y2 * (1.0 / 120.0
-                    + y2 * (-1.0 / 5040.0
-                        + y2 * (1.0 / 362_880.0
-                            + y2 * (-1.0 / 39_916_800.0
-                                + y2 * (1.0 / 6_227_020_800.0
-                                    + y2 * (-1.0 / 1_307_674_368_000.0))))))));
-    let cos = 1.0
-        + y2 * (-0.5
-            + y2 * (1.0 / 24.0
-                + y2 * (-1.0 / 720.0
-                    + y2 * (1.0 / 40_320.0
-                        + y2 * (-1.0 / 3_628_800.0
-                            + y2 * (1.0 / 479_001_600.0
-                                + y2 * (-1.0 / 87_178_291_200.0
-                                    + y2 * (1.0 / 20_922_789_888_000.0))))))));
-    // The quarter turns by masks, not branches, which would be taken at
-    // random.
-    const SIGN: u64 = 1 << 63;
-    let odd = 0u64.wrapping_sub(quarter & 1);
-    let half = (quarter & 2) << 62;
-    let (sin, cos) = (sin.to_bits(), cos.to_bits());
-    let s = (sin & !odd) | (cos & odd);
-    let c = (cos & !odd) | ((sin ^ SIGN) & odd);
-    (f64::from_bits(s ^ half), f64::from_bits(c ^ half))
-}
-
 /// Where a row's pixels lie about an edge's ray: the row's first pixel
 /// at (`x0`, `y`), the offset across the ray of the first and its step,
 /// u per offset (L/f), and the pixel's half projections in u.
@@ -804,10 +762,10 @@ fn band(c0: f64, c1: f64, reach: f64, count: usize) -> std::ops::Range<usize> {
 /// cos(`start` + i·`step`) into `out[i]` for i in `range`: a rotation from
 /// pixel to pixel, started afresh every 32 so that round-off cannot grow.
 fn cosines(start: f64, step: f64, range: std::ops::Range<usize>, out: &mut [f64]) {
-    let (sin_step, cos_step) = step.sin_cos();
+    let (sin_step, cos_step) = libm::sincos(step);
     let mut i = range.start;
     while i < range.end {
-        let (mut s, mut c) = (start + i as f64 * step).sin_cos();
+        let (mut s, mut c) = libm::sincos(start + i as f64 * step);
         for value in &mut out[i..range.end.min(i + 32)] {
             *value = c;
             (c, s) = (c * cos_step - s * sin_step, s * cos_step + c * sin_step);
@@ -873,28 +831,6 @@ mod tests {
             f_number: Some(8.0),
         };
         aperture.optics(&camera, 1.0, 0).unwrap()
-    }
-
-    #[test]
-    fn the_rows_sines_and_cosines_are_those_of_libm() {
-        // Across the quarter turns' boundaries and out to the phases of
-        // the farthest fringes (K r ≲ 10⁵ rad).
-        let mut x = -20.0;
-        while x < 1e5 {
-            let (s, c) = sin_cos(x);
-            let tolerance = 4e-16;
-            assert!((s - libm::sin(x)).abs() <= tolerance, "sin {x}: {s}");
-            assert!((c - libm::cos(x)).abs() <= tolerance, "cos {x}: {c}");
-            x = if x < 1.0 { x + 0.0123 } else { x * 1.001 };
-        }
-        for k in -8..=8 {
-            let x = f64::from(k) * std::f64::consts::FRAC_PI_4;
-            let (s, c) = sin_cos(x);
-            assert!(
-                (s - x.sin()).abs() < 1e-15 && (c - x.cos()).abs() < 1e-15,
-                "{x}"
-            );
-        }
     }
 
     #[test]

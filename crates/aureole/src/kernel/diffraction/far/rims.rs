@@ -4,8 +4,9 @@
 
 use std::f64::consts::{FRAC_1_SQRT_2, PI, TAU};
 
-use super::{band, pixel_mean, sin_cos, Line, FRINGE_FLOOR, PLANES};
+use super::{band, pixel_mean, Line, FRINGE_FLOOR, PLANES};
 use crate::kernel::Sending;
+use crate::math::sin_cos;
 use crate::optics::aperture::pupil::{DiscTerm, EdgeTerm};
 
 /// The discs' fringes. Far out a disc's amplitude is, by stationary
@@ -91,7 +92,7 @@ impl Rim {
                     edge.middle[0] - disc.centre[0],
                     edge.middle[1] - disc.centre[1],
                 ];
-                let distance = d[0].hypot(d[1]);
+                let distance = libm::hypot(d[0], d[1]);
                 let radial = (d[0] * edge.normal[1] - d[1] * edge.normal[0]).abs();
                 let on_rim = (distance - disc.radius).abs() <= 1e-6 * disc.radius;
                 if !(on_rim || short) || radial > 1e-9 * distance {
@@ -122,7 +123,7 @@ impl Rim {
                         .map(|line| {
                             (0..3 * half_turn + 2)
                                 .map(|i| {
-                                    let (sin, cos) = (-PI + i as f64 * step).sin_cos();
+                                    let (sin, cos) = libm::sincos(-PI + i as f64 * step);
                                     let g = [disc.radius * cos + d[0], disc.radius * sin + d[1]];
                                     pixel_mean(pitch, sending, g.map(|g| g / (line.lambda * f)))
                                 })
@@ -132,7 +133,7 @@ impl Rim {
                     step,
                     half_turn,
                     band: beat * 2.0 * longest * f / (TAU * edge.length),
-                    reach: beat.powf(0.4),
+                    reach: libm::pow(beat, 0.4),
                 });
             }
         }
@@ -247,7 +248,9 @@ impl Fringes {
         let longest = lines.iter().map(|l| l.lambda).fold(0.0, f64::max);
         let rims = Rim::find(edges, discs, lines, f, pitch, sending, area);
         let reach = rims.iter().map(|rim| rim.reach).fold(
-            (roots * roots * longest * f * pitch * pitch / (PI * PI * area * FRINGE_FLOOR)).cbrt(),
+            libm::cbrt(
+                roots * roots * longest * f * pitch * pitch / (PI * PI * area * FRINGE_FLOOR),
+            ),
             f64::max,
         );
         Fringes {
@@ -298,7 +301,7 @@ impl Fringes {
         row.angle.clear();
         for i in first..end {
             let x = x0 + i as f64 * pitch;
-            let r = x.hypot(y);
+            let r = libm::hypot(x, y);
             let t = x.abs().min(y.abs()) / (r * self.step);
             row.radius.push(r);
             row.node.push(t as usize);
