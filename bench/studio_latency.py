@@ -12,6 +12,7 @@ the DevTools protocol. Standard library only:
 
     cargo build --release && python3 bench/studio_latency.py
     python3 bench/studio_latency.py --device gpu --width 3840   # a 4K preview on the GPU
+    python3 bench/studio_latency.py --binary OTHER/aureole      # another build
 
 `--device` is the studio's (auto, cpu or gpu); a `--width` beyond the
 built-in 1280x720 street renders the street `aureole demo` writes at that
@@ -40,15 +41,17 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--device", default="auto", choices=["auto", "cpu", "gpu"])
     parser.add_argument("--width", type=int, default=1280)
+    parser.add_argument("--binary", default=BINARY, help="the aureole to time (another build, to compare)")
     args = parser.parse_args()
+    binary = args.binary
     width, height = args.width, args.width * 9 // 16
     folder = tempfile.mkdtemp()
     image = "demo"
     if width > 1280:
         image = os.path.join(folder, "street.exr")
-        subprocess.run([BINARY, "demo", "-q", "--size", f"{width}x{height}", "--hdr", image,
+        subprocess.run([binary, "demo", "-q", "--size", f"{width}x{height}", "--hdr", image,
                         "-o", os.path.join(folder, "street.png")], check=True)
-    server = subprocess.Popen([BINARY, "studio", "--no-browser", "-q", "--root", ROOT,
+    server = subprocess.Popen([binary, "studio", "--no-browser", "-q", "--root", ROOT,
                                "--root", folder, "--device", args.device],
                               stdout=subprocess.PIPE, text=True)
     try:

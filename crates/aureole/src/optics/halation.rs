@@ -358,7 +358,8 @@ impl HaloShape {
         let log_transmission = math::ln(transmission);
         // Away from the ring h is smooth on the scale L: |h''/h| is at
         // most about 24/L², plus the oblique transmission's (ln T / L)².
-        let log_t = log_transmission.max(-690.775_527_898_213_7);
+        // An opaque layer (T = 0) counts as T = 10⁻³⁰⁰.
+        let log_t = log_transmission.max(math::ln(1e-300));
         let curvature = (24.0 + log_t * log_t) / (path * path);
         HaloShape {
             path,
@@ -443,6 +444,47 @@ mod tests {
             ..toml::from_str("").unwrap()
         };
         assert!((halation.base_index() - 1.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_rows_samples_are_what_the_grid_and_the_density_give() {
+        // A thin base (the grid is finer than a point everywhere), a thick
+        // one (one point away from the ring), with and without the ring.
+        for (path, back, transmission) in [
+            (3.0, Back::Air(1.5), 0.5),
+            (40.0, Back::Air(1.6), 0.2),
+            (40.0, Back::Backing(0.005), 0.3),
+            (12.0, Back::Air(1.5), 0.0),
+        ] {
+            let shape = HaloShape::new(path, back, transmission);
+            let (mut ones, mut grids) = (0, 0);
+            for j in 0..120 {
+                let y = f64::from(j) * 0.7;
+                let x0 = -0.5;
+                let mut row = vec![Sample::Dark; 150];
+                shape.sample_row(x0, y, &mut row);
+                for (i, sample) in row.into_iter().enumerate() {
+                    let x = x0 + i as f64;
+                    let grid = shape.grid(x, y);
+                    match sample {
+                        Sample::One(f) => {
+                            ones += 1;
+                            assert_eq!(grid, Supersampling::square(1));
+                            assert_eq!(f, shape.density(x, y), "({x}, {y})");
+                        }
+                        Sample::Grid(g) => {
+                            grids += 1;
+                            assert_eq!(g, grid, "({x}, {y})");
+                        }
+                        Sample::Dark => panic!("a halo lights every pixel"),
+                    }
+                }
+            }
+            assert!(ones + grids == 120 * 150, "{ones} {grids}");
+            if path >= 40.0 {
+                assert!(ones > 10_000, "L = {path}: {ones}");
+            }
+        }
     }
 
     #[test]
