@@ -18,7 +18,8 @@ run:
 Both read the same input files and the same kernel file, and their first
 results are compared (relative L2 over the image).
 
-Then the kernels: the 4K lens kernel written by `psf` and read back as
+Then a still (one 4K frame through the default camera, the kernel built in
+the run, against the peer given that kernel). Then the kernels: the 4K lens kernel written by `psf` and read back as
 `apply --kernel` reads it (`bench_codec kernel`), one frame with the kernel
 file against one frame building it, and the issue-5 bloom + corona kernel
 built at 7679x4319; and four issue-5 PFM frames with the kernel built from
@@ -205,6 +206,39 @@ def kernels(aureole, bench_codec, work):
     print()
 
 
+def still(aureole, work):
+    """One 4K frame through the default camera, file to file, the kernel
+    built in the run, against OpenEXR + scipy given that camera's kernel
+    ready-made (its second, warm frame: read, fftconvolve with 2 workers
+    per channel, half ZIP write)."""
+    dir = os.path.join(work, "street-4K")
+    frame = os.path.join(dir, "s.0001.exr")
+    out = os.path.join(dir, "still.exr")
+    ours = [timed([aureole, "apply", frame, "--half", "-o", out, "-q"])[0] for _ in range(RUNS)]
+    kernel = os.path.join(dir, "default.exr")
+    run([aureole, "psf", "--preset", "paper-fig5-both", "--for-image", frame, "-o", kernel, "-q"])
+    peer_out = os.path.join(dir, "still-peer")
+    os.makedirs(peer_out, exist_ok=True)
+    theirs = [json.loads(run([sys.executable, __file__, "peer", os.path.join(dir, "s.%04d.exr"), "2",
+                              kernel, os.path.join(peer_out, "s.%04d.exr")]).stdout)["frame"]
+              for _ in range(RUNS)]
+    a = read_rgb(out)
+    b = read_rgb(os.path.join(peer_out, "s.0001.exr"))
+    difference = np.linalg.norm(a - b) / np.linalg.norm(a)
+    median = statistics.median
+    print("## A still: one 4K night street through the default camera, file to file\n")
+    print(f"Medians of {RUNS}: `aureole apply s.0001.exr --half -o still.exr` builds the default")
+    print("camera's kernel (paper-fig5-both) in the run; the peer is given that kernel")
+    print("(`psf --for-image`) before its clock starts.\n")
+    print("| implementation | time | ratio to the peer | agreement |")
+    print("|---|---|---|---|")
+    print(f"| aureole, kernel built in the run | {median(ours):.2f} s | "
+          f"{median(ours) / median(theirs):.2f} | reference |")
+    print(f"| OpenEXR + scipy fftconvolve (2 workers), kernel given | {median(theirs):.2f} s | 1.0 | "
+          f"{difference:.1e} |")
+    print()
+
+
 def pfm_built(aureole, work, workload_dir):
     """Four issue-5 PFM frames, the kernel built from the config in the
     same run, against scipy given the kernel ready."""
@@ -288,6 +322,7 @@ def main(aureole, bench_codec, work, workload_dir):
     pfm_batch("issue-5 workload 4K, PFM in and out", aureole, dir, kernel)
     print()
     kernels(aureole, bench_codec, work)
+    still(aureole, work)
     pfm_built(aureole, work, workload_dir)
 
 
