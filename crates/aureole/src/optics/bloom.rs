@@ -8,10 +8,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
-use super::shape::{Sample, SpreadShape, Supersampling};
+use super::shape::{SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
+use crate::math;
 use crate::units::Length;
 
 /// Bloom parameters, as in an `[[effect]]` table with `type = "bloom"`.
@@ -72,7 +73,7 @@ impl Bloom {
     pub fn density_at(&self, r: f64, radius_px: f64) -> f64 {
         let q = r / radius_px;
         self.epsilon * (self.beta - 1.0) / (std::f64::consts::PI * radius_px * radius_px)
-            * power(1.0 + q * q, -self.beta)
+            * math::power(1.0 + q * q, -self.beta)
     }
 
     fn shape(&self, pitch_mm: Option<f64>) -> Result<BloomShape> {
@@ -114,21 +115,11 @@ impl SpreadShape for BloomShape {
 
     fn density(&self, x: f64, y: f64) -> f64 {
         let q2 = (x * x + y * y) / (self.radius * self.radius);
-        power(1.0 + q2, -self.beta)
+        math::power(1.0 + q2, -self.beta)
     }
 
-    /// Most of a full-frame bloom is sampled once per pixel: there the
-    /// grid is not asked for.
-    fn sample(&self, x: f64, y: f64) -> Sample {
-        if x * x + y * y > self.one_point_squared {
-            return Sample::One(self.density(x, y));
-        }
-        let grid = self.grid(x, y);
-        if grid.x <= 1 && grid.y <= 1 {
-            Sample::One(self.density(x, y))
-        } else {
-            Sample::Grid(grid)
-        }
+    fn one_point_squared(&self) -> f64 {
+        self.one_point_squared
     }
 
     fn grid(&self, x: f64, y: f64) -> Supersampling {
@@ -141,32 +132,10 @@ impl SpreadShape for BloomShape {
     }
 }
 
-/// base^exponent: for a whole exponent (the paper's β = 2 to 5) by
-/// squaring, a tenth of `pow`'s time over the millions of pixels of a
-/// full-frame bloom and within an ulp or two of it; else `pow`.
-fn power(base: f64, exponent: f64) -> f64 {
-    let whole = exponent.abs();
-    if whole.fract() != 0.0 || whole > 64.0 {
-        return libm::pow(base, exponent);
-    }
-    let (mut result, mut square, mut n) = (1.0, base, whole as u32);
-    while n > 0 {
-        if n & 1 == 1 {
-            result *= square;
-        }
-        square *= square;
-        n >>= 1;
-    }
-    if exponent < 0.0 {
-        1.0 / result
-    } else {
-        result
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::optics::shape::Sample;
 
     #[test]
     fn one_sample_where_the_grid_is_one_point_and_f_is_the_density() {
@@ -195,19 +164,6 @@ mod tests {
                 }
             }
             assert!(ones > 50_000, "β {beta}: {ones}");
-        }
-    }
-
-    #[test]
-    fn whole_powers_by_squaring_agree_with_pow() {
-        for base in [1.0, 1.0 + 1e-9, 1.37, 2.0, 101.0, 7.3e6] {
-            for exponent in [-2.0, -3.0, -5.0, -64.0, -2.5, 1.5, 4.0, -100.0] {
-                let (fast, reference) = (power(base, exponent), libm::pow(base, exponent));
-                assert!(
-                    (fast - reference).abs() <= 8.0 * f64::EPSILON * reference.abs(),
-                    "{base}^{exponent}: {fast} vs {reference}"
-                );
-            }
         }
     }
 }

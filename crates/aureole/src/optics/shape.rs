@@ -37,6 +37,9 @@ pub(crate) trait SpreadShape: Sync {
     /// and density share work (a direction, the nearest ray) computes it
     /// once here; the answer must be the one the three calls would give.
     fn sample(&self, x: f64, y: f64) -> Sample {
+        if x * x + y * y > self.one_point_squared() {
+            return Sample::One(self.density(x, y));
+        }
         if self.vanishes_over_pixel(x, y) {
             return Sample::Dark;
         }
@@ -46,6 +49,14 @@ pub(crate) trait SpreadShape: Sync {
         } else {
             Sample::Grid(grid)
         }
+    }
+
+    /// The squared distance from the centre beyond which every pixel's
+    /// grid is one point and f never vanishes, so that
+    /// [`SpreadShape::sample`] asks for neither: most of a full-frame
+    /// kernel of a smooth shape. Infinite (the default): nowhere.
+    fn one_point_squared(&self) -> f64 {
+        f64::INFINITY
     }
 
     /// [`SpreadShape::sample`] at the points (x₀ + i, y) for each i of

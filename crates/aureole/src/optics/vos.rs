@@ -13,6 +13,7 @@ use super::shape::{SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::math;
 
 /// Vos glare parameters, as in an `[[effect]]` table with `type = "vos"`.
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
@@ -63,9 +64,15 @@ impl Vos {
         self.validate()?;
         let focal = camera.require_focal_length("vos glare")?;
         let pitch = pitch_mm.ok_or_else(|| Error::needs_sensor_width("vos glare".into()))?;
+        // The grid is one point where n(n + 1)/r² at the pixel's nearest
+        // point is at most 0.024 px⁻² (Supersampling::for_curvature); a
+        // pixel one more pixel beyond needs no test.
+        let n = self.exponent;
+        let one_point = (n * (n + 1.0) / 0.024).sqrt() + std::f64::consts::FRAC_1_SQRT_2 + 1.0;
         Ok(VosShape {
             radians_per_px: pitch / focal,
-            exponent: self.exponent,
+            exponent: n,
+            one_point_squared: one_point * one_point,
         })
     }
 }
@@ -74,6 +81,8 @@ struct VosShape {
     /// tan θ per pixel of distance: pitch / focal length.
     radians_per_px: f64,
     exponent: f64,
+    /// Beyond this squared distance a pixel's grid is one point.
+    one_point_squared: f64,
 }
 
 impl SpreadShape for VosShape {
@@ -82,9 +91,14 @@ impl SpreadShape for VosShape {
     }
 
     fn density(&self, x: f64, y: f64) -> f64 {
-        let theta = libm::atan((x * x + y * y).sqrt() * self.radians_per_px);
-        let c = libm::cos(theta);
-        libm::pow(theta, -self.exponent) * c * c * c
+        let t = (x * x + y * y).sqrt() * self.radians_per_px;
+        // cos(atan t) = 1/√(1 + t²), without a cosine.
+        let c = 1.0 / (1.0 + t * t).sqrt();
+        math::power(libm::atan(t), -self.exponent) * c * c * c
+    }
+
+    fn one_point_squared(&self) -> f64 {
+        self.one_point_squared
     }
 
     fn grid(&self, x: f64, y: f64) -> Supersampling {
@@ -101,5 +115,66 @@ impl SpreadShape for VosShape {
         // ∫ θ⁻ⁿ θ dθ diverges at 0 for n ≥ 2: the formula holds outside the
         // centre pixel, and what stays within half a pixel is unspread light.
         false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optics::shape::Sample;
+
+    #[test]
+    fn one_sample_where_the_grid_is_one_point_and_f_is_the_density() {
+        let camera = Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(50.0),
+            f_number: None,
+        };
+        for exponent in [1.5, 2.0, 2.7, 3.0] {
+            let vos = Vos {
+                epsilon: 0.05,
+                exponent,
+            };
+            let shape = vos.shape(&camera, Some(0.009)).unwrap();
+            let mut ones = 0;
+            for j in 0..300 {
+                for i in 0..300 {
+                    let (x, y) = (f64::from(i) * 0.37 + 0.5, f64::from(j) * 0.29);
+                    let grid = shape.grid(x, y);
+                    match shape.sample(x, y) {
+                        Sample::One(f) => {
+                            ones += 1;
+                            assert_eq!(grid, Supersampling::square(1), "({x}, {y})");
+                            assert_eq!(f, shape.density(x, y));
+                        }
+                        Sample::Grid(g) => assert_eq!(g, grid),
+                        Sample::Dark => panic!("glare lights every pixel"),
+                    }
+                }
+            }
+            assert!(ones > 50_000, "n {exponent}: {ones}");
+        }
+    }
+
+    #[test]
+    fn the_density_is_the_angles_power_law_with_its_cosines() {
+        // θ⁻ⁿ cos³θ with θ = atan(r·pitch/f), against libm's functions.
+        let camera = Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(50.0),
+            f_number: None,
+        };
+        let shape = Vos {
+            epsilon: 0.05,
+            exponent: 2.5,
+        }
+        .shape(&camera, Some(0.009))
+        .unwrap();
+        for r in [0.3, 1.0, 17.0, 400.0, 5000.0, 60000.0] {
+            let theta = libm::atan(r * 0.009 / 50.0);
+            let expected = libm::pow(theta, -2.5) * libm::cos(theta).powi(3);
+            let f = shape.density(r, 0.0);
+            assert!((f / expected - 1.0).abs() < 1e-14, "{r}: {f} vs {expected}");
+        }
     }
 }
