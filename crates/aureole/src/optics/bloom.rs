@@ -135,7 +135,7 @@ impl SpreadShape for BloomShape {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::shape::Sample;
+    use crate::optics::shape::assert_samples_agree;
 
     #[test]
     fn one_sample_where_the_grid_is_one_point_and_f_is_the_density() {
@@ -147,22 +147,10 @@ mod tests {
             }
             .shape(None)
             .unwrap();
-            let mut ones = 0;
-            for j in 0..400 {
-                for i in 0..400 {
-                    let (x, y) = (f64::from(i) * 4.1 - 3.0, f64::from(j) * 3.3);
-                    let grid = shape.grid(x, y);
-                    match shape.sample(x, y) {
-                        Sample::One(f) => {
-                            ones += 1;
-                            assert_eq!(grid, Supersampling::square(1), "({x}, {y})");
-                            assert_eq!(f, shape.density(x, y));
-                        }
-                        Sample::Grid(g) => assert_eq!(g, grid),
-                        Sample::Dark => panic!("a bloom lights every pixel"),
-                    }
-                }
-            }
+            let points = (0..400).flat_map(|j| {
+                (0..400).map(move |i| (f64::from(i) * 4.1 - 3.0, f64::from(j) * 3.3))
+            });
+            let ones = assert_samples_agree(&shape, points);
             assert!(ones > 50_000, "β {beta}: {ones}");
         }
     }

@@ -115,3 +115,27 @@ impl Supersampling {
         })
     }
 }
+
+/// For a shape that lights every pixel: each of `points`' samples is the
+/// grid the shape asks for there, and where that is one point, f there to
+/// the bit. How many were one point.
+#[cfg(test)]
+pub(crate) fn assert_samples_agree(
+    shape: &dyn SpreadShape,
+    points: impl Iterator<Item = (f64, f64)>,
+) -> usize {
+    let mut ones = 0;
+    for (x, y) in points {
+        let grid = shape.grid(x, y);
+        match shape.sample(x, y) {
+            Sample::One(f) => {
+                ones += 1;
+                assert_eq!(grid, Supersampling::square(1), "({x}, {y})");
+                assert_eq!(f, shape.density(x, y), "({x}, {y})");
+            }
+            Sample::Grid(g) => assert_eq!(g, grid, "({x}, {y})"),
+            Sample::Dark => panic!("({x}, {y}) is dark where every pixel is lit"),
+        }
+    }
+    ones
+}

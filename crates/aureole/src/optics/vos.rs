@@ -121,7 +121,7 @@ impl SpreadShape for VosShape {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::shape::Sample;
+    use crate::optics::shape::assert_samples_agree;
 
     #[test]
     fn one_sample_where_the_grid_is_one_point_and_f_is_the_density() {
@@ -136,22 +136,10 @@ mod tests {
                 exponent,
             };
             let shape = vos.shape(&camera, Some(0.009)).unwrap();
-            let mut ones = 0;
-            for j in 0..300 {
-                for i in 0..300 {
-                    let (x, y) = (f64::from(i) * 0.37 + 0.5, f64::from(j) * 0.29);
-                    let grid = shape.grid(x, y);
-                    match shape.sample(x, y) {
-                        Sample::One(f) => {
-                            ones += 1;
-                            assert_eq!(grid, Supersampling::square(1), "({x}, {y})");
-                            assert_eq!(f, shape.density(x, y));
-                        }
-                        Sample::Grid(g) => assert_eq!(g, grid),
-                        Sample::Dark => panic!("glare lights every pixel"),
-                    }
-                }
-            }
+            let points = (0..300).flat_map(|j| {
+                (0..300).map(move |i| (f64::from(i) * 0.37 + 0.5, f64::from(j) * 0.29))
+            });
+            let ones = assert_samples_agree(&shape, points);
             assert!(ones > 50_000, "n {exponent}: {ones}");
         }
     }
