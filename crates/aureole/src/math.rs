@@ -1,7 +1,7 @@
 //! Elementary functions for the kernel rasterisers' inner loops, where a
 //! full-frame 4K kernel evaluates them tens of millions of times: each a
-//! few multiplications and additions with no branch on the hot path, within
-//! a few ulp of the correctly rounded value (the tests bound each against
+//! short polynomial in a few multiplications and additions, within a few
+//! ulp of the correctly rounded value (the tests bound each against
 //! `libm`), and deterministic as `libm` is: IEEE `+ − × ÷` in f64 only, no
 //! fused multiply-add and no platform library, so every machine computes
 //! the same bits.
@@ -22,9 +22,9 @@ const LN2_LO: f64 = 1.9082149292705877e-10;
 const HALF_PI_HI: f64 = FRAC_PI_2;
 const HALF_PI_LO: f64 = 6.123_233_995_736_766e-17;
 
-/// The nearest whole number to `v` (|v| < 2⁵¹), ties to even.
+/// The nearest whole number to `v` (|v| < 2⁵¹), ties to even, as an f64.
 #[inline]
-fn round_even(v: f64) -> f64 {
+pub fn nearest(v: f64) -> f64 {
     (v + ROUNDER) - ROUNDER
 }
 
@@ -46,7 +46,7 @@ pub fn exp(x: f64) -> f64 {
             0.0
         };
     }
-    let k = round_even(x * std::f64::consts::LOG2_E);
+    let k = nearest(x * std::f64::consts::LOG2_E);
     // |r| ≤ ln2/2: the Taylor series to r¹³/13! leaves 4·10⁻¹⁸. Its terms
     // from r² on are summed by Estrin's scheme, products of independent
     // pairs rather than one chain of thirteen, then added to 1 + r.
@@ -199,7 +199,7 @@ pub fn neg_ln_cos(x: f64) -> f64 {
     }
 }
 
-/// atan(yᵢ/xᵢ)'s eight anchors, atan((2i + 1)/16), correctly rounded.
+/// The eight anchors of [`atan2`]: atan((2i + 1)/16), correctly rounded.
 const ATAN_ANCHORS: [f64; 8] = [
     0.062_418_809_995_957_35,
     0.185_347_949_995_694_76,
@@ -271,12 +271,6 @@ pub fn power(base: f64, exponent: f64) -> f64 {
     } else {
         result
     }
-}
-
-/// The nearest whole number to v (|v| < 2⁵¹, ties to even), as an f64.
-#[inline]
-pub fn nearest(v: f64) -> f64 {
-    round_even(v)
 }
 
 #[cfg(test)]

@@ -337,9 +337,6 @@ fn rasterise_bands(
 /// the shape's [`SpreadShape::sample`] there.
 fn corners(shape: &dyn SpreadShape, x: f64, y: f64, sample: Sample) -> Corners {
     let grid = if x.abs() <= 0.5 && y.abs() <= 0.5 {
-        if shape.vanishes_over_pixel(x, y) {
-            return [0.0; 4];
-        }
         let grid = shape.grid(x, y);
         Supersampling {
             x: grid.x.max(16),

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
-use super::shape::{SpreadShape, Supersampling};
+use super::shape::{one_point_beyond, SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -86,17 +86,14 @@ impl Bloom {
             radius >= 1e-3,
             "at least 0.001 px once converted to pixels",
         )?;
-        // The grid is one point where the curvature bound 2β(2β + 1)/(R² +
-        // r²) at the pixel's nearest point is at most 0.024 px⁻²
-        // (Supersampling::for_curvature); a pixel beyond one more pixel
-        // from that radius needs no test.
-        let beta = self.beta;
-        let flat = (2.0 * beta * (2.0 * beta + 1.0) / 0.024 - radius * radius).max(0.0);
-        let one_point = flat.sqrt() + std::f64::consts::FRAC_1_SQRT_2 + 1.0;
         Ok(BloomShape {
             radius,
-            beta,
-            one_point_squared: one_point * one_point,
+            beta: self.beta,
+            // The curvature bound of `grid`: 2β(2β + 1)/(R² + r²).
+            one_point_squared: one_point_beyond(
+                2.0 * self.beta * (2.0 * self.beta + 1.0),
+                radius * radius,
+            ),
         })
     }
 }
@@ -135,7 +132,7 @@ impl SpreadShape for BloomShape {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::shape::assert_samples_agree;
+    use crate::optics::shape::assert_rows_agree;
 
     #[test]
     fn one_sample_where_the_grid_is_one_point_and_f_is_the_density() {
@@ -147,10 +144,10 @@ mod tests {
             }
             .shape(None)
             .unwrap();
-            let points = (0..400).flat_map(|j| {
-                (0..400).map(move |i| (f64::from(i) * 4.1 - 3.0, f64::from(j) * 3.3))
-            });
-            let ones = assert_samples_agree(&shape, points);
+            // Out to 2000 px, where even β = 100 is one point.
+            let rows = (0..200).map(|j| (-3.0, f64::from(j) * 6.6, 1700));
+            let [ones, _, dark] = assert_rows_agree(&shape, rows, |_, _| {});
+            assert_eq!(dark, 0, "a bloom lights every pixel");
             assert!(ones > 50_000, "β {beta}: {ones}");
         }
     }

@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{fraction, length, Default, Kind, Parameter};
 
-use super::shape::{Sample, SpreadShape, Supersampling};
+use super::shape::{SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -311,11 +311,12 @@ impl Back {
 /// ∫₀¹ 2u R(u) T^(1/u) du with u = cos θ, by Simpson's rule on each side of
 /// the critical angle, where R jumps to 1.
 fn share(back: Back, transmission: f64) -> f64 {
+    let log_transmission = math::ln(transmission);
     let integrand = |u: f64| {
         if u <= 0.0 {
             0.0
         } else {
-            2.0 * u * back.reflectance(u) * oblique(math::ln(transmission), u)
+            2.0 * u * back.reflectance(u) * oblique(log_transmission, u)
         }
     };
     let simpson = |a: f64, b: f64| {
@@ -391,38 +392,9 @@ impl SpreadShape for HaloShape {
     fn grid(&self, x: f64, y: f64) -> Supersampling {
         let r = (x * x + y * y).sqrt();
         // The step at the ring is sampled finely in the pixels it crosses.
-        if let Some(ring) = self.ring {
-            if (r - ring).abs() <= std::f64::consts::SQRT_2 {
-                return Supersampling::square(32);
-            }
-        }
-        self.smooth
-    }
-
-    /// The grid and h a row at a time: the distances first, then h where
-    /// one point is enough, each pass of independent points.
-    fn sample_row(&self, x0: f64, y: f64, out: &mut [Sample]) {
-        const CHUNK: usize = 64;
-        let one = self.smooth == Supersampling::square(1);
-        for (c, chunk) in out.chunks_mut(CHUNK).enumerate() {
-            let first = x0 + (c * CHUNK) as f64;
-            let mut r = [0.0; CHUNK];
-            for (i, r) in r.iter_mut().take(chunk.len()).enumerate() {
-                let x = first + i as f64;
-                *r = (x * x + y * y).sqrt();
-            }
-            for (sample, &r) in chunk.iter_mut().zip(&r) {
-                let near_ring = self
-                    .ring
-                    .is_some_and(|ring| (r - ring).abs() <= std::f64::consts::SQRT_2);
-                *sample = if near_ring {
-                    Sample::Grid(Supersampling::square(32))
-                } else if one {
-                    Sample::One(self.at(r))
-                } else {
-                    Sample::Grid(self.smooth)
-                };
-            }
+        match self.ring {
+            Some(ring) if (r - ring).abs() <= std::f64::consts::SQRT_2 => Supersampling::square(32),
+            _ => self.smooth,
         }
     }
 }
@@ -444,47 +416,6 @@ mod tests {
             ..toml::from_str("").unwrap()
         };
         assert!((halation.base_index() - 1.5).abs() < 1e-12);
-    }
-
-    #[test]
-    fn a_rows_samples_are_what_the_grid_and_the_density_give() {
-        // A thin base (the grid is finer than a point everywhere), a thick
-        // one (one point away from the ring), with and without the ring.
-        for (path, back, transmission) in [
-            (3.0, Back::Air(1.5), 0.5),
-            (40.0, Back::Air(1.6), 0.2),
-            (40.0, Back::Backing(0.005), 0.3),
-            (12.0, Back::Air(1.5), 0.0),
-        ] {
-            let shape = HaloShape::new(path, back, transmission);
-            let (mut ones, mut grids) = (0, 0);
-            for j in 0..120 {
-                let y = f64::from(j) * 0.7;
-                let x0 = -0.5;
-                let mut row = vec![Sample::Dark; 150];
-                shape.sample_row(x0, y, &mut row);
-                for (i, sample) in row.into_iter().enumerate() {
-                    let x = x0 + i as f64;
-                    let grid = shape.grid(x, y);
-                    match sample {
-                        Sample::One(f) => {
-                            ones += 1;
-                            assert_eq!(grid, Supersampling::square(1));
-                            assert_eq!(f, shape.density(x, y), "({x}, {y})");
-                        }
-                        Sample::Grid(g) => {
-                            grids += 1;
-                            assert_eq!(g, grid, "({x}, {y})");
-                        }
-                        Sample::Dark => panic!("a halo lights every pixel"),
-                    }
-                }
-            }
-            assert!(ones + grids == 120 * 150, "{ones} {grids}");
-            if path >= 40.0 {
-                assert!(ones > 10_000, "L = {path}: {ones}");
-            }
-        }
     }
 
     #[test]

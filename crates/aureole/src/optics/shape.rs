@@ -24,24 +24,16 @@ pub(crate) trait SpreadShape: Sync {
         false
     }
 
-    /// Whether f is exactly 0 (in f64) everywhere in the pixel centred at
-    /// (x, y), so that its mean is 0 without sampling. Only a cheap,
-    /// conservative test belongs here: false is always correct.
-    fn vanishes_over_pixel(&self, _x: f64, _y: f64) -> bool {
-        false
-    }
-
     /// What the rasteriser needs of the pixel (or unit square) centred at
-    /// (x, y), in one call: whether f vanishes over it, else its grid, and
-    /// where that grid is a single point f there. A shape whose test, grid
-    /// and density share work (a direction, the nearest ray) computes it
-    /// once here; the answer must be the one the three calls would give.
+    /// (x, y), in one call: whether f is exactly 0 (in f64) over all of it
+    /// (only a cheap, conservative test: `Dark` must be true), else its
+    /// grid, and where that grid is a single point f there. A shape whose
+    /// test, grid and density share work (a direction, the nearest ray)
+    /// computes it once here; the grid and f must be those of `grid` and
+    /// `density`.
     fn sample(&self, x: f64, y: f64) -> Sample {
         if x * x + y * y > self.one_point_squared() {
             return Sample::One(self.density(x, y));
-        }
-        if self.vanishes_over_pixel(x, y) {
-            return Sample::Dark;
         }
         let grid = self.grid(x, y);
         if grid.x <= 1 && grid.y <= 1 {
@@ -52,9 +44,9 @@ pub(crate) trait SpreadShape: Sync {
     }
 
     /// The squared distance from the centre beyond which every pixel's
-    /// grid is one point and f never vanishes, so that
-    /// [`SpreadShape::sample`] asks for neither: most of a full-frame
-    /// kernel of a smooth shape. Infinite (the default): nowhere.
+    /// grid is one point, so that [`SpreadShape::sample`] does not ask for
+    /// it: most of a full-frame kernel of a smooth shape. Infinite (the
+    /// default): nowhere.
     fn one_point_squared(&self) -> f64 {
         f64::INFINITY
     }
@@ -71,8 +63,8 @@ pub(crate) trait SpreadShape: Sync {
 
     /// On the row of pixels centred at height y: ranges of x (pixel
     /// centres, inclusive) outside which f is exactly 0 over every pixel,
-    /// or `None` where any pixel may be lit. Like
-    /// [`SpreadShape::vanishes_over_pixel`], a conservative, cheap answer.
+    /// or `None` where any pixel may be lit. Like [`SpreadShape::sample`]'s
+    /// `Dark`, a conservative, cheap answer.
     fn lit_spans(&self, _y: f64) -> Option<Vec<(f64, f64)>> {
         None
     }
@@ -87,6 +79,19 @@ pub(crate) enum Sample {
     One(f64),
     /// f is averaged over this grid.
     Grid(Supersampling),
+}
+
+/// The largest |f''/f| in px⁻² that one point per pixel keeps near 10⁻³.
+const ONE_POINT_CURVATURE: f64 = 0.024;
+
+/// For a radial f whose curvature at distance r is at most c/(a + r²),
+/// taken at a pixel's nearest point (√2/2 px nearer the centre): the
+/// squared distance beyond which [`Supersampling::for_curvature`] gives
+/// one point, with a pixel to spare.
+pub(crate) fn one_point_beyond(c: f64, a: f64) -> f64 {
+    let flat = (c / ONE_POINT_CURVATURE - a).max(0.0).sqrt();
+    let r = flat + std::f64::consts::FRAC_1_SQRT_2 + 1.0;
+    r * r
 }
 
 /// A supersampling grid: `x` columns by `y` rows of sample points in a
@@ -107,7 +112,7 @@ impl Supersampling {
     /// (h²/24)·|f''/f| with h = 1/m, stays near 10⁻³ for a curvature
     /// `relative_curvature` = |f''/f| in px⁻², at most `max`.
     pub fn for_curvature(relative_curvature: f64, max: u32) -> Supersampling {
-        let m = (relative_curvature / 0.024).sqrt().ceil();
+        let m = (relative_curvature / ONE_POINT_CURVATURE).sqrt().ceil();
         Supersampling::square(if m.is_finite() {
             (m as u32).clamp(1, max)
         } else {
@@ -116,26 +121,40 @@ impl Supersampling {
     }
 }
 
-/// For a shape that lights every pixel: each of `points`' samples is the
-/// grid the shape asks for there, and where that is one point, f there to
-/// the bit. How many were one point.
+/// Each row of `rows` (x₀, y, n: the points (x₀ + i, y), i < n) through
+/// [`SpreadShape::sample_row`]: every point is what [`SpreadShape::sample`]
+/// says of it alone, its grid is [`SpreadShape::grid`]'s, and where that is
+/// one point, f is [`SpreadShape::density`]'s to the bit; `dark` checks
+/// each point called dark. How many were one point, a grid, dark.
 #[cfg(test)]
-pub(crate) fn assert_samples_agree(
+pub(crate) fn assert_rows_agree(
     shape: &dyn SpreadShape,
-    points: impl Iterator<Item = (f64, f64)>,
-) -> usize {
-    let mut ones = 0;
-    for (x, y) in points {
-        let grid = shape.grid(x, y);
-        match shape.sample(x, y) {
-            Sample::One(f) => {
-                ones += 1;
-                assert_eq!(grid, Supersampling::square(1), "({x}, {y})");
-                assert_eq!(f, shape.density(x, y), "({x}, {y})");
+    rows: impl Iterator<Item = (f64, f64, usize)>,
+    mut dark: impl FnMut(f64, f64),
+) -> [usize; 3] {
+    let mut counts = [0; 3];
+    for (x0, y, n) in rows {
+        let mut row = vec![Sample::Dark; n];
+        shape.sample_row(x0, y, &mut row);
+        for (i, sample) in row.into_iter().enumerate() {
+            let x = x0 + i as f64;
+            assert_eq!(sample, shape.sample(x, y), "({x}, {y})");
+            match sample {
+                Sample::One(f) => {
+                    counts[0] += 1;
+                    assert_eq!(shape.grid(x, y), Supersampling::square(1), "({x}, {y})");
+                    assert_eq!(f, shape.density(x, y), "({x}, {y})");
+                }
+                Sample::Grid(g) => {
+                    counts[1] += 1;
+                    assert_eq!(g, shape.grid(x, y), "({x}, {y})");
+                }
+                Sample::Dark => {
+                    counts[2] += 1;
+                    dark(x, y);
+                }
             }
-            Sample::Grid(g) => assert_eq!(g, grid, "({x}, {y})"),
-            Sample::Dark => panic!("({x}, {y}) is dark where every pixel is lit"),
         }
     }
-    ones
+    counts
 }

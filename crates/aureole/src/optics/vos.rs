@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{Default, Kind, Parameter, EPSILON};
 
-use super::shape::{SpreadShape, Supersampling};
+use super::shape::{one_point_beyond, SpreadShape, Supersampling};
 use super::{Context, Model, Source};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -64,15 +64,11 @@ impl Vos {
         self.validate()?;
         let focal = camera.require_focal_length("vos glare")?;
         let pitch = pitch_mm.ok_or_else(|| Error::needs_sensor_width("vos glare".into()))?;
-        // The grid is one point where n(n + 1)/r² at the pixel's nearest
-        // point is at most 0.024 px⁻² (Supersampling::for_curvature); a
-        // pixel one more pixel beyond needs no test.
-        let n = self.exponent;
-        let one_point = (n * (n + 1.0) / 0.024).sqrt() + std::f64::consts::FRAC_1_SQRT_2 + 1.0;
         Ok(VosShape {
             radians_per_px: pitch / focal,
-            exponent: n,
-            one_point_squared: one_point * one_point,
+            exponent: self.exponent,
+            // The curvature bound of `grid`: n(n + 1)/r².
+            one_point_squared: one_point_beyond(self.exponent * (self.exponent + 1.0), 0.0),
         })
     }
 }
@@ -121,7 +117,7 @@ impl SpreadShape for VosShape {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::shape::assert_samples_agree;
+    use crate::optics::shape::assert_rows_agree;
 
     #[test]
     fn one_sample_where_the_grid_is_one_point_and_f_is_the_density() {
@@ -136,10 +132,9 @@ mod tests {
                 exponent,
             };
             let shape = vos.shape(&camera, Some(0.009)).unwrap();
-            let points = (0..300).flat_map(|j| {
-                (0..300).map(move |i| (f64::from(i) * 0.37 + 0.5, f64::from(j) * 0.29))
-            });
-            let ones = assert_samples_agree(&shape, points);
+            let rows = (0..300).map(|j| (0.5, f64::from(j) * 0.29, 300));
+            let [ones, _, dark] = assert_rows_agree(&shape, rows, |_, _| {});
+            assert_eq!(dark, 0, "glare lights every pixel");
             assert!(ones > 50_000, "n {exponent}: {ones}");
         }
     }
