@@ -9,7 +9,9 @@ run:
 - aureole: `aureole apply s.%04d.exr --frames … --kernel K -o out/ --half`,
   a batch of 1 and of FRAMES + 1 frames; the steady-state time per frame is
   the difference over FRAMES, the per-stage medians come from its summary
-  lines, the peak memory is that of the whole batch (`/usr/bin/time`);
+  lines, the peak memory is that of the whole batch (`/usr/bin/time`), the
+  fresh memory per frame its minor faults (batches of FRAMES + 1 against
+  1, and of 2 FRAMES + 1 against FRAMES + 1: the steady state);
 - the peer: the `OpenEXR` package reading each frame, scipy.signal's
   fftconvolve with 2 workers per channel (f32, mode "same"), and OpenEXR
   writing half floats with the input's compression (ZIP), frame by frame in
@@ -117,14 +119,15 @@ def aureole_batch(aureole, work, kernel, count, ext="exr"):
     os.makedirs(out)
     half = ["--half"] if ext == "exr" else []
     start = time.perf_counter()
-    done = run(["/usr/bin/time", "-f", "peak %M", aureole, "apply",
+    done = run(["/usr/bin/time", "-f", "peak %M faults %R", aureole, "apply",
                 os.path.join(work, f"s.%04d.{ext}"), "--frames", f"1-{count}",
                 "--kernel", kernel, "-o", out + "/"] + half)
     wall = time.perf_counter() - start
     stages = [tuple(map(float, m)) for m in re.findall(
         r"read ([\d.]+) s, camera ([\d.]+) s, write ([\d.]+) s", done.stderr)]
     peak = int(re.search(r"peak (\d+)", done.stderr).group(1)) / 1024
-    return wall, stages, peak, out
+    faults = int(re.search(r"faults (\d+)", done.stderr).group(1))
+    return wall, stages, peak, out, faults
 
 
 def read_rgb(path):
@@ -135,11 +138,20 @@ def read_rgb(path):
         return np.stack([channels[c].pixels.astype(np.float64) for c in ("R", "G", "B")])
 
 
+def fresh_mib(faults_before, faults_after):
+    """Fresh memory per frame between two batches FRAMES frames apart, in
+    MiB: their minor page faults, 4 KiB each."""
+    return (faults_after - faults_before) / FRAMES * 4096 / 2**20
+
+
 def workload(name, aureole, work, kernel):
-    for n in range(2, FRAMES + 2):
+    for n in range(2, 2 * FRAMES + 2):
         shutil.copyfile(os.path.join(work, "s.0001.exr"), os.path.join(work, f"s.{n:04d}.exr"))
-    one, _, _, _ = aureole_batch(aureole, work, kernel, 1)
-    many, stages, peak, out = aureole_batch(aureole, work, kernel, FRAMES + 1)
+    one, _, _, _, faults_one = aureole_batch(aureole, work, kernel, 1)
+    many, stages, peak, out, faults_many = aureole_batch(aureole, work, kernel, FRAMES + 1)
+    faults_more = aureole_batch(aureole, work, kernel, 2 * FRAMES + 1)[4]
+    fresh = (f"{fresh_mib(faults_one, faults_many):.0f} MiB, "
+             f"{fresh_mib(faults_many, faults_more):.1f} MiB")
     per_frame = (many - one) / FRAMES
     steady = stages[1:]
     read, camera, write = (statistics.median(s[i] for s in steady) for i in range(3))
@@ -151,19 +163,19 @@ def workload(name, aureole, work, kernel):
     a = read_rgb(os.path.join(out, "s.0001.exr"))
     b = read_rgb(os.path.join(peer_out, "s.0001.exr"))
     difference = np.linalg.norm(a - b) / np.linalg.norm(a)
-    print(f"| {name} | aureole | {per_frame:.2f} s | {read:.2f} s | {camera:.2f} s | {write:.2f} s | {peak:.0f} MB | 1.0 | reference |")
-    print(f"| {name} | OpenEXR + scipy fftconvolve (2 workers) | {theirs['frame']:.2f} s | {theirs['read']:.2f} s | {theirs['convolve']:.2f} s | {theirs['write']:.2f} s | {theirs['peak_mb']:.0f} MB | {theirs['frame'] / per_frame:.1f} | {difference:.1e} |")
+    print(f"| {name} | aureole | {per_frame:.2f} s | {read:.2f} s | {camera:.2f} s | {write:.2f} s | {peak:.0f} MB | {fresh} | 1.0 | reference |")
+    print(f"| {name} | OpenEXR + scipy fftconvolve (2 workers) | {theirs['frame']:.2f} s | {theirs['read']:.2f} s | {theirs['convolve']:.2f} s | {theirs['write']:.2f} s | {theirs['peak_mb']:.0f} MB | | {theirs['frame'] / per_frame:.1f} | {difference:.1e} |")
 
 
 def pfm_batch(name, aureole, work, kernel):
     """aureole alone, PFM in and out (float32, no compression)."""
     for n in range(2, FRAMES + 2):
         shutil.copyfile(os.path.join(work, "s.0001.pfm"), os.path.join(work, f"s.{n:04d}.pfm"))
-    one, _, _, _ = aureole_batch(aureole, work, kernel, 1, "pfm")
-    many, stages, peak, _ = aureole_batch(aureole, work, kernel, FRAMES + 1, "pfm")
+    one, _, _, _, faults_one = aureole_batch(aureole, work, kernel, 1, "pfm")
+    many, stages, peak, _, faults_many = aureole_batch(aureole, work, kernel, FRAMES + 1, "pfm")
     steady = stages[1:]
     read, camera, write = (statistics.median(s[i] for s in steady) for i in range(3))
-    print(f"| {name} | aureole | {(many - one) / FRAMES:.2f} s | {read:.2f} s | {camera:.2f} s | {write:.2f} s | {peak:.0f} MB | | |")
+    print(f"| {name} | aureole | {(many - one) / FRAMES:.2f} s | {read:.2f} s | {camera:.2f} s | {write:.2f} s | {peak:.0f} MB | {fresh_mib(faults_one, faults_many):.0f} MiB | | |")
 
 
 def timed(command):
@@ -301,9 +313,11 @@ def main(aureole, bench_codec, work, workload_dir):
     print("aureole's overlap (it reads the next frame and writes the last while one")
     print("is convolved), so they add up to more than its time per frame. Both write")
     print("half floats with ZIP, the input's compression. Agreement: relative L2")
-    print("between the two results.\n")
-    print("| workload | implementation | per frame | read | convolve | write | peak memory | ratio to aureole | agreement |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("between the two results. Fresh memory per frame: `/usr/bin/time`'s")
+    print(f"minor faults, batches of {FRAMES + 1} against 1 (the frames in flight fill")
+    print(f"up: one read ahead, one being written), then {2 * FRAMES + 1} against {FRAMES + 1} (the steady state).\n")
+    print("| workload | implementation | per frame | read | convolve | write | peak memory | fresh memory per frame | ratio to aureole | agreement |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for size, (w, h) in (("4K", (3840, 2160)), ("1080p", (1920, 1080))):
         dir = os.path.join(work, f"street-{size}")
         os.makedirs(dir, exist_ok=True)

@@ -11,6 +11,7 @@ use aureole_io::job::Input;
 use aureole_io::kernel::read_kernel_file;
 use aureole_io::limits::{default_memory_limit, Limits};
 use aureole_io::read::Choice;
+use aureole_io::spares::Spares;
 use aureole_io::write::LinearOptions;
 use clap::ArgMatches;
 
@@ -228,6 +229,13 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         limit,
         quiet,
         batch: jobs.len() > 1,
+        // One frame keeps nothing: its buffers are freed as soon as done.
+        spares: if jobs.len() > 1 {
+            crate::allocator::keep_freed_memory();
+            Spares::keeping()
+        } else {
+            Spares::default()
+        },
         progress: Progress::new(quiet),
     };
     let failures = run.all(session, &todo);
@@ -281,6 +289,8 @@ struct Run<'a> {
     quiet: bool,
     /// Several jobs: a frame's failure is said at once and the rest go on.
     batch: bool,
+    /// The buffers of frames done, lent to the frames after them.
+    spares: Spares,
     progress: Progress,
 }
 
@@ -374,7 +384,12 @@ impl Run<'_> {
         let limits = Limits {
             max_bytes: self.limit,
         };
-        let input = input::read(&job.input, &options, (limits, &self.choice), self.quiet)?;
+        let input = input::read(
+            &job.input,
+            &options,
+            (limits, &self.choice, &self.spares),
+            self.quiet,
+        )?;
         Ok(Read {
             job,
             input,
@@ -434,6 +449,7 @@ impl Run<'_> {
             read.input.apply(session, &options, &mut report)
         }
         .map_err(|e| input::about(&job.input, e))?;
+        read.input.give_back_planes();
         let kernel = session
             .plan()
             .map_or((0, 0), |p| (p.kernel().width(), p.kernel().height()));

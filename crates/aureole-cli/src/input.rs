@@ -7,7 +7,8 @@ use std::path::Path;
 use aureole::{FrameOptions, ScaleSource};
 use aureole_io::job::Input;
 use aureole_io::limits::Limits;
-use aureole_io::read::{read_image_with, Choice, Loaded};
+use aureole_io::read::{read_image_reusing, Choice, Loaded};
+use aureole_io::spares::Spares;
 
 use crate::values::parse_positive;
 use crate::Failure;
@@ -50,10 +51,11 @@ impl SourceArgs {
 pub fn read(
     path: &Path,
     options: &FrameOptions,
-    (limits, choice): (Limits, &Choice),
+    (limits, choice, spares): (Limits, &Choice, &Spares),
     quiet: bool,
 ) -> Result<Input, Failure> {
-    let input = read_loaded(path, read_image_with(path, limits, choice)?, options, quiet)?;
+    let loaded = read_image_reusing(path, limits, choice, spares)?;
+    let input = read_loaded(path, loaded, options, quiet)?;
     if !quiet {
         eprintln!(
             "aureole: note: {}: luminance scale {} cd/m² per unit ({})",

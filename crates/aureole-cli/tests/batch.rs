@@ -162,6 +162,61 @@ fn several_inputs_into_a_folder_give_the_bytes_of_single_runs() {
         .stderr(predicates::str::contains("must be an existing folder"));
 }
 
+/// A batch lends each frame the buffers of the frames before it (decoded
+/// planes, encode buffers, the file's bytes): frames of other sizes,
+/// sample types and layouts must come out as if each ran alone.
+#[test]
+fn frames_of_other_sizes_and_types_in_one_batch_give_the_bytes_of_single_runs() {
+    let temp = tempfile::tempdir().unwrap();
+    let dir = temp.path();
+    let float = LinearOptions {
+        samples: Some(aureole_io::formats::Samples::Float),
+        ..LinearOptions::default()
+    };
+    let half = LinearOptions {
+        samples: Some(aureole_io::formats::Samples::Half),
+        ..LinearOptions::default()
+    };
+    let mut grey = frame(3, (30, 20));
+    grey.layout = Layout::Luminance;
+    grey.planes.truncate(1);
+    let frames: [(Image, LinearOptions); 5] = [
+        (frame(1, (48, 30)), float),
+        (frame(2, (20, 14)), half),
+        (grey, float),
+        (frame(4, (48, 30)), half),
+        (frame(5, (52, 34)), float),
+    ];
+    for (n, (image, options)) in frames.iter().enumerate() {
+        let path = dir.join(format!("shot.{:04}.exr", n + 1));
+        write_linear(&path, image, *options).unwrap();
+    }
+    std::fs::create_dir(dir.join("out")).unwrap();
+    let camera = ["--preset", "paper-fig5-both", "--half"];
+    aureole()
+        .current_dir(dir)
+        .args(["apply", "-q", "shot.%04d.exr", "--frames", "1-5"])
+        .args(["-o", "out/glow.%04d.exr"])
+        .args(camera)
+        .assert()
+        .success();
+    for n in 1..=5 {
+        let single = dir.join(format!("single{n}.exr"));
+        aureole()
+            .current_dir(dir)
+            .args(["apply", "-q", &format!("shot.{n:04}.exr"), "-o"])
+            .arg(&single)
+            .args(camera)
+            .assert()
+            .success();
+        assert_eq!(
+            std::fs::read(dir.join(format!("out/glow.{n:04}.exr"))).unwrap(),
+            std::fs::read(&single).unwrap(),
+            "frame {n}"
+        );
+    }
+}
+
 #[test]
 fn ctrl_c_stops_the_batch_leaving_only_whole_files() {
     let temp = sequence(40, (200, 150));

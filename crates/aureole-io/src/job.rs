@@ -186,6 +186,14 @@ impl Input {
         Ok(applied)
     }
 
+    /// Hands the frame's planes to the buffers the file was read with
+    /// ([`crate::read::read_image_reusing`]) once every view has been
+    /// through the camera: the next frame is decoded into them. The frame
+    /// is empty afterwards; [`Input::write`] needs only its scale.
+    pub fn give_back_planes(&mut self) {
+        self.original.spares.give_image(self.frame.take_image());
+    }
+
     /// Writes `image`, the camera's result, to `output` atomically: an EXR
     /// into a copy of the input with every view, layer, part and attribute,
     /// a linear format as it is, a picture exposed and tone-mapped.

@@ -48,6 +48,7 @@ pub mod measured;
 #[cfg(feature = "plot")]
 pub mod plot;
 pub mod read;
+pub mod spares;
 pub mod write;
 
 pub use error::{Error, Result};

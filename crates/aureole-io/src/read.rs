@@ -1,6 +1,7 @@
 //! Reading images by their content, whatever their name says: the format
 //! table ([`crate::formats`]) recognises the file and decodes it.
 
+use std::io::Read;
 use std::path::Path;
 
 use aureole::image::Image;
@@ -11,6 +12,7 @@ use crate::error::{Error, Result};
 use crate::formats::{by_content, readable, Original};
 pub use crate::formats::{Choice, Shape};
 use crate::limits::Limits;
+use crate::spares::Spares;
 
 /// A decoded file and what the user should know about how it was read.
 #[derive(Debug, Clone)]
@@ -123,6 +125,17 @@ pub fn read_image(path: &Path, limits: Limits) -> Result<Loaded> {
 
 /// As [`read_image`], reading the layer and part `choice` names.
 pub fn read_image_with(path: &Path, limits: Limits, choice: &Choice) -> Result<Loaded> {
+    read_image_reusing(path, limits, choice, &Spares::default())
+}
+
+/// As [`read_image_with`], into buffers `spares` lends (earlier frames'),
+/// which the image's [`Loaded::original`] carries to the writer.
+pub fn read_image_reusing(
+    path: &Path,
+    limits: Limits,
+    choice: &Choice,
+    spares: &Spares,
+) -> Result<Loaded> {
     let metadata = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     // Every format we read stores at least a byte per pixel's worth of
     // data for its planes, so a file larger than the bound cannot fit.
@@ -136,8 +149,13 @@ pub fn read_image_with(path: &Path, limits: Limits, choice: &Choice) -> Result<L
             ),
         });
     }
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    decode_image_with(&bytes, limits, choice).map_err(|message| Error::Decode {
+    let mut bytes = spares.bytes(usize::try_from(metadata.len()).unwrap_or(0));
+    std::fs::File::open(path)
+        .and_then(|mut file| file.read_to_end(&mut bytes))
+        .map_err(|e| Error::io(path, e))?;
+    let loaded = decode(&bytes, limits, choice, spares);
+    spares.give_bytes(bytes);
+    loaded.map_err(|message| Error::Decode {
         path: path.to_path_buf(),
         message,
     })
@@ -155,6 +173,15 @@ pub fn decode_image_with(
     limits: Limits,
     choice: &Choice,
 ) -> std::result::Result<Loaded, String> {
+    decode(bytes, limits, choice, &Spares::default())
+}
+
+fn decode(
+    bytes: &[u8],
+    limits: Limits,
+    choice: &Choice,
+    spares: &Spares,
+) -> std::result::Result<Loaded, String> {
     let head = &bytes[..bytes.len().min(16)];
     match by_content(head) {
         Some(format) if choice.is_some() && format.name != "OpenEXR" => Err(format!(
@@ -162,7 +189,8 @@ pub fn decode_image_with(
             format.name
         )),
         Some(format) => {
-            let decoded = (format.decode)(bytes, limits, choice)?;
+            let mut decoded = (format.decode)(bytes, limits, choice, spares)?;
+            decoded.original.spares = spares.clone();
             Ok(Loaded {
                 image: decoded.image,
                 format: format.name,

@@ -17,6 +17,7 @@ use crate::compression::Compression;
 use crate::display::Depth;
 use crate::error::Result;
 use crate::limits::Limits;
+use crate::spares::Spares;
 
 /// What a format holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,7 +58,7 @@ pub struct Format {
     pub(crate) magic: fn(&[u8]) -> bool,
     /// Decodes a whole file (the layer and part chosen, where it has
     /// several); the error is one line.
-    pub(crate) decode: fn(&[u8], Limits, &Choice) -> std::result::Result<Decoded, String>,
+    pub(crate) decode: fn(&[u8], Limits, &Choice, &Spares) -> std::result::Result<Decoded, String>,
     /// Writes it.
     pub(crate) encode: Encoder,
 }
@@ -102,6 +103,9 @@ pub struct Original {
     pub(crate) radiance: Option<radiance::Header>,
     /// Layers of glare to write beside the result (EXR only).
     pub(crate) glare: Vec<aureole::GlareLayer>,
+    /// Where the writer takes its buffers from and gives them back: those
+    /// the file was read with.
+    pub(crate) spares: Spares,
 }
 
 impl Original {
@@ -262,7 +266,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::Unsupported,
         depths: &[],
         magic: |head| head.starts_with(b"#?"),
-        decode: |bytes, limits, _| radiance::decode(bytes, limits),
+        decode: |bytes, limits, _, _| radiance::decode(bytes, limits),
         encode: Encoder::Linear(radiance::encode),
     },
     Format {
@@ -273,7 +277,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::Planes,
         depths: &[],
         magic: |head| head.starts_with(b"PF") || head.starts_with(b"Pf"),
-        decode: |bytes, limits, _| pfm::decode_file(bytes, limits),
+        decode: |bytes, limits, _, _| pfm::decode_file(bytes, limits),
         encode: Encoder::Linear(pfm::encode),
     },
     Format {
@@ -284,7 +288,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::LogPicture,
         depths: &[Depth::Eight, Depth::Sixteen],
         magic: |head| head.starts_with(b"\x89PNG"),
-        decode: |bytes, limits, _| picture::decode(bytes, limits),
+        decode: |bytes, limits, _, _| picture::decode(bytes, limits),
         encode: Encoder::Picture(image::ImageFormat::Png),
     },
     Format {
@@ -295,7 +299,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Eight],
         magic: |head| head.starts_with(&[0xff, 0xd8, 0xff]),
-        decode: |bytes, limits, _| picture::decode(bytes, limits),
+        decode: |bytes, limits, _, _| picture::decode(bytes, limits),
         encode: Encoder::Picture(image::ImageFormat::Jpeg),
     },
     Format {
@@ -306,7 +310,7 @@ pub static FORMATS: &[Format] = &[
         kernels: KernelStorage::Unsupported,
         depths: &[Depth::Sixteen, Depth::Eight],
         magic: |head| head.starts_with(b"II*\0") || head.starts_with(b"MM\0*"),
-        decode: |bytes, limits, _| picture::decode(bytes, limits),
+        decode: |bytes, limits, _, _| picture::decode(bytes, limits),
         encode: Encoder::Picture(image::ImageFormat::Tiff),
     },
 ];

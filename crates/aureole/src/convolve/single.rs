@@ -27,7 +27,7 @@ use rustfft::{Fft, FftPlanner};
 use super::grid::{ColumnTransform, Grid, Transforms};
 use super::lamps::Near;
 use super::placement::Placement;
-use super::pool::Pool;
+use super::pool::{Lent, Pool, Scratch};
 use super::{Centre, Engine, Footprint, Load, Spread};
 use crate::control::{Cancel, Control};
 use crate::error::Result;
@@ -109,12 +109,13 @@ enum KernelColumn<'a> {
     Split {
         far: &'a [Complex<f32>],
         window: &'a [Complex<f32>],
-        lamps: Option<&'a LampRows>,
+        lamps: Option<&'a LampRows<'a>>,
     },
 }
 
-/// Row spectra of the lamps alone, by row: (row, its spectrum).
-type LampRows = Vec<(usize, Vec<Complex<f32>>)>;
+/// Row spectra of the lamps alone, by row: (row, its spectrum), lent by
+/// the engine's pool of them.
+type LampRows<'a> = Vec<(usize, Lent<'a, Vec<Complex<f32>>>)>;
 
 /// What a strip task reads: strip `index`, the kernel plane's spectra, and
 /// the lamps' row spectra if there are lamps.
@@ -122,7 +123,7 @@ struct Strip<'a> {
     index: usize,
     spectra: &'a Spectra,
     kernel_plane: usize,
-    lamps: Option<&'a LampRows>,
+    lamps: Option<&'a LampRows<'a>>,
 }
 
 impl Strip<'_> {
@@ -230,7 +231,28 @@ pub struct Convolver {
     twiddles: Vec<Complex<f32>>,
     transforms: Transforms<f32>,
     buffers: Pool<Buffers>,
+    /// Each pass's per-task buffers, kept from frame to frame.
+    scratch: PassScratch,
 }
+
+/// The buffers a task of each pass works in.
+#[derive(Debug, Default)]
+struct PassScratch {
+    forward: Scratch<RowScratch>,
+    columns: Scratch<ColumnScratch>,
+    inverse: Scratch<InverseScratch>,
+    /// The lamps' row spectra, one per row with lamps.
+    lamps: Scratch<Vec<Complex<f32>>>,
+}
+
+/// A row padded, its spectrum, the transform's scratch.
+type RowScratch = (Vec<f32>, Vec<Complex<f32>>, Vec<Complex<f32>>);
+
+/// A strip of H rows, three columns, the transforms' scratch.
+type ColumnScratch = (Vec<Complex<f32>>, [Vec<Complex<f32>>; 3], Vec<Complex<f32>>);
+
+/// A block of row spectra, a row, the transform's scratch.
+type InverseScratch = (Vec<Complex<f32>>, Vec<f32>, Vec<Complex<f32>>);
 
 impl Convolver {
     /// Plans the convolution of `width`×`height` images with a kernel given
@@ -289,6 +311,7 @@ impl Convolver {
             twiddles,
             transforms: Transforms::plan(grid.px, grid.columns.transform_length()),
             buffers: Pool::new(),
+            scratch: PassScratch::default(),
         }
     }
 
@@ -401,16 +424,19 @@ impl Convolver {
             .enumerate()
             .for_each_init(
                 || {
-                    (
-                        row_fft.make_input_vec(),
-                        row_fft.make_output_vec(),
-                        row_fft.make_scratch_vec(),
-                    )
+                    self.scratch.forward.lend(|| {
+                        (
+                            row_fft.make_input_vec(),
+                            row_fft.make_output_vec(),
+                            row_fft.make_scratch_vec(),
+                        )
+                    })
                 },
-                |(padded, spectrum, scratch), (block, (tiles, source))| {
+                |lent, (block, (tiles, source))| {
                     if cancel.is_cancelled() {
                         return;
                     }
+                    let (padded, spectrum, scratch) = &mut **lent;
                     for (r, row) in source.chunks(w).enumerate() {
                         match input.fractions {
                             Some(fractions) => {
@@ -439,20 +465,33 @@ impl Convolver {
 
     /// The row spectra of an input's lamps alone (the forward rows leave
     /// them out), one per row that has lamps.
-    fn lamp_rows(&self, input: &Input) -> LampRows {
+    fn lamp_rows(&self, input: &Input) -> LampRows<'_> {
         let w = self.width;
         let mut rows: Vec<usize> = input.lamps.iter().map(|&i| i / w).collect();
         rows.dedup();
+        let row_fft = &self.transforms.row_fft;
         rows.into_par_iter()
-            .map(|y| {
-                let mut padded = self.transforms.row_fft.make_input_vec();
-                for &i in lamps_in_row(input.lamps, y, w) {
-                    padded[i % w] = input.bright(i);
-                }
-                let mut spectrum = self.transforms.row_fft.make_output_vec();
-                let _ = self.transforms.row_fft.process(&mut padded, &mut spectrum);
-                (y, spectrum)
-            })
+            .map_init(
+                || {
+                    self.scratch.forward.lend(|| {
+                        (
+                            row_fft.make_input_vec(),
+                            row_fft.make_output_vec(),
+                            row_fft.make_scratch_vec(),
+                        )
+                    })
+                },
+                |lent, y| {
+                    let (padded, _, scratch) = &mut **lent;
+                    padded.fill(0.0);
+                    for &i in lamps_in_row(input.lamps, y, w) {
+                        padded[i % w] = input.bright(i);
+                    }
+                    let mut spectrum = self.scratch.lamps.lend(|| row_fft.make_output_vec());
+                    let _ = row_fft.process_with_scratch(padded, &mut spectrum, scratch);
+                    (y, spectrum)
+                },
+            )
             .collect()
     }
 
@@ -487,13 +526,16 @@ impl Convolver {
             .max(self.transforms.column_ifft.get_inplace_scratch_len());
         tasks.into_par_iter().enumerate().for_each_init(
             || {
-                (
-                    vec![zero; h * STRIP],
-                    [vec![zero; py], vec![zero; py], vec![zero; py]],
-                    vec![zero; scratch_len],
-                )
+                self.scratch.columns.lend(|| {
+                    (
+                        vec![zero; h * STRIP],
+                        [vec![zero; py], vec![zero; py], vec![zero; py]],
+                        vec![zero; scratch_len],
+                    )
+                })
             },
-            |(out, columns, scratch), (s, mut tiles)| {
+            |lent, (s, mut tiles)| {
+                let (out, columns, scratch) = &mut **lent;
                 for ((input, lamps), tiles) in inputs.iter().zip(lamp_rows).zip(tiles.iter_mut()) {
                     if cancel.is_cancelled() {
                         return;
@@ -710,16 +752,19 @@ impl Convolver {
             .enumerate()
             .for_each_init(
                 || {
-                    (
-                        vec![zero; BLOCK * count],
-                        row_ifft.make_output_vec(),
-                        row_ifft.make_scratch_vec(),
-                    )
+                    self.scratch.inverse.lend(|| {
+                        (
+                            vec![zero; BLOCK * count],
+                            row_ifft.make_output_vec(),
+                            row_ifft.make_scratch_vec(),
+                        )
+                    })
                 },
-                |(spectra, output, scratch), (block, (destination, source))| {
+                |lent, (block, (destination, source))| {
                     if cancel.is_cancelled() {
                         return;
                     }
+                    let (spectra, output, scratch) = &mut **lent;
                     self.gather_block(results, block, destination.len() / w, strips, spectra);
                     for (r, ((spectrum, destination), source)) in spectra
                         .chunks_mut(count)

@@ -98,6 +98,14 @@ impl Frame {
         self.image
     }
 
+    /// The image taken out, an empty one of its layout left in its place
+    /// with the frame's scale: its planes for another frame's once the
+    /// camera is done with them.
+    pub fn take_image(&mut self) -> Image {
+        let empty = Image::filled(0, 0, self.image.layout, 0.0);
+        std::mem::replace(&mut self.image, empty)
+    }
+
     /// cd/m² per file unit.
     pub fn scale(&self) -> f64 {
         self.scale

@@ -25,6 +25,7 @@ use crate::compression::Compression;
 use crate::error::{Error, Result};
 use crate::formats::{explain, Choice, Shape};
 use crate::limits::Limits;
+use crate::spares::Spares;
 
 mod b44;
 mod chroma;
@@ -792,6 +793,7 @@ pub(crate) fn decode(
     bytes: &[u8],
     limits: Limits,
     choice: &Choice,
+    spares: &Spares,
 ) -> std::result::Result<Decoded, String> {
     let file = read::File::parse(bytes).map_err(|e| explain("OpenEXR", e))?;
     let levels = check_headers(&file.headers, limits)?;
@@ -808,7 +810,8 @@ pub(crate) fn decode(
                 .map(move |name| (c.part, name.as_str()))
         })
         .collect();
-    let mut channels = read::read(bytes, &file, &wanted).map_err(|e| explain("OpenEXR", e))?;
+    let mut channels =
+        read::read(bytes, &file, &wanted, spares).map_err(|e| explain("OpenEXR", e))?;
 
     let mut notes = Vec::new();
     let mut spread: Vec<&Candidate> = vec![&chosen];
@@ -894,6 +897,7 @@ pub(crate) fn decode(
         original: super::Original {
             glare: Vec::new(),
             radiance: None,
+            spares: spares.clone(),
             exr: Some(Box::new(Kept {
                 image: kept,
                 part: chosen.part,
@@ -1096,18 +1100,25 @@ fn kept_image(headers: &[Header], channels: Vec<Vec<read::Channel>>) -> FlatImag
     }
 }
 
-/// Samples to store: half (clamped to its range, counted) or float; on
-/// every core, half through F16C where the CPU has it.
-fn samples(plane: &[f32], half: bool, clamp: bool, clamped: &mut usize) -> x::FlatSamples {
+/// Samples to store, in a buffer `spares` lends: half (clamped to its
+/// range, counted) or float; on every core, half through F16C where the
+/// CPU has it.
+fn samples(
+    plane: &[f32],
+    half: bool,
+    clamp: bool,
+    spares: &Spares,
+    clamped: &mut usize,
+) -> x::FlatSamples {
     const CHUNK: usize = 1 << 16;
     if !half {
-        let mut out = vec![0.0f32; plane.len()];
+        let mut out = spares.floats(plane.len());
         out.par_chunks_mut(CHUNK)
             .zip(plane.par_chunks(CHUNK))
             .for_each(|(o, p)| o.copy_from_slice(p));
         return x::FlatSamples::F32(out);
     }
-    let mut out = vec![x::f16::ZERO; plane.len()];
+    let mut out = spares.halves(plane.len());
     *clamped += out
         .par_chunks_mut(CHUNK)
         .zip(plane.par_chunks(CHUNK))
@@ -1147,6 +1158,7 @@ fn put_back(
     image: &mut FlatImage,
     result: &Layer,
     samples: Option<Samples>,
+    spares: &Spares,
     clamped: &mut usize,
 ) -> std::result::Result<(), String> {
     let colours = result.colour.len();
@@ -1181,7 +1193,7 @@ fn put_back(
         let half = is_half(id.kind, samples);
         x::AnyChannel {
             name: id.name.as_str().into(),
-            sample_data: self::samples(plane, half, clamp, clamped),
+            sample_data: self::samples(plane, half, clamp, spares, clamped),
             quantize_linearly: id.linear,
             sampling: x::Vec2(1, 1),
         }
@@ -1217,6 +1229,7 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
     let mut notes = Vec::new();
     let mut clamped = 0;
     let glare = std::mem::take(&mut planes.original.glare);
+    let spares = std::mem::take(&mut planes.original.spares);
     let image = match planes.original.exr.take() {
         Some(kept) => {
             let Kept {
@@ -1236,7 +1249,8 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
                 colour: &planes.colour,
                 alpha: planes.alpha,
             };
-            put_back(&mut image, &result, planes.samples, &mut clamped).map_err(encode_error)?;
+            put_back(&mut image, &result, planes.samples, &spares, &mut clamped)
+                .map_err(encode_error)?;
             // The glare in the spread layer's sample type.
             let kind = taken.first().map_or(SampleType::F32, |t| t.kind);
             let half = is_half(kind, planes.samples);
@@ -1245,6 +1259,7 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
                 parent(&prefix),
                 &glare,
                 half,
+                &spares,
                 &mut clamped,
             );
             for view in &views {
@@ -1258,7 +1273,7 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
                     colour: &colour,
                     alpha: view.image.alpha.as_deref(),
                 };
-                put_back(&mut image, &result, planes.samples, &mut clamped)
+                put_back(&mut image, &result, planes.samples, &spares, &mut clamped)
                     .map_err(|e| encode_error(format!("view {}: {e}", view.name)))?;
             }
             if let Some(compression) = planes.compression {
@@ -1269,9 +1284,16 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
             image
         }
         None => {
-            let mut image = new_image(&planes, &mut clamped);
+            let mut image = new_image(&planes, &spares, &mut clamped);
             let half = planes.samples == Some(Samples::Half);
-            add_glare(&mut image.layer_data[0], "", &glare, half, &mut clamped);
+            add_glare(
+                &mut image.layer_data[0],
+                "",
+                &glare,
+                half,
+                &spares,
+                &mut clamped,
+            );
             image
         }
     };
@@ -1297,7 +1319,21 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
             ceiling: lowered.ceiling as u32,
         });
     }
+    give_back(image, &spares);
     Ok(notes)
+}
+
+/// The samples of a written image, kept for the next frame's.
+fn give_back(image: FlatImage, spares: &Spares) {
+    for layer in image.layer_data {
+        for channel in layer.channel_data.list {
+            match channel.sample_data {
+                x::FlatSamples::F16(values) => spares.give_halves(values),
+                x::FlatSamples::F32(values) => spares.give_floats(values),
+                x::FlatSamples::U32(_) => {}
+            }
+        }
+    }
 }
 
 /// Whether a channel read as `kind` is written as half floats: as read,
@@ -1324,6 +1360,7 @@ fn add_glare(
     parent: &str,
     glare: &[aureole::GlareLayer],
     half: bool,
+    spares: &Spares,
     clamped: &mut usize,
 ) {
     if glare.is_empty() {
@@ -1340,7 +1377,7 @@ fn add_glare(
             let name = format!("{parent}{}.{short}", one.name);
             added.push(x::AnyChannel::new(
                 name.as_str(),
-                samples(plane, half, true, clamped),
+                samples(plane, half, true, spares, clamped),
             ));
         }
     }
@@ -1351,7 +1388,7 @@ fn add_glare(
 }
 
 /// A single-part file of the planes: `Y` or `R`, `G`, `B`, and `A`.
-fn new_image(planes: &LinearPlanes, clamped: &mut usize) -> FlatImage {
+fn new_image(planes: &LinearPlanes, spares: &Spares, clamped: &mut usize) -> FlatImage {
     let names: &[&str] = if planes.colour.len() == 1 {
         &["Y"]
     } else {
@@ -1361,12 +1398,12 @@ fn new_image(planes: &LinearPlanes, clamped: &mut usize) -> FlatImage {
     let mut list: Vec<x::AnyChannel<x::FlatSamples>> = names
         .iter()
         .zip(&planes.colour)
-        .map(|(name, plane)| x::AnyChannel::new(*name, samples(plane, half, true, clamped)))
+        .map(|(name, plane)| x::AnyChannel::new(*name, samples(plane, half, true, spares, clamped)))
         .collect();
     if let Some(alpha) = planes.alpha {
         list.push(x::AnyChannel::new(
             "A",
-            samples(alpha, half, false, clamped),
+            samples(alpha, half, false, spares, clamped),
         ));
     }
     let attributes = x::LayerAttributes {

@@ -4,9 +4,19 @@
 //! 128. Float samples' bytes then change slowly and compress well.
 
 /// The even bytes, then the odd ones, as differences.
+#[cfg(test)]
 pub(crate) fn predict(raw: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    predict_into(raw, &mut Vec::new(), &mut out);
+    out
+}
+
+/// [`predict`] into `out`, through `split`: buffers a thread keeps.
+pub(crate) fn predict_into(raw: &[u8], split: &mut Vec<u8>, out: &mut Vec<u8>) {
     let half = raw.len().div_ceil(2);
-    let mut split = vec![0u8; raw.len()];
+    // Resized, not cleared: chunks of one size write no zeros.
+    split.resize(raw.len(), 0);
+    out.resize(raw.len(), 0);
     let (even, odd) = split.split_at_mut(half);
     for ((pair, e), o) in raw.chunks_exact(2).zip(even.iter_mut()).zip(odd.iter_mut()) {
         *e = pair[0];
@@ -15,14 +25,12 @@ pub(crate) fn predict(raw: &[u8]) -> Vec<u8> {
     if raw.len() % 2 == 1 {
         even[half - 1] = raw[raw.len() - 1];
     }
-    let mut out = vec![0u8; raw.len()];
     if let (Some((first, rest)), Some(&value)) = (out.split_first_mut(), split.first()) {
         *first = value;
         for (o, pair) in rest.iter_mut().zip(split.windows(2)) {
             *o = pair[1].wrapping_sub(pair[0]).wrapping_add(128);
         }
     }
-    out
 }
 
 /// [`predict`] undone, in place of `predicted`'s bytes.

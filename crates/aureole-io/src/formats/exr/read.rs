@@ -23,6 +23,7 @@ use rayon::prelude::*;
 
 use super::layout::{samples_between, BlockLayout};
 use super::{b44, piz, pxr24, rle, zip};
+use crate::spares::Spares;
 
 /// A file's headers and where its chunks are.
 pub(crate) struct File {
@@ -214,6 +215,7 @@ pub(crate) fn read(
     bytes: &[u8],
     file: &File,
     as_float: &[(usize, &str)],
+    spares: &Spares,
 ) -> Result<Vec<Vec<Channel>>, String> {
     let headers = &file.headers;
     let mut blocks: Vec<Vec<Block>> = headers.iter().map(|_| Vec::new()).collect();
@@ -228,7 +230,7 @@ pub(crate) fn read(
     let mut parts: Vec<Vec<Channel>> = headers
         .iter()
         .enumerate()
-        .map(|(p, header)| channels(p, header, as_float))
+        .map(|(p, header)| channels(p, header, as_float, spares))
         .collect();
     // Each band gets its lines of every channel of its part.
     let mut rows: Vec<Vec<Rows>> = bands.iter().map(|_| Vec::new()).collect();
@@ -286,7 +288,12 @@ fn widths(header: &Header) -> Vec<usize> {
 }
 
 /// The channels of part `p`, their samples zeroed, ready to be filled.
-fn channels(p: usize, header: &Header, as_float: &[(usize, &str)]) -> Vec<Channel> {
+fn channels(
+    p: usize,
+    header: &Header,
+    as_float: &[(usize, &str)],
+    spares: &Spares,
+) -> Vec<Channel> {
     let origin = header.own_attributes.layer_position;
     let (left, top) = (i64::from(origin.0), i64::from(origin.1));
     let (right, bottom) = (
@@ -307,8 +314,8 @@ fn channels(p: usize, header: &Header, as_float: &[(usize, &str)]) -> Vec<Channe
                 .iter()
                 .any(|&(part, name)| part == p && c.name.eq(name));
             let samples = match (float, c.sample_type) {
-                (true, _) | (false, SampleType::F32) => FlatSamples::F32(vec![0.0; n]),
-                (false, SampleType::F16) => FlatSamples::F16(vec![f16::ZERO; n]),
+                (true, _) | (false, SampleType::F32) => FlatSamples::F32(spares.floats(n)),
+                (false, SampleType::F16) => FlatSamples::F16(spares.halves(n)),
                 (false, SampleType::U32) => FlatSamples::U32(vec![0; n]),
             };
             Channel {

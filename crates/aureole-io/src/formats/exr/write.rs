@@ -4,6 +4,7 @@
 //! compression by `exr`, and handed in order to `exr`'s chunk writer,
 //! which writes the headers and the offset tables.
 
+use std::cell::RefCell;
 use std::io::{Seek, SeekFrom, Write};
 
 use exr::block::chunk::TileCoordinates;
@@ -23,6 +24,13 @@ use super::{dwa, zip};
 /// Chunks compressed together before they are written, per thread: a
 /// bound on the compressed chunks held at once (a few MB at 4K).
 const CHUNKS_PER_THREAD: usize = 16;
+
+thread_local! {
+    /// Each thread's compressor and buffers: chunks are compressed on the
+    /// threads of rayon's pool, which live as long as the process, so a
+    /// frame sequence compresses every frame in the same memory.
+    static ZIPPER: RefCell<zip::Zipper> = RefCell::new(zip::Zipper::new());
+}
 
 /// Samples that a lossy compression could not hold, lowered ([`dwa`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,19 +64,12 @@ pub(crate) fn write(image: &FlatImage, mut out: impl Write + Seek) -> exr::error
         for blocks in order.chunks(batch) {
             let chunks = blocks
                 .par_iter()
-                .map_init(
-                    || (zip::compressor(), Vec::new()),
-                    |(compressor, scratch), &(index, block)| {
-                        let data = layers.extract_uncompressed_block(&meta.headers, block);
-                        let (chunk, lowered) = compress(
-                            UncompressedBlock { index: block, data },
-                            &meta.headers,
-                            compressor,
-                            scratch,
-                        )?;
-                        Ok((index, chunk, lowered))
-                    },
-                )
+                .map(|&(index, block)| {
+                    let data = layers.extract_uncompressed_block(&meta.headers, block);
+                    let (chunk, lowered) =
+                        compress(UncompressedBlock { index: block, data }, &meta.headers)?;
+                    Ok((index, chunk, lowered))
+                })
                 .collect::<exr::error::Result<Vec<(usize, Chunk, Lowered)>>>()?;
             for (index, chunk, block) in chunks {
                 lowered.count += block.count;
@@ -123,12 +124,7 @@ fn sorted_attributes(headers: &[u8], count: usize) -> Option<Vec<u8>> {
 /// half range ([`dwa`]), the rest as `exr` compresses them. Samples are
 /// stored little-endian: on a big-endian machine `exr` converts them and
 /// compresses them too.
-fn compress(
-    block: UncompressedBlock,
-    headers: &[Header],
-    compressor: &mut libdeflater::Compressor,
-    scratch: &mut Vec<u8>,
-) -> exr::error::Result<(Chunk, Lowered)> {
+fn compress(block: UncompressedBlock, headers: &[Header]) -> exr::error::Result<(Chunk, Lowered)> {
     let none = Lowered {
         count: 0,
         ceiling: crate::formats::HALF_MAX,
@@ -145,7 +141,7 @@ fn compress(
         return Ok((block.compress_to_chunk(headers)?, none));
     }
     let index = block.index;
-    let compressed_pixels_le = zip::compress(block.data, compressor, scratch);
+    let compressed_pixels_le = ZIPPER.with_borrow_mut(|zipper| zipper.compress(block.data));
     let compressed_block = match header.blocks {
         BlockDescription::ScanLines => CompressedBlock::ScanLine(CompressedScanLineBlock {
             compressed_pixels_le,

@@ -5,7 +5,7 @@
 
 use libdeflater::{CompressionLvl, Compressor, DecompressionError, Decompressor};
 
-use super::predictor::{predict, unpredict};
+use super::predictor::{predict_into, unpredict};
 
 /// libdeflate's level for every ZIP chunk we write. Measured on a 4K half
 /// RGB frame of the night street after the camera, one thread: level 1
@@ -15,30 +15,43 @@ use super::predictor::{predict, unpredict};
 /// time; float kernels barely compress at any level (91 %).
 pub(crate) const LEVEL: i32 = 1;
 
-/// A compressor at [`LEVEL`], one per thread.
-pub(crate) fn compressor() -> Compressor {
-    // LEVEL is in libdeflate's range (0–12), so `new` cannot fail; the
-    // default level is a fallback that never runs.
-    Compressor::new(CompressionLvl::new(LEVEL).unwrap_or_default())
+/// A compressor at [`LEVEL`] and its buffers, one per thread, kept from
+/// chunk to chunk and from frame to frame.
+pub(crate) struct Zipper {
+    compressor: Compressor,
+    split: Vec<u8>,
+    predicted: Vec<u8>,
+    compressed: Vec<u8>,
 }
 
-/// The bytes of a chunk's samples (little-endian, as the file stores them
-/// uncompressed) as a ZIP chunk's data; the samples themselves where
-/// compressing would not make them smaller, as OpenEXR does. `scratch`
-/// is the thread's buffer, kept between chunks.
-pub(crate) fn compress(
-    raw: Vec<u8>,
-    compressor: &mut Compressor,
-    scratch: &mut Vec<u8>,
-) -> Vec<u8> {
-    let predicted = predict(&raw);
-    let bound = compressor.zlib_compress_bound(predicted.len());
-    if scratch.len() < bound {
-        scratch.resize(bound, 0);
+impl Zipper {
+    pub(crate) fn new() -> Zipper {
+        Zipper {
+            // LEVEL is in libdeflate's range (0–12), so `new` cannot fail;
+            // the default level is a fallback that never runs.
+            compressor: Compressor::new(CompressionLvl::new(LEVEL).unwrap_or_default()),
+            split: Vec::new(),
+            predicted: Vec::new(),
+            compressed: Vec::new(),
+        }
     }
-    match compressor.zlib_compress(&predicted, scratch) {
-        Ok(n) if n < raw.len() => scratch[..n].to_vec(),
-        _ => raw,
+
+    /// The bytes of a chunk's samples (little-endian, as the file stores
+    /// them uncompressed) as a ZIP chunk's data; the samples themselves
+    /// where compressing would not make them smaller, as OpenEXR does.
+    pub(crate) fn compress(&mut self, raw: Vec<u8>) -> Vec<u8> {
+        predict_into(&raw, &mut self.split, &mut self.predicted);
+        let bound = self.compressor.zlib_compress_bound(self.predicted.len());
+        if self.compressed.len() < bound {
+            self.compressed.resize(bound, 0);
+        }
+        match self
+            .compressor
+            .zlib_compress(&self.predicted, &mut self.compressed)
+        {
+            Ok(n) if n < raw.len() => self.compressed[..n].to_vec(),
+            _ => raw,
+        }
     }
 }
 
@@ -71,11 +84,12 @@ mod tests {
 
     #[test]
     fn chunks_come_back_as_they_were() {
-        let mut compressor = compressor();
+        // One zipper for chunks of every length, as a thread keeps it.
+        let mut zipper = Zipper::new();
         let mut decompressor = Decompressor::new();
-        for length in [1usize, 2, 3, 17, 4096, 4097] {
+        for length in [4097usize, 1, 2, 3, 17, 4096, 4097] {
             let raw: Vec<u8> = (0..length).map(|i| (i * 7 % 13) as u8).collect();
-            let data = compress(raw.clone(), &mut compressor, &mut Vec::new());
+            let data = zipper.compress(raw.clone());
             assert!(data.len() < length || data == raw, "{length}");
             if data.len() < length {
                 assert_eq!(decompress(&data, length, &mut decompressor).unwrap(), raw);
@@ -93,9 +107,6 @@ mod tests {
                 (state >> 24) as u8
             })
             .collect();
-        assert_eq!(
-            compress(raw.clone(), &mut compressor(), &mut Vec::new()),
-            raw
-        );
+        assert_eq!(Zipper::new().compress(raw.clone()), raw);
     }
 }
