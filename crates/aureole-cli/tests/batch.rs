@@ -46,6 +46,26 @@ fn leftovers(dir: &Path) -> Vec<String> {
         .collect()
 }
 
+/// Each of frames `shot.0001.exr` … `count` in `dir` through `camera` on
+/// its own gives the bytes the batch wrote to `{batch}.0001.exr` ….
+fn assert_single_runs_give(dir: &Path, count: usize, batch: &str, camera: &[&str]) {
+    for n in 1..=count {
+        let single = dir.join(format!("single{n}.exr"));
+        aureole()
+            .current_dir(dir)
+            .args(["apply", "-q", &format!("shot.{n:04}.exr"), "-o"])
+            .arg(&single)
+            .args(camera)
+            .assert()
+            .success();
+        assert_eq!(
+            std::fs::read(dir.join(format!("{batch}.{n:04}.exr"))).unwrap(),
+            std::fs::read(&single).unwrap(),
+            "frame {n}"
+        );
+    }
+}
+
 #[test]
 fn one_bad_frame_is_reported_and_the_others_are_written_then_resumed() {
     let temp = sequence(4, (40, 30));
@@ -137,21 +157,7 @@ fn several_inputs_into_a_folder_give_the_bytes_of_single_runs() {
         .args(["-o", "out", "--preset", "paper-fig5-both"])
         .assert()
         .success();
-    for n in 1..=3 {
-        let single = dir.join(format!("single{n}.exr"));
-        aureole()
-            .current_dir(dir)
-            .args(["apply", "-q", &format!("shot.{n:04}.exr"), "-o"])
-            .arg(&single)
-            .args(["--preset", "paper-fig5-both"])
-            .assert()
-            .success();
-        assert_eq!(
-            std::fs::read(dir.join(format!("out/shot.{n:04}.exr"))).unwrap(),
-            std::fs::read(&single).unwrap(),
-            "frame {n}"
-        );
-    }
+    assert_single_runs_give(dir, 3, "out/shot", &["--preset", "paper-fig5-both"]);
     // Several inputs need a folder to write into.
     aureole()
         .current_dir(dir)
@@ -200,21 +206,7 @@ fn frames_of_other_sizes_and_types_in_one_batch_give_the_bytes_of_single_runs() 
         .args(camera)
         .assert()
         .success();
-    for n in 1..=5 {
-        let single = dir.join(format!("single{n}.exr"));
-        aureole()
-            .current_dir(dir)
-            .args(["apply", "-q", &format!("shot.{n:04}.exr"), "-o"])
-            .arg(&single)
-            .args(camera)
-            .assert()
-            .success();
-        assert_eq!(
-            std::fs::read(dir.join(format!("out/glow.{n:04}.exr"))).unwrap(),
-            std::fs::read(&single).unwrap(),
-            "frame {n}"
-        );
-    }
+    assert_single_runs_give(dir, 5, "out/glow", &camera);
 }
 
 #[test]
