@@ -354,16 +354,22 @@ fn corners(shape: &dyn SpreadShape, x: f64, y: f64, sample: Sample) -> Corners {
     let (mx, my) = (grid.x.max(1), grid.y.max(1));
     let (step_x, step_y) = (1.0 / f64::from(mx), 1.0 / f64::from(my));
     let mut sums = [0.0; 4];
+    let mut points = GridRow::default();
     for a in 0..my {
         let t = -0.5 + (f64::from(a) + 0.5) * step_y;
         let (top, bottom) = (0.5 + t, 0.5 - t);
         let (mut left, mut right) = (0.0, 0.0);
-        for b in 0..mx {
-            let s = -0.5 + (f64::from(b) + 0.5) * step_x;
-            let f = shape.density(x + s, y + t);
-            left += (0.5 - s) * f;
-            right += (0.5 + s) * f;
-        }
+        let s = |b: u32| -0.5 + (f64::from(b) + 0.5) * step_x;
+        points.each(
+            shape,
+            mx,
+            y + t,
+            |b| x + s(b),
+            |b, f| {
+                left += (0.5 - s(b)) * f;
+                right += (0.5 + s(b)) * f;
+            },
+        );
         sums[TOP_LEFT] += top * left;
         sums[TOP_RIGHT] += top * right;
         sums[BOTTOM_LEFT] += bottom * left;
@@ -382,12 +388,53 @@ fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, grid: Supersampling) -
     let (mx, my) = (grid.x.max(1), grid.y.max(1));
     let (step_x, step_y) = (1.0 / f64::from(mx), 1.0 / f64::from(my));
     let mut sum = 0.0;
+    let mut points = GridRow::default();
     for a in 0..my {
         let sy = y - 0.5 + (f64::from(a) + 0.5) * step_y;
-        for b in 0..mx {
-            let sx = x - 0.5 + (f64::from(b) + 0.5) * step_x;
-            sum += shape.density(sx, sy);
-        }
+        let sx = |b: u32| x - 0.5 + (f64::from(b) + 0.5) * step_x;
+        points.each(shape, mx, sy, sx, |_, f| sum += f);
     }
     sum / f64::from(mx * my)
+}
+
+/// The midpoints of a row of a pixel's grid and f at them, a chunk at a
+/// time ([`SpreadShape::density_row`]).
+struct GridRow {
+    xs: [f64; GridRow::CHUNK],
+    f: [f64; GridRow::CHUNK],
+}
+
+impl Default for GridRow {
+    fn default() -> GridRow {
+        GridRow {
+            xs: [0.0; GridRow::CHUNK],
+            f: [0.0; GridRow::CHUNK],
+        }
+    }
+}
+
+impl GridRow {
+    const CHUNK: usize = 64;
+
+    /// `each(b, f)` for b = 0 … m − 1 in order, f the shape's density at
+    /// (`x(b)`, y).
+    fn each(
+        &mut self,
+        shape: &dyn SpreadShape,
+        m: u32,
+        y: f64,
+        x: impl Fn(u32) -> f64,
+        mut each: impl FnMut(u32, f64),
+    ) {
+        for first in (0..m).step_by(Self::CHUNK) {
+            let n = (m - first).min(Self::CHUNK as u32) as usize;
+            for (b, x_b) in (first..).zip(&mut self.xs[..n]) {
+                *x_b = x(b);
+            }
+            shape.density_row(&self.xs[..n], y, &mut self.f[..n]);
+            for (b, &f) in (first..).zip(&self.f[..n]) {
+                each(b, f);
+            }
+        }
+    }
 }

@@ -503,6 +503,28 @@ impl SpreadShape for CoronaShape {
         one[0]
     }
 
+    /// f in three passes over the points, as [`CoronaShape::sample_row`]'s
+    /// (distance and direction; ray and terms; the lobe and the fade).
+    fn density_row(&self, xs: &[f64], y: f64, out: &mut [f64]) {
+        const CHUNK: usize = 64;
+        for (xs, out) in xs.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            let mut r = [0.0; CHUNK];
+            let mut phi = [0.0; CHUNK];
+            for ((r, phi), &x) in r.iter_mut().zip(&mut phi).zip(xs) {
+                *r = (x * x + y * y).sqrt();
+                *phi = math::atan2(y, x);
+            }
+            let mut terms = [[0.0; 4]; CHUNK];
+            for ((terms, &r), &phi) in terms.iter_mut().zip(&r).zip(&phi).take(xs.len()) {
+                let (ray, offset) = self.nearest_ray(phi);
+                *terms = self.terms(ray, r, offset);
+            }
+            for (f, &terms) in out.iter_mut().zip(&terms) {
+                *f = Self::light(terms);
+            }
+        }
+    }
+
     /// The test, the grid and f with one direction and one nearest ray per
     /// point, in three passes over the row (distance and direction; ray,
     /// test and grid; the lobe and the fade), each of independent points.

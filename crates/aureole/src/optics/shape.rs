@@ -61,6 +61,16 @@ pub(crate) trait SpreadShape: Sync {
         }
     }
 
+    /// f at the points (x, y) for each x of `xs`, into `out`:
+    /// [`SpreadShape::density`]'s values to the bit, computed stage by
+    /// stage over the points by a shape whose f is a long chain (a pixel's
+    /// grid of midpoints, a row at a time).
+    fn density_row(&self, xs: &[f64], y: f64, out: &mut [f64]) {
+        for (f, &x) in out.iter_mut().zip(xs) {
+            *f = self.density(x, y);
+        }
+    }
+
     /// On the row of pixels centred at height y: ranges of x (pixel
     /// centres, inclusive) outside which f is exactly 0 over every pixel,
     /// or `None` where any pixel may be lit. Like [`SpreadShape::sample`]'s
@@ -125,7 +135,9 @@ impl Supersampling {
 /// [`SpreadShape::sample_row`]: every point is what [`SpreadShape::sample`]
 /// says of it alone, its grid is [`SpreadShape::grid`]'s, and where that is
 /// one point, f is [`SpreadShape::density`]'s to the bit; `dark` checks
-/// each point called dark. How many were one point, a grid, dark.
+/// each point called dark; and [`SpreadShape::density_row`] over the row
+/// and over points a fraction of a pixel apart gives `density`'s values to
+/// the bit. How many were one point, a grid, dark.
 #[cfg(test)]
 pub(crate) fn assert_rows_agree(
     shape: &dyn SpreadShape,
@@ -134,6 +146,16 @@ pub(crate) fn assert_rows_agree(
 ) -> [usize; 3] {
     let mut counts = [0; 3];
     for (x0, y, n) in rows {
+        // The row's pixel centres, then points 1/7 px apart over as many
+        // pixels as a grid row covers (more than one chunk of them).
+        for step in [1.0, 1.0 / 7.0] {
+            let xs: Vec<f64> = (0..n.max(70)).map(|i| x0 + i as f64 * step).collect();
+            let mut f = vec![f64::NAN; xs.len()];
+            shape.density_row(&xs, y, &mut f);
+            for (&x, &f) in xs.iter().zip(&f) {
+                assert_eq!(f.to_bits(), shape.density(x, y).to_bits(), "({x}, {y})");
+            }
+        }
         let mut row = vec![Sample::Dark; n];
         shape.sample_row(x0, y, &mut row);
         for (i, sample) in row.into_iter().enumerate() {
