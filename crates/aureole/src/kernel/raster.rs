@@ -354,27 +354,27 @@ fn corners(shape: &dyn SpreadShape, x: f64, y: f64, sample: Sample) -> Corners {
     let (mx, my) = (grid.x.max(1), grid.y.max(1));
     let (step_x, step_y) = (1.0 / f64::from(mx), 1.0 / f64::from(my));
     let mut sums = [0.0; 4];
-    let mut points = GridRow::default();
-    for a in 0..my {
-        let t = -0.5 + (f64::from(a) + 0.5) * step_y;
-        let (top, bottom) = (0.5 + t, 0.5 - t);
-        let (mut left, mut right) = (0.0, 0.0);
-        let s = |b: u32| -0.5 + (f64::from(b) + 0.5) * step_x;
-        points.each(
-            shape,
-            mx,
-            y + t,
-            |b| x + s(b),
-            |b, f| {
-                left += (0.5 - s(b)) * f;
-                right += (0.5 + s(b)) * f;
-            },
-        );
-        sums[TOP_LEFT] += top * left;
-        sums[TOP_RIGHT] += top * right;
-        sums[BOTTOM_LEFT] += bottom * left;
-        sums[BOTTOM_RIGHT] += bottom * right;
-    }
+    let s = |b: u32| -0.5 + (f64::from(b) + 0.5) * step_x;
+    let t = |a: u32| -0.5 + (f64::from(a) + 0.5) * step_y;
+    let (mut left, mut right) = (0.0, 0.0);
+    GridPoints::default().each(
+        shape,
+        (mx, my),
+        |b| x + s(b),
+        |a| y + t(a),
+        |a, b, f| {
+            left += (0.5 - s(b)) * f;
+            right += (0.5 + s(b)) * f;
+            if b + 1 == mx {
+                let (top, bottom) = (0.5 + t(a), 0.5 - t(a));
+                sums[TOP_LEFT] += top * left;
+                sums[TOP_RIGHT] += top * right;
+                sums[BOTTOM_LEFT] += bottom * left;
+                sums[BOTTOM_RIGHT] += bottom * right;
+                (left, right) = (0.0, 0.0);
+            }
+        },
+    );
     let n = f64::from(mx * my);
     sums.map(|v| v / n)
 }
@@ -388,52 +388,57 @@ fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, grid: Supersampling) -
     let (mx, my) = (grid.x.max(1), grid.y.max(1));
     let (step_x, step_y) = (1.0 / f64::from(mx), 1.0 / f64::from(my));
     let mut sum = 0.0;
-    let mut points = GridRow::default();
-    for a in 0..my {
-        let sy = y - 0.5 + (f64::from(a) + 0.5) * step_y;
-        let sx = |b: u32| x - 0.5 + (f64::from(b) + 0.5) * step_x;
-        points.each(shape, mx, sy, sx, |_, f| sum += f);
-    }
+    let sx = |b: u32| x - 0.5 + (f64::from(b) + 0.5) * step_x;
+    let sy = |a: u32| y - 0.5 + (f64::from(a) + 0.5) * step_y;
+    GridPoints::default().each(shape, (mx, my), sx, sy, |_, _, f| sum += f);
     sum / f64::from(mx * my)
 }
 
-/// The midpoints of a row of a pixel's grid and f at them, a chunk at a
-/// time ([`SpreadShape::density_row`]).
-struct GridRow {
-    xs: [f64; GridRow::CHUNK],
-    f: [f64; GridRow::CHUNK],
+/// The midpoints of a pixel's grid and f at them, a chunk at a time
+/// ([`SpreadShape::density_at`]): a thin ray's grid is a few points along
+/// it by dozens across, and chunks that run on from row to row keep the
+/// passes long whichever way it lies.
+struct GridPoints {
+    xs: [f64; GridPoints::CHUNK],
+    ys: [f64; GridPoints::CHUNK],
+    f: [f64; GridPoints::CHUNK],
 }
 
-impl Default for GridRow {
-    fn default() -> GridRow {
-        GridRow {
-            xs: [0.0; GridRow::CHUNK],
-            f: [0.0; GridRow::CHUNK],
+impl Default for GridPoints {
+    fn default() -> GridPoints {
+        GridPoints {
+            xs: [0.0; GridPoints::CHUNK],
+            ys: [0.0; GridPoints::CHUNK],
+            f: [0.0; GridPoints::CHUNK],
         }
     }
 }
 
-impl GridRow {
+impl GridPoints {
     const CHUNK: usize = 64;
 
-    /// `each(b, f)` for b = 0 … m − 1 in order, f the shape's density at
-    /// (`x(b)`, y).
+    /// `each(a, b, f)` for the `mx` × `my` points of the grid, row a by row
+    /// in order, f the shape's density at (`x(b)`, `y(a)`).
     fn each(
         &mut self,
         shape: &dyn SpreadShape,
-        m: u32,
-        y: f64,
+        (mx, my): (u32, u32),
         x: impl Fn(u32) -> f64,
-        mut each: impl FnMut(u32, f64),
+        y: impl Fn(u32) -> f64,
+        mut each: impl FnMut(u32, u32, f64),
     ) {
-        for first in (0..m).step_by(Self::CHUNK) {
-            let n = (m - first).min(Self::CHUNK as u32) as usize;
-            for (b, x_b) in (first..).zip(&mut self.xs[..n]) {
-                *x_b = x(b);
+        let total = mx as usize * my as usize;
+        let at = |i: usize| ((i / mx as usize) as u32, (i % mx as usize) as u32);
+        for first in (0..total).step_by(Self::CHUNK) {
+            let n = (total - first).min(Self::CHUNK);
+            for (i, (x_i, y_i)) in (first..).zip(self.xs[..n].iter_mut().zip(&mut self.ys[..n])) {
+                let (a, b) = at(i);
+                (*x_i, *y_i) = (x(b), y(a));
             }
-            shape.density_row(&self.xs[..n], y, &mut self.f[..n]);
-            for (b, &f) in (first..).zip(&self.f[..n]) {
-                each(b, f);
+            shape.density_at(&self.xs[..n], &self.ys[..n], &mut self.f[..n]);
+            for (i, &f) in (first..).zip(&self.f[..n]) {
+                let (a, b) = at(i);
+                each(a, b, f);
             }
         }
     }

@@ -505,12 +505,16 @@ impl SpreadShape for CoronaShape {
 
     /// f in three passes over the points, as [`CoronaShape::sample_row`]'s
     /// (distance and direction; ray and terms; the lobe and the fade).
-    fn density_row(&self, xs: &[f64], y: f64, out: &mut [f64]) {
+    fn density_at(&self, xs: &[f64], ys: &[f64], out: &mut [f64]) {
         const CHUNK: usize = 64;
-        for (xs, out) in xs.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+        for ((xs, ys), out) in xs
+            .chunks(CHUNK)
+            .zip(ys.chunks(CHUNK))
+            .zip(out.chunks_mut(CHUNK))
+        {
             let mut r = [0.0; CHUNK];
             let mut phi = [0.0; CHUNK];
-            for ((r, phi), &x) in r.iter_mut().zip(&mut phi).zip(xs) {
+            for (((r, phi), &x), &y) in r.iter_mut().zip(&mut phi).zip(xs).zip(ys) {
                 *r = (x * x + y * y).sqrt();
                 *phi = math::atan2(y, x);
             }

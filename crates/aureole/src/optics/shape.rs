@@ -61,12 +61,12 @@ pub(crate) trait SpreadShape: Sync {
         }
     }
 
-    /// f at the points (x, y) for each x of `xs`, into `out`:
+    /// f at the points (`xs[i]`, `ys[i]`), into `out`:
     /// [`SpreadShape::density`]'s values to the bit, computed stage by
     /// stage over the points by a shape whose f is a long chain (a pixel's
-    /// grid of midpoints, a row at a time).
-    fn density_row(&self, xs: &[f64], y: f64, out: &mut [f64]) {
-        for (f, &x) in out.iter_mut().zip(xs) {
+    /// grid of midpoints, a chunk at a time).
+    fn density_at(&self, xs: &[f64], ys: &[f64], out: &mut [f64]) {
+        for ((f, &x), &y) in out.iter_mut().zip(xs).zip(ys) {
             *f = self.density(x, y);
         }
     }
@@ -135,9 +135,9 @@ impl Supersampling {
 /// [`SpreadShape::sample_row`]: every point is what [`SpreadShape::sample`]
 /// says of it alone, its grid is [`SpreadShape::grid`]'s, and where that is
 /// one point, f is [`SpreadShape::density`]'s to the bit; `dark` checks
-/// each point called dark; and [`SpreadShape::density_row`] over the row
-/// and over points a fraction of a pixel apart gives `density`'s values to
-/// the bit. How many were one point, a grid, dark.
+/// each point called dark; and [`SpreadShape::density_at`] over the row
+/// and over points a fraction of a pixel apart, on it and beside it, gives
+/// `density`'s values to the bit. How many were one point, a grid, dark.
 #[cfg(test)]
 pub(crate) fn assert_rows_agree(
     shape: &dyn SpreadShape,
@@ -150,9 +150,10 @@ pub(crate) fn assert_rows_agree(
         // pixels as a grid row covers (more than one chunk of them).
         for step in [1.0, 1.0 / 7.0] {
             let xs: Vec<f64> = (0..n.max(70)).map(|i| x0 + i as f64 * step).collect();
+            let ys: Vec<f64> = (0..xs.len()).map(|i| y + (i % 3) as f64 * step).collect();
             let mut f = vec![f64::NAN; xs.len()];
-            shape.density_row(&xs, y, &mut f);
-            for (&x, &f) in xs.iter().zip(&f) {
+            shape.density_at(&xs, &ys, &mut f);
+            for ((&x, &y), &f) in xs.iter().zip(&ys).zip(&f) {
                 assert_eq!(f.to_bits(), shape.density(x, y).to_bits(), "({x}, {y})");
             }
         }
