@@ -357,7 +357,7 @@ fn corners(shape: &dyn SpreadShape, x: f64, y: f64, sample: Sample) -> Corners {
     let s = |b: u32| -0.5 + (f64::from(b) + 0.5) * step_x;
     let t = |a: u32| -0.5 + (f64::from(a) + 0.5) * step_y;
     let (mut left, mut right) = (0.0, 0.0);
-    GridPoints::default().each(
+    GridPoints::each(
         shape,
         (mx, my),
         |b| x + s(b),
@@ -390,7 +390,7 @@ fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, grid: Supersampling) -
     let mut sum = 0.0;
     let sx = |b: u32| x - 0.5 + (f64::from(b) + 0.5) * step_x;
     let sy = |a: u32| y - 0.5 + (f64::from(a) + 0.5) * step_y;
-    GridPoints::default().each(shape, (mx, my), sx, sy, |_, _, f| sum += f);
+    GridPoints::each(shape, (mx, my), sx, sy, |_, _, f| sum += f);
     sum / f64::from(mx * my)
 }
 
@@ -417,10 +417,13 @@ impl Default for GridPoints {
 impl GridPoints {
     const CHUNK: usize = 64;
 
+    /// Grids of at most this many points go one point at a time: chunks
+    /// would gain nothing there and cost their buffers.
+    const FEW: usize = 8;
+
     /// `each(a, b, f)` for the `mx` × `my` points of the grid, row a by row
     /// in order, f the shape's density at (`x(b)`, `y(a)`).
     fn each(
-        &mut self,
         shape: &dyn SpreadShape,
         (mx, my): (u32, u32),
         x: impl Fn(u32) -> f64,
@@ -428,15 +431,25 @@ impl GridPoints {
         mut each: impl FnMut(u32, u32, f64),
     ) {
         let total = mx as usize * my as usize;
+        if total <= Self::FEW {
+            for a in 0..my {
+                for b in 0..mx {
+                    each(a, b, shape.density(x(b), y(a)));
+                }
+            }
+            return;
+        }
+        let mut points = GridPoints::default();
         let at = |i: usize| ((i / mx as usize) as u32, (i % mx as usize) as u32);
         for first in (0..total).step_by(Self::CHUNK) {
             let n = (total - first).min(Self::CHUNK);
-            for (i, (x_i, y_i)) in (first..).zip(self.xs[..n].iter_mut().zip(&mut self.ys[..n])) {
+            let GridPoints { xs, ys, f } = &mut points;
+            for (i, (x_i, y_i)) in (first..).zip(xs[..n].iter_mut().zip(&mut ys[..n])) {
                 let (a, b) = at(i);
                 (*x_i, *y_i) = (x(b), y(a));
             }
-            shape.density_at(&self.xs[..n], &self.ys[..n], &mut self.f[..n]);
-            for (i, &f) in (first..).zip(&self.f[..n]) {
+            shape.density_at(&xs[..n], &ys[..n], &mut f[..n]);
+            for (i, &f) in (first..).zip(&f[..n]) {
                 let (a, b) = at(i);
                 each(a, b, f);
             }
