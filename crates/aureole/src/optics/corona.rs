@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
-use super::shape::{Sample, SpreadShape, Supersampling};
+use super::shape::{self, Sample, SpreadShape, Supersampling, CHUNK_POINTS};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -506,19 +506,14 @@ impl SpreadShape for CoronaShape {
     /// f in three passes over the points, as [`CoronaShape::sample_row`]'s
     /// (distance and direction; ray and terms; the lobe and the fade).
     fn density_at(&self, xs: &[f64], ys: &[f64], out: &mut [f64]) {
-        const CHUNK: usize = 64;
-        for ((xs, ys), out) in xs
-            .chunks(CHUNK)
-            .zip(ys.chunks(CHUNK))
-            .zip(out.chunks_mut(CHUNK))
-        {
-            let mut r = [0.0; CHUNK];
-            let mut phi = [0.0; CHUNK];
+        shape::in_chunks(xs, ys, out, |xs, ys, out| {
+            let mut r = [0.0; CHUNK_POINTS];
+            let mut phi = [0.0; CHUNK_POINTS];
             for (((r, phi), &x), &y) in r.iter_mut().zip(&mut phi).zip(xs).zip(ys) {
                 *r = (x * x + y * y).sqrt();
                 *phi = math::atan2(y, x);
             }
-            let mut terms = [[0.0; 4]; CHUNK];
+            let mut terms = [[0.0; 4]; CHUNK_POINTS];
             for ((terms, &r), &phi) in terms.iter_mut().zip(&r).zip(&phi).take(xs.len()) {
                 let (ray, offset) = self.nearest_ray(phi);
                 *terms = self.terms(ray, r, offset);
@@ -526,7 +521,7 @@ impl SpreadShape for CoronaShape {
             for (f, &terms) in out.iter_mut().zip(&terms) {
                 *f = Self::light(terms);
             }
-        }
+        });
     }
 
     /// The test, the grid and f with one direction and one nearest ray per

@@ -25,7 +25,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::schema::{fraction, length, Default, Kind, Parameter};
 
-use super::shape::{SpreadShape, Supersampling};
+use super::shape::{self, SpreadShape, Supersampling, CHUNK_POINTS};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -393,13 +393,8 @@ impl SpreadShape for HaloShape {
     /// oblique transmission; the reflectance and the rest), so that the
     /// processor overlaps the points' exponentials.
     fn density_at(&self, xs: &[f64], ys: &[f64], out: &mut [f64]) {
-        const CHUNK: usize = 64;
-        for ((xs, ys), out) in xs
-            .chunks(CHUNK)
-            .zip(ys.chunks(CHUNK))
-            .zip(out.chunks_mut(CHUNK))
-        {
-            let mut cos = [0.0; CHUNK];
+        shape::in_chunks(xs, ys, out, |xs, ys, out| {
+            let mut cos = [0.0; CHUNK_POINTS];
             for ((cos, &x), &y) in cos.iter_mut().zip(xs).zip(ys) {
                 let q = (x * x + y * y).sqrt() / self.path;
                 *cos = 1.0 / (1.0 + q * q).sqrt();
@@ -411,7 +406,7 @@ impl SpreadShape for HaloShape {
                 let cos2 = cos * cos;
                 *f = self.back.reflectance(cos) * *f * cos2 * cos2;
             }
-        }
+        });
     }
 
     fn grid(&self, x: f64, y: f64) -> Supersampling {

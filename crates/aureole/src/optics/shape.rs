@@ -80,6 +80,27 @@ pub(crate) trait SpreadShape: Sync {
     }
 }
 
+/// Points a shape's [`SpreadShape::density_at`] takes in one pass.
+pub(crate) const CHUNK_POINTS: usize = 64;
+
+/// `pass(xs, ys, out)` over the points a chunk of at most
+/// [`CHUNK_POINTS`] at a time: what a shape's `density_at` computes its
+/// stages over.
+pub(crate) fn in_chunks(
+    xs: &[f64],
+    ys: &[f64],
+    out: &mut [f64],
+    mut pass: impl FnMut(&[f64], &[f64], &mut [f64]),
+) {
+    for ((xs, ys), out) in xs
+        .chunks(CHUNK_POINTS)
+        .zip(ys.chunks(CHUNK_POINTS))
+        .zip(out.chunks_mut(CHUNK_POINTS))
+    {
+        pass(xs, ys, out);
+    }
+}
+
 /// [`SpreadShape::sample`]'s answer for one pixel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Sample {
