@@ -423,15 +423,7 @@ impl Convolver {
             .zip(input.plane.par_chunks(BLOCK * w))
             .enumerate()
             .for_each_init(
-                || {
-                    self.scratch.forward.lend(|| {
-                        (
-                            row_fft.make_input_vec(),
-                            row_fft.make_output_vec(),
-                            row_fft.make_scratch_vec(),
-                        )
-                    })
-                },
+                || self.row_scratch(),
                 |lent, (block, (tiles, source))| {
                     if cancel.is_cancelled() {
                         return;
@@ -463,6 +455,18 @@ impl Convolver {
             );
     }
 
+    /// A forward row's buffers, lent by the pool of them.
+    fn row_scratch(&self) -> Lent<'_, RowScratch> {
+        let row_fft = &self.transforms.row_fft;
+        self.scratch.forward.lend(|| {
+            (
+                row_fft.make_input_vec(),
+                row_fft.make_output_vec(),
+                row_fft.make_scratch_vec(),
+            )
+        })
+    }
+
     /// The row spectra of an input's lamps alone (the forward rows leave
     /// them out), one per row that has lamps.
     fn lamp_rows(&self, input: &Input) -> LampRows<'_> {
@@ -472,15 +476,7 @@ impl Convolver {
         let row_fft = &self.transforms.row_fft;
         rows.into_par_iter()
             .map_init(
-                || {
-                    self.scratch.forward.lend(|| {
-                        (
-                            row_fft.make_input_vec(),
-                            row_fft.make_output_vec(),
-                            row_fft.make_scratch_vec(),
-                        )
-                    })
-                },
+                || self.row_scratch(),
                 |lent, y| {
                     let (padded, _, scratch) = &mut **lent;
                     padded.fill(0.0);

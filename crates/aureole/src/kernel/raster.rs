@@ -10,7 +10,7 @@ use super::{Extent, Sending};
 use crate::control::{for_each, for_each_row, Control};
 use crate::error::Result;
 use crate::image::{sum_f64, zeros};
-use crate::optics::shape::{Sample, SpreadShape, Supersampling};
+use crate::optics::shape::{Sample, SpreadShape, Supersampling, CHUNK_POINTS};
 
 /// Pixels of a row rasterised together where f has no mirror symmetry.
 const PIECE: usize = 256;
@@ -357,7 +357,7 @@ fn corners(shape: &dyn SpreadShape, x: f64, y: f64, sample: Sample) -> Corners {
     let s = |b: u32| -0.5 + (f64::from(b) + 0.5) * step_x;
     let t = |a: u32| -0.5 + (f64::from(a) + 0.5) * step_y;
     let (mut left, mut right) = (0.0, 0.0);
-    GridPoints::each(
+    grid_points(
         shape,
         (mx, my),
         |b| x + s(b),
@@ -390,69 +390,52 @@ fn pixel_average(shape: &dyn SpreadShape, x: f64, y: f64, grid: Supersampling) -
     let mut sum = 0.0;
     let sx = |b: u32| x - 0.5 + (f64::from(b) + 0.5) * step_x;
     let sy = |a: u32| y - 0.5 + (f64::from(a) + 0.5) * step_y;
-    GridPoints::each(shape, (mx, my), sx, sy, |_, _, f| sum += f);
+    grid_points(shape, (mx, my), sx, sy, |_, _, f| sum += f);
     sum / f64::from(mx * my)
 }
 
-/// The midpoints of a pixel's grid and f at them, a chunk at a time
-/// ([`SpreadShape::density_at`]): a thin ray's grid is a few points along
-/// it by dozens across, and chunks that run on from row to row keep the
-/// passes long whichever way it lies.
-struct GridPoints {
-    xs: [f64; GridPoints::CHUNK],
-    ys: [f64; GridPoints::CHUNK],
-    f: [f64; GridPoints::CHUNK],
-}
-
-impl Default for GridPoints {
-    fn default() -> GridPoints {
-        GridPoints {
-            xs: [0.0; GridPoints::CHUNK],
-            ys: [0.0; GridPoints::CHUNK],
-            f: [0.0; GridPoints::CHUNK],
+/// `each(a, b, f)` for the `mx` × `my` midpoints of a pixel's grid, row
+/// a by row in order, f the shape's density at (`x(b)`, `y(a)`), asked
+/// for a chunk at a time ([`SpreadShape::density_at`]): a thin ray's grid
+/// is a few points along it by dozens across, and chunks that run on from
+/// row to row keep the passes long whichever way it lies. Grids of at most
+/// [`FEW_POINTS`] go one point at a time: chunks would gain nothing there
+/// and cost their buffers.
+fn grid_points(
+    shape: &dyn SpreadShape,
+    (mx, my): (u32, u32),
+    x: impl Fn(u32) -> f64,
+    y: impl Fn(u32) -> f64,
+    mut each: impl FnMut(u32, u32, f64),
+) {
+    let total = mx as usize * my as usize;
+    if total <= FEW_POINTS {
+        for a in 0..my {
+            for b in 0..mx {
+                each(a, b, shape.density(x(b), y(a)));
+            }
+        }
+        return;
+    }
+    let (mut xs, mut ys, mut f) = (
+        [0.0; CHUNK_POINTS],
+        [0.0; CHUNK_POINTS],
+        [0.0; CHUNK_POINTS],
+    );
+    let at = |i: usize| ((i / mx as usize) as u32, (i % mx as usize) as u32);
+    for first in (0..total).step_by(CHUNK_POINTS) {
+        let n = (total - first).min(CHUNK_POINTS);
+        for (i, (x_i, y_i)) in (first..).zip(xs[..n].iter_mut().zip(&mut ys[..n])) {
+            let (a, b) = at(i);
+            (*x_i, *y_i) = (x(b), y(a));
+        }
+        shape.density_at(&xs[..n], &ys[..n], &mut f[..n]);
+        for (i, &f) in (first..).zip(&f[..n]) {
+            let (a, b) = at(i);
+            each(a, b, f);
         }
     }
 }
 
-impl GridPoints {
-    const CHUNK: usize = 64;
-
-    /// Grids of at most this many points go one point at a time: chunks
-    /// would gain nothing there and cost their buffers.
-    const FEW: usize = 8;
-
-    /// `each(a, b, f)` for the `mx` × `my` points of the grid, row a by row
-    /// in order, f the shape's density at (`x(b)`, `y(a)`).
-    fn each(
-        shape: &dyn SpreadShape,
-        (mx, my): (u32, u32),
-        x: impl Fn(u32) -> f64,
-        y: impl Fn(u32) -> f64,
-        mut each: impl FnMut(u32, u32, f64),
-    ) {
-        let total = mx as usize * my as usize;
-        if total <= Self::FEW {
-            for a in 0..my {
-                for b in 0..mx {
-                    each(a, b, shape.density(x(b), y(a)));
-                }
-            }
-            return;
-        }
-        let mut points = GridPoints::default();
-        let at = |i: usize| ((i / mx as usize) as u32, (i % mx as usize) as u32);
-        for first in (0..total).step_by(Self::CHUNK) {
-            let n = (total - first).min(Self::CHUNK);
-            let GridPoints { xs, ys, f } = &mut points;
-            for (i, (x_i, y_i)) in (first..).zip(xs[..n].iter_mut().zip(&mut ys[..n])) {
-                let (a, b) = at(i);
-                (*x_i, *y_i) = (x(b), y(a));
-            }
-            shape.density_at(&xs[..n], &ys[..n], &mut f[..n]);
-            for (i, &f) in (first..).zip(&f[..n]) {
-                let (a, b) = at(i);
-                each(a, b, f);
-            }
-        }
-    }
-}
+/// See [`grid_points`].
+const FEW_POINTS: usize = 8;

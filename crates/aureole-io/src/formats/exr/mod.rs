@@ -894,10 +894,8 @@ pub(crate) fn decode(
         display_referred: false,
         notes,
         compression,
+        // The spares are the reader's to attach, for every format.
         original: super::Original {
-            glare: Vec::new(),
-            radiance: None,
-            spares: spares.clone(),
             exr: Some(Box::new(Kept {
                 image: kept,
                 part: chosen.part,
@@ -906,6 +904,7 @@ pub(crate) fn decode(
                 chroma: chosen.chroma,
                 views: kept_views,
             })),
+            ..Default::default()
         },
     })
 }
