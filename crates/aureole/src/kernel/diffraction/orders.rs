@@ -5,7 +5,7 @@
 
 use super::near::NearField;
 use super::Spectrum;
-use crate::control::{for_each_row, Control};
+use crate::control::{for_each, for_each_row, Control};
 use crate::convolve::{self, Composing};
 use crate::error::Result;
 use crate::kernel::{Extent, Kernel, Sending};
@@ -40,19 +40,15 @@ pub(super) fn through_filter(
         .map(|plane| centre_window(plane, extent, ORDER_REACH))
         .collect();
     let cores = Cores::new(optics, spectrum, &windows, pitch_mm, extent.sending);
-    let share = 1.0 / planes.len().max(1) as f64;
+    let lattice = Lattice::new(optics);
+    let lines = Lines::new(optics, spectrum, pitch_mm, weights_total);
+    let combs = combs(&lattice, &lines, extent, &mut control.part(0.0, 0.1))?;
+    let weakest = weakest_corrected(&lattice, &lines, weights_total.len());
+    let corrected = Corrected::new(&lattice, &lines, weakest);
+    let share = 0.9 / planes.len().max(1) as f64;
     let mut filtered = Vec::with_capacity(planes.len());
-    for (c, plane) in planes.iter().enumerate() {
-        let orders = Orders {
-            optics,
-            spectrum,
-            c,
-            extent,
-            pitch_mm,
-            total: weights_total[c],
-        };
-        let comb = comb(&orders, extent);
-        let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
+    for (c, (plane, comb)) in planes.iter().zip(combs).enumerate() {
+        let mut part = control.part(0.1 + c as f64 * share, 0.1 + (c + 1) as f64 * share);
         let mut moved = spread_orders(
             &comb,
             &windows[c],
@@ -60,14 +56,13 @@ pub(super) fn through_filter(
             composing,
             &mut part.part(0.0, 0.9),
         )?;
-        cores.correct(c, &orders, extent, &mut moved, &mut part.part(0.9, 1.0))?;
-        filtered.push(
-            plane
-                .iter()
-                .zip(&moved)
-                .map(|(p, m)| zero * p + m)
-                .collect(),
-        );
+        drop(comb);
+        cores.correct(&corrected, c, extent, &mut moved, &mut part.part(0.9, 1.0))?;
+        moved
+            .par_iter_mut()
+            .zip(plane)
+            .for_each(|(m, p)| *m += zero * p);
+        filtered.push(moved);
     }
     Ok(filtered)
 }
@@ -99,7 +94,7 @@ fn spread_orders(
     let plane: Vec<f32> = window.values.iter().map(|&v| v as f32).collect();
     match Kernel::from_planes(side, side, vec![plane]) {
         Ok(kernel) => {
-            let comb: Vec<f32> = comb.iter().map(|&v| v as f32).collect();
+            let comb: Vec<f32> = comb.par_iter().map(|&v| v as f32).collect();
             let size = (extent.width, extent.height);
             let composed = convolve::compose(
                 &kernel.planes()[0],
@@ -110,7 +105,7 @@ fn spread_orders(
                 control,
             )?;
             Ok(composed
-                .into_iter()
+                .into_par_iter()
                 .map(|v| f64::from(v).max(0.0))
                 .collect())
         }
@@ -198,80 +193,177 @@ fn scatter(
     Ok(out)
 }
 
-/// Where a non-zero order of one wavelength lands, in px from the
-/// kernel's left and top edges (pixel centres at whole numbers), and its
-/// share of a plane's light.
-struct Order {
-    x: f64,
-    y: f64,
-    weight: f64,
-    /// The wavelength's index in the spectrum.
-    line: usize,
-}
+/// The filter's non-zero orders, (ν_x, ν_y, share |c_m|²), sorted by ν_y,
+/// so that those of one wavelength that land in a band of rows lie
+/// together. A star filter has millions (pairs of families: 3.2 million
+/// for four families at 200 µm, in every wavelength of the light).
+struct Lattice(Vec<[f64; 3]>);
 
-/// The filter's non-zero orders for plane `c`: each order m at x = ν_m λ f,
-/// with its share |c_m|² of the light, for every wavelength of the plane
-/// (so orders disperse into spectra). A star filter has millions of them
-/// (pairs of families, in every wavelength: 55 million for four families
-/// at 200 µm): they are produced as they are used, never stored, and only
-/// the few bright enough to need their cores corrected are kept.
-struct Orders<'a> {
-    optics: &'a Optics,
-    spectrum: &'a Spectrum,
-    c: usize,
-    extent: &'a Extent,
-    pitch_mm: f64,
-    total: f64,
-}
-
-impl Orders<'_> {
-    fn each(&self, mut visit: impl FnMut(Order)) {
-        let (cx, cy) = (
-            (self.extent.width / 2) as f64,
-            (self.extent.height / 2) as f64,
-        );
-        for (line, (lambda_nm, weights)) in self.spectrum.iter().enumerate() {
-            if weights[self.c] == 0.0 {
-                continue;
-            }
-            let to_px = lambda_nm * 1e-6 * self.optics.focal_mm / self.pitch_mm;
-            for (nu, share) in self
-                .optics
-                .orders
-                .iter()
-                .filter(|(nu, _)| nu[0] != 0.0 || nu[1] != 0.0)
-            {
-                visit(Order {
-                    x: cx + nu[0] * to_px,
-                    y: cy - nu[1] * to_px,
-                    weight: share * weights[self.c] / self.total,
-                    line,
-                });
-            }
-        }
+impl Lattice {
+    fn new(optics: &Optics) -> Lattice {
+        let mut orders: Vec<[f64; 3]> = optics
+            .orders
+            .iter()
+            .filter(|(nu, _)| nu[0] != 0.0 || nu[1] != 0.0)
+            .map(|(nu, share)| [nu[0], nu[1], *share])
+            .collect();
+        // Orders equal in all three are interchangeable: the order is
+        // the same on every run.
+        orders.par_sort_unstable_by(|a, b| {
+            (a[1].total_cmp(&b[1]))
+                .then(a[0].total_cmp(&b[0]))
+                .then(a[2].total_cmp(&b[2]))
+        });
+        Lattice(orders)
     }
 }
 
-/// The orders spread bilinearly over the pixels about them.
-fn comb(orders: &Orders, extent: &Extent) -> Vec<f64> {
+/// Each wavelength of the light: px per cycle/mm of an order's shift
+/// (λf over the pitch), and its weight in each plane over the plane's
+/// total, by which an order's share is multiplied.
+struct Lines(Vec<(f64, Vec<f64>)>);
+
+impl Lines {
+    fn new(optics: &Optics, spectrum: &Spectrum, pitch_mm: f64, totals: &[f64]) -> Lines {
+        Lines(
+            spectrum
+                .iter()
+                .map(|(lambda_nm, weights)| {
+                    let shares = weights.iter().zip(totals).map(|(w, t)| w / t);
+                    (
+                        lambda_nm * 1e-6 * optics.focal_mm / pitch_mm,
+                        shares.collect(),
+                    )
+                })
+                .collect(),
+        )
+    }
+}
+
+/// Rows of the combs filled together: bands run in parallel, and every
+/// pixel's sum comes out in the same order (wavelength, then ν_y) on any
+/// number of threads.
+const COMB_ROWS: usize = 16;
+
+/// Each plane's orders spread bilinearly over the pixels about them, the
+/// planes together: the orders' places are found once for all of them.
+fn combs(
+    lattice: &Lattice,
+    lines: &Lines,
+    extent: &Extent,
+    control: &mut Control,
+) -> Result<Vec<Vec<f64>>> {
     let (width, height) = (extent.width, extent.height);
-    let mut comb = vec![0.0; width * height];
-    orders.each(|order| {
-        let (x0, y0) = (order.x.floor(), order.y.floor());
-        let (fx, fy) = (order.x - x0, order.y - y0);
-        for (dx, dy, w) in [
-            (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
-            (1.0, 0.0, fx * (1.0 - fy)),
-            (0.0, 1.0, (1.0 - fx) * fy),
-            (1.0, 1.0, fx * fy),
-        ] {
-            let (x, y) = (x0 + dx, y0 + dy);
-            if x >= 0.0 && y >= 0.0 && (x as usize) < width && (y as usize) < height {
-                comb[y as usize * width + x as usize] += order.weight * w;
+    let (cx, cy) = ((width / 2) as f64, (height / 2) as f64);
+    let planes = lines.0.first().map_or(0, |(_, shares)| shares.len());
+    let mut combs: Vec<Vec<f64>> = (0..planes).map(|_| vec![0.0; width * height]).collect();
+    let mut bands: Vec<Vec<&mut [f64]>> = Vec::new();
+    for comb in &mut combs {
+        for (b, band) in comb.chunks_mut(COMB_ROWS * width).enumerate() {
+            if b == bands.len() {
+                bands.push(Vec::with_capacity(planes));
+            }
+            bands[b].push(band);
+        }
+    }
+    let orders = &lattice.0;
+    for_each(&mut bands, control, |b, band| {
+        let top = b * COMB_ROWS;
+        let rows = band.first().map_or(0, |plane| plane.len() / width);
+        let (first, end) = (top as f64, (top + rows) as f64);
+        // Written before they are read: a page of the calloc'd planes read
+        // first maps the shared zero page, and the write after it costs a
+        // copy and a TLB flush on every core.
+        for plane in band.iter_mut() {
+            plane.fill(0.0);
+        }
+        for (to_px, shares) in &lines.0 {
+            // The orders whose rows y0 = ⌊y⌋ or y0 + 1 lie in the band,
+            // y = cy − ν_y·to_px, and a row more on either side against
+            // round-off: each is checked below.
+            let lowest = (cy - end - 1.0) / to_px;
+            let highest = (cy - first + 2.0) / to_px;
+            let from = orders.partition_point(|o| o[1] < lowest);
+            let to = orders.partition_point(|o| o[1] <= highest);
+            for o in &orders[from..to.max(from)] {
+                let (x, y) = (cx + o[0] * to_px, cy - o[1] * to_px);
+                let (x0, y0) = (x.floor(), y.floor());
+                let (fx, fy) = (x - x0, y - y0);
+                for (dx, dy, w) in [
+                    (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
+                    (1.0, 0.0, fx * (1.0 - fy)),
+                    (0.0, 1.0, (1.0 - fx) * fy),
+                    (1.0, 1.0, fx * fy),
+                ] {
+                    let (x, y) = (x0 + dx, y0 + dy);
+                    if x >= 0.0 && y >= first && x < width as f64 && y < end {
+                        let at = (y as usize - top) * width + x as usize;
+                        for (plane, share) in band.iter_mut().zip(shares) {
+                            plane[at] += o[2] * share * w;
+                        }
+                    }
+                }
             }
         }
-    });
-    comb
+    })?;
+    Ok(combs)
+}
+
+/// The orders bright enough to have their cores corrected in some plane
+/// and wavelength (a share of at least `weakest`), the brightest first.
+struct Corrected<'a> {
+    lattice: &'a Lattice,
+    lines: &'a Lines,
+    by_share: Vec<usize>,
+    weakest: Vec<f64>,
+}
+
+impl<'a> Corrected<'a> {
+    fn new(lattice: &'a Lattice, lines: &'a Lines, weakest: Vec<f64>) -> Corrected<'a> {
+        // An order is corrected in plane c where its share times its
+        // wavelength's weight reaches the plane's weakest, so in some
+        // wavelength where it does with the largest weight.
+        let largest: Vec<f64> = (0..weakest.len())
+            .map(|c| lines.0.iter().map(|(_, s)| s[c]).fold(0.0, f64::max))
+            .collect();
+        let orders = &lattice.0;
+        let mut by_share: Vec<usize> = (0..orders.len())
+            .filter(|&i| {
+                let share = orders[i][2];
+                largest.iter().zip(&weakest).any(|(l, w)| share * l >= *w)
+            })
+            .collect();
+        by_share.sort_unstable_by(|&a, &b| orders[b][2].total_cmp(&orders[a][2]).then(a.cmp(&b)));
+        Corrected {
+            lattice,
+            lines,
+            by_share,
+            weakest,
+        }
+    }
+
+    /// Visits every order corrected in plane `c`: its place in px from
+    /// the kernel's left and top edges (pixel centres at whole numbers),
+    /// its share of the plane and its wavelength's index, the brightest of
+    /// each wavelength first.
+    fn each(&self, c: usize, centre: (f64, f64), mut visit: impl FnMut(f64, f64, f64, usize)) {
+        let orders = &self.lattice.0;
+        for (line, (to_px, shares)) in self.lines.0.iter().enumerate() {
+            for &i in &self.by_share {
+                let o = &orders[i];
+                let weight = o[2] * shares[c];
+                if weight < self.weakest[c] {
+                    break;
+                }
+                visit(
+                    centre.0 + o[0] * to_px,
+                    centre.1 - o[1] * to_px,
+                    weight,
+                    line,
+                );
+            }
+        }
+    }
 }
 
 /// Sub-pixel places per pixel and axis at which the cores are evaluated;
@@ -377,8 +469,8 @@ impl Cores {
     /// between the sub-pixel places about each.
     fn correct(
         &self,
+        corrected: &Corrected,
         c: usize,
-        orders: &Orders,
         extent: &Extent,
         out: &mut [f64],
         control: &mut Control,
@@ -387,20 +479,17 @@ impl Cores {
         let reach = self.reach as i64;
         let side = 2 * self.reach + 2;
         let scale = PHASES as f64;
-        let weakest = weakest_corrected(orders);
+        let centre = ((w / 2) as f64, (h / 2) as f64);
         // Each corrected order's pixel, the four places about it with
-        // their weights, and its share, sorted by row.
+        // their weights, and its share.
         let mut placed: Vec<Placed> = Vec::new();
-        orders.each(|order| {
-            if order.weight < weakest {
-                return;
-            }
-            let (x0, y0) = (order.x.floor(), order.y.floor());
-            let (px, py) = ((order.x - x0) * scale, (order.y - y0) * scale);
+        corrected.each(c, centre, |x, y, weight, line| {
+            let (x0, y0) = (x.floor(), y.floor());
+            let (px, py) = ((x - x0) * scale, (y - y0) * scale);
             let a = (px.floor() as usize).min(PHASES - 1);
             let b = (py.floor() as usize).min(PHASES - 1);
             let (ta, tb) = (px - a as f64, py - b as f64);
-            let blocks = &self.blocks[c][order.line];
+            let blocks = &self.blocks[c][line];
             let at = |a: usize, b: usize| blocks[b * (PHASES + 1) + a].as_slice();
             let mix = [
                 (at(a, b), (1.0 - ta) * (1.0 - tb)),
@@ -412,29 +501,54 @@ impl Cores {
                 x0: x0 as i64,
                 y0: y0 as i64,
                 mix,
-                weight: order.weight,
+                weight,
             };
             if placed_order.y0 + reach + 1 >= 0 && placed_order.y0 - reach < h {
                 placed.push(placed_order);
             }
         });
-        placed.sort_by_key(|p| (p.y0, p.x0));
+        // By row (counting), each row's in the order visited.
+        let lowest = -reach - 1;
+        let mut starts = vec![0usize; (h + 2 * reach + 2) as usize];
+        for p in &placed {
+            starts[(p.y0 - lowest) as usize + 1] += 1;
+        }
+        for k in 1..starts.len() {
+            starts[k] += starts[k - 1];
+        }
+        let mut next = starts.clone();
+        let mut order = vec![0; placed.len()];
+        for (i, p) in placed.iter().enumerate() {
+            let slot = &mut next[(p.y0 - lowest) as usize];
+            order[*slot] = i;
+            *slot += 1;
+        }
+        let placed: Vec<Placed> = order.into_iter().map(|i| placed[i]).collect();
+        let start = |y0: i64| starts[(y0 - lowest).clamp(0, starts.len() as i64 - 1) as usize];
         // Each output row gathers the orders whose blocks cover it, so rows
         // run in parallel and the sums come out in the same order every
         // run.
         for_each_row(out, extent.width, control, |y, row| {
             let y = y as i64;
-            let first = placed.partition_point(|p| p.y0 + reach + 1 < y);
-            let last = placed.partition_point(|p| p.y0 - reach <= y);
-            for p in &placed[first..last] {
+            for p in &placed[start(y - reach - 1)..start(y + reach + 1)] {
                 let v = (y - p.y0 + reach) as usize;
-                for u in 0..side {
-                    let x = p.x0 - reach + u as i64;
-                    if x >= 0 && x < w {
-                        let k = v * side + u;
-                        let blend: f64 = p.mix.iter().map(|&(block, t)| t * block[k]).sum();
-                        row[x as usize] += p.weight * blend;
-                    }
+                // The block's columns u that fall within the row.
+                let left = p.x0 - reach;
+                let (from, to) = (
+                    (-left).clamp(0, side as i64),
+                    (w - left).clamp(0, side as i64),
+                );
+                if from >= to {
+                    continue;
+                }
+                let (from, to) = (from as usize, to as usize);
+                let x = (left + from as i64) as usize;
+                let block = |m: usize| &p.mix[m].0[v * side + from..v * side + to];
+                let (t0, t1, t2, t3) = (p.mix[0].1, p.mix[1].1, p.mix[2].1, p.mix[3].1);
+                let out = row[x..x + to - from].iter_mut();
+                let blocks = block(0).iter().zip(block(1)).zip(block(2)).zip(block(3));
+                for (o, (((b0, b1), b2), b3)) in out.zip(blocks) {
+                    *o += p.weight * (t0 * b0 + t1 * b1 + t2 * b2 + t3 * b3);
                 }
             }
         })
@@ -443,6 +557,7 @@ impl Cores {
 
 /// An order to correct: its pixel, the blocks of the four places about it
 /// with their weights, and its share.
+#[derive(Clone, Copy)]
 struct Placed<'a> {
     x0: i64,
     y0: i64,
@@ -450,22 +565,44 @@ struct Placed<'a> {
     weight: f64,
 }
 
-/// The weakest share an order may have and still be corrected: the orders
-/// below it keep their bilinear place, and what they hold together, at
-/// most [`UNCORRECTED`] of the light, lands within a pixel or two of where
-/// it belongs. Found by the shares' binary exponents, in one pass.
-fn weakest_corrected(orders: &Orders) -> f64 {
-    let mut light = vec![0.0; 1100];
-    let exponent = |w: f64| (-libm::log2(w).floor()).clamp(0.0, 1099.0) as usize;
-    orders.each(|order| light[exponent(order.weight)] += order.weight);
-    let mut held = 0.0;
-    for (e, l) in light.iter().enumerate().rev() {
-        held += l;
-        if held > UNCORRECTED {
-            return libm::exp2(-(e as f64));
-        }
-    }
-    f64::INFINITY
+/// The weakest share an order may have and still be corrected, per plane:
+/// the orders below it keep their bilinear place, and what they hold
+/// together, at most [`UNCORRECTED`] of the light, lands within a pixel or
+/// two of where it belongs. Found by the shares' binary exponents, each
+/// wavelength apart and then added in order.
+fn weakest_corrected(lattice: &Lattice, lines: &Lines, planes: usize) -> Vec<f64> {
+    const EXPONENTS: usize = 1100;
+    // ⌊−log₂ w⌋ from the bits: w = m·2^e, 1 ≤ m < 2.
+    let exponent = |w: f64| {
+        let e = ((w.to_bits() >> 52) & 0x7ff) as i64 - 1023;
+        (-e).clamp(0, EXPONENTS as i64 - 1) as usize
+    };
+    let per_line: Vec<Vec<f64>> = lines
+        .0
+        .par_iter()
+        .map(|(_, shares)| {
+            let mut light = vec![0.0; EXPONENTS * planes];
+            for o in &lattice.0 {
+                for (c, share) in shares.iter().enumerate() {
+                    let w = o[2] * share;
+                    light[c * EXPONENTS + exponent(w)] += w;
+                }
+            }
+            light
+        })
+        .collect();
+    (0..planes)
+        .map(|c| {
+            let mut held = 0.0;
+            for e in (0..EXPONENTS).rev() {
+                held += per_line.iter().map(|l| l[c * EXPONENTS + e]).sum::<f64>();
+                if held > UNCORRECTED {
+                    return libm::exp2(-(e as f64));
+                }
+            }
+            f64::INFINITY
+        })
+        .collect()
 }
 
 /// The sub-pixel place (fx, fy) of block `k`.
@@ -506,6 +643,122 @@ mod tests {
     use super::*;
     use crate::control::Cancel;
     use crate::kernel::Sending;
+
+    /// A star filter of three families on a 50 mm f/8 lens, its 17
+    /// wavelengths and their planes' totals.
+    fn star() -> (Optics, Spectrum, Vec<f64>) {
+        let family = |angle_deg| crate::optics::aperture::Filter {
+            angle_deg,
+            spacing_um: 200.0,
+            width_um: 10.0,
+        };
+        let aperture = crate::optics::Aperture {
+            blades: 0,
+            spectral: true,
+            filters: vec![family(0.0), family(45.0), family(90.0)],
+            ..crate::optics::Aperture::new(7)
+        };
+        let camera = crate::Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(50.0),
+            f_number: Some(8.0),
+        };
+        let optics = aperture.optics(&camera, 1.0, 0).unwrap();
+        let spectrum = crate::optics::aperture::spectrum::Light::Spectral.wavelengths();
+        let totals = (0..3)
+            .map(|c| spectrum.iter().map(|(_, w)| w[c]).sum())
+            .collect();
+        (optics, spectrum, totals)
+    }
+
+    #[test]
+    fn the_combs_bands_place_every_order_as_one_pass_does() {
+        // 87 rows: bands of 16 and a last of 7; orders straddle every
+        // band's edge.
+        let pitch = 0.012;
+        let (optics, spectrum, totals) = star();
+        let extent = Extent::new(203, 87).unwrap();
+        let lattice = Lattice::new(&optics);
+        let lines = Lines::new(&optics, &spectrum, pitch, &totals);
+        let cancel = Cancel::new();
+        let combs = combs(&lattice, &lines, &extent, &mut Control::quiet(&cancel)).unwrap();
+        let (w, h) = (203usize, 87usize);
+        let mut one: Vec<Vec<f64>> = vec![vec![0.0; w * h]; 3];
+        for (to_px, shares) in &lines.0 {
+            for (nu, share) in optics.orders.iter().filter(|(nu, _)| nu != &[0.0, 0.0]) {
+                let (x, y) = (101.0 + nu[0] * to_px, 43.0 - nu[1] * to_px);
+                let (x0, y0) = (x.floor(), y.floor());
+                let (fx, fy) = (x - x0, y - y0);
+                for (dx, dy, f) in [
+                    (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
+                    (1.0, 0.0, fx * (1.0 - fy)),
+                    (0.0, 1.0, (1.0 - fx) * fy),
+                    (1.0, 1.0, fx * fy),
+                ] {
+                    let (x, y) = (x0 + dx, y0 + dy);
+                    if x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64 {
+                        for (plane, s) in one.iter_mut().zip(shares) {
+                            plane[y as usize * w + x as usize] += share * s * f;
+                        }
+                    }
+                }
+            }
+        }
+        for (banded, one) in combs.iter().zip(&one) {
+            let total: f64 = one.iter().sum();
+            assert!(total > 1e-3, "{total}");
+            for (a, b) in banded.iter().zip(one) {
+                assert!((a - b).abs() <= 1e-12 * total, "{a} against {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_orders_left_uncorrected_hold_at_most_their_share() {
+        // Below the weakest corrected share lies at most UNCORRECTED of
+        // each plane's light, and below twice it, more: the threshold is
+        // the highest power of two that keeps to it.
+        let (optics, spectrum, totals) = star();
+        let lattice = Lattice::new(&optics);
+        let lines = Lines::new(&optics, &spectrum, 0.012, &totals);
+        let weakest = weakest_corrected(&lattice, &lines, 3);
+        for (c, weakest) in weakest.iter().enumerate() {
+            let below = |threshold: f64| -> f64 {
+                let mut light = 0.0;
+                for (_, shares) in &lines.0 {
+                    for o in &lattice.0 {
+                        let w = o[2] * shares[c];
+                        if w < threshold {
+                            light += w;
+                        }
+                    }
+                }
+                light
+            };
+            assert!(below(*weakest) <= UNCORRECTED, "plane {c}");
+            assert!(below(2.0 * weakest) > UNCORRECTED, "plane {c}");
+        }
+        let corrected = Corrected::new(&lattice, &lines, weakest.clone());
+        for c in 0..3 {
+            let mut count = 0;
+            corrected.each(c, (0.0, 0.0), |_, _, w, _| {
+                assert!(w >= weakest[c]);
+                count += 1;
+            });
+            let all: usize = lines
+                .0
+                .iter()
+                .map(|(_, s)| {
+                    lattice
+                        .0
+                        .iter()
+                        .filter(|o| o[2] * s[c] >= weakest[c])
+                        .count()
+                })
+                .sum();
+            assert_eq!(count, all, "plane {c}");
+        }
+    }
 
     #[test]
     fn scattering_and_fft_spread_orders_alike() {

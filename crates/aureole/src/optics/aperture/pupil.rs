@@ -682,7 +682,7 @@ fn disc(area: f64, centre: [f64; 2], radius: f64, q: [f64; 2], q2: f64) -> Ampli
     let magnitude = if x < 1e-6 {
         area
     } else {
-        TAU * radius * radius * libm::j1(x) / x
+        TAU * radius * radius * crate::math::j1(x) / x
     };
     phase(magnitude, q, centre)
 }

@@ -106,20 +106,21 @@ impl Spots {
     /// Each plane's pattern at `r` mm, the mean over `width` mm across
     /// the radius, added into `out`.
     pub(super) fn add(&self, r: f64, width: f64, out: &mut [f64; PLANES]) {
+        let p = self.planes;
         for group in &self.groups {
-            let at = |r: f64, c: usize| {
-                let position =
-                    (r.max(0.0) / group.step).min((group.integral.len() / self.planes - 1) as f64);
-                let k = (position.floor() as usize).min(group.integral.len() / self.planes - 2);
-                let t = position - k as f64;
-                let (a, b) = (
-                    group.integral[k * self.planes + c],
-                    group.integral[(k + 1) * self.planes + c],
-                );
-                a + t * (b - a)
+            let nodes = group.integral.len() / p;
+            // The two nodes about `r` and where it lies between them, for
+            // every plane at once (r ≥ 0: truncation is the floor).
+            let place = |r: f64| {
+                let position = (r.max(0.0) / group.step).min((nodes - 1) as f64);
+                let k = (position as usize).min(nodes - 2);
+                (&group.integral[k * p..(k + 2) * p], position - k as f64)
             };
-            for (c, value) in out.iter_mut().take(self.planes).enumerate() {
-                *value += (at(r + width / 2.0, c) - at(r - width / 2.0, c)) / width;
+            let ((outer, t_outer), (inner, t_inner)) =
+                (place(r + width / 2.0), place(r - width / 2.0));
+            for (c, value) in out.iter_mut().take(p).enumerate() {
+                let at = |pair: &[f64], t: f64| pair[c] + t * (pair[p + c] - pair[c]);
+                *value += (at(outer, t_outer) - at(inner, t_inner)) / width;
             }
         }
     }
