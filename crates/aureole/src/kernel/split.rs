@@ -89,7 +89,7 @@ impl SplitKernel {
                 .into_iter()
                 .map(|plane| Layer {
                     centre: 0.0,
-                    spread: plane.iter().map(|&v| v as f32).collect(),
+                    spread: plane.par_iter().map(|&v| v as f32).collect(),
                 })
                 .collect(),
         }
