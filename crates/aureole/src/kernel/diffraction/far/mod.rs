@@ -391,11 +391,12 @@ impl Received {
         let nodes = self.values.get(k * p..(k + 4) * p)?;
         let t = position - k as f64;
         let (before, after) = (t + 1.0, t - 1.0);
+        const SIXTH: f64 = 1.0 / 6.0;
         let weights = [
-            -t * after * (t - 2.0) / 6.0,
-            before * after * (t - 2.0) / 2.0,
-            -before * t * (t - 2.0) / 2.0,
-            before * t * after / 6.0,
+            -t * after * (t - 2.0) * SIXTH,
+            before * after * (t - 2.0) * 0.5,
+            -before * t * (t - 2.0) * 0.5,
+            before * t * after * SIXTH,
         ];
         let mut out = [0.0; PLANES];
         for (c, o) in out[..p].iter_mut().enumerate() {

@@ -24,7 +24,8 @@ const STEPS_PER_FRINGE: f64 = 16.0;
 
 /// One octave of spot sizes, its patterns integrated along the radius.
 struct Group {
-    step: f64,
+    /// 1 over the grid's step.
+    inverse_step: f64,
     /// ∫₀^r of the planes' sum, at r = k·step, the planes side by side.
     integral: Vec<f64>,
 }
@@ -93,7 +94,10 @@ impl Spots {
                             integral[(k - 1) * planes + c] + 0.5 * step * (a + b);
                     }
                 }
-                Group { step, integral }
+                Group {
+                    inverse_step: 1.0 / step,
+                    integral,
+                }
             })
             .collect();
         Spots { groups, planes }
@@ -107,12 +111,14 @@ impl Spots {
     /// the radius, added into `out`.
     pub(super) fn add(&self, r: f64, width: f64, out: &mut [f64; PLANES]) {
         let p = self.planes;
+        // Multiplications, not the divisions a pixel would wait on.
+        let per_width = 1.0 / width;
         for group in &self.groups {
             let nodes = group.integral.len() / p;
             // The two nodes about `r` and where it lies between them, for
             // every plane at once (r ≥ 0: truncation is the floor).
             let place = |r: f64| {
-                let position = (r.max(0.0) / group.step).min((nodes - 1) as f64);
+                let position = (r.max(0.0) * group.inverse_step).min((nodes - 1) as f64);
                 let k = (position as usize).min(nodes - 2);
                 (&group.integral[k * p..(k + 2) * p], position - k as f64)
             };
@@ -120,7 +126,7 @@ impl Spots {
                 (place(r + width / 2.0), place(r - width / 2.0));
             for (c, value) in out.iter_mut().take(p).enumerate() {
                 let at = |pair: &[f64], t: f64| pair[c] + t * (pair[p + c] - pair[c]);
-                *value += (at(outer, t_outer) - at(inner, t_inner)) / width;
+                *value += (at(outer, t_outer) - at(inner, t_inner)) * per_width;
             }
         }
     }
