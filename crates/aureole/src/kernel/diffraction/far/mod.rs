@@ -99,6 +99,9 @@ struct Edge {
     l_over_f: f64,
     /// The pixel means of its light across its ray, tabulated.
     received: Received,
+    /// Where its pairs are summed line by line: each line's own means
+    /// near the ray, tabulated.
+    line_means: Vec<Received>,
     /// The equal, parallel edges after it, whose rays coincide with its
     /// own and interfere with it.
     pairs: Vec<Pair>,
@@ -460,6 +463,7 @@ impl FarField {
         let area = optics.pupil.area();
         let fringes = Fringes::new(&discs, &straight, &lines, f, pitch, sending, area);
         let table = Cumulative::new(&(0..planes).map(light).collect::<Vec<_>>());
+        let longest = lines.iter().map(|l| l.lambda).fold(0.0, f64::max);
         let edges = straight
             .into_par_iter()
             .zip(pairs)
@@ -470,12 +474,24 @@ impl FarField {
                 // and a pixel's step beyond it, and within the kernel.
                 let band = table.end + spread(beta, gamma, sending) + 2.0 * (beta + gamma);
                 let received = Received::new(&table, (beta, gamma), sending, band.min(reach * k));
+                let near =
+                    PAIR_REACH * longest + spread(beta, gamma, sending) + 2.0 * (beta + gamma);
+                let line_means = if pairs.is_empty() {
+                    Vec::new()
+                } else {
+                    lines
+                        .iter()
+                        .filter_map(|line| line.table.as_ref())
+                        .map(|own| Received::new(own, (beta, gamma), sending, near.min(reach * k)))
+                        .collect()
+                };
                 Edge {
                     l2: e.length * e.length,
                     normal: e.normal,
                     along: e.along,
                     l_over_f: k,
                     received,
+                    line_means,
                     pairs,
                 }
             })
@@ -496,7 +512,7 @@ impl FarField {
             fringes,
             spots: Spots::new(&spots, &lines, planes, f, pitch, reach + pitch),
             table,
-            longest: lines.iter().map(|l| l.lambda).fold(0.0, f64::max),
+            longest,
             lines,
             mean_lambda: (0..planes)
                 .map(|c| {
@@ -624,6 +640,7 @@ impl FarField {
             }
         }
         let at = Strip {
+            line_means: &edge.line_means,
             x0,
             y,
             pitch,
@@ -683,7 +700,8 @@ impl FarField {
         let count = row.tails.len();
         row.cross.resize(count, 0.0);
         row.waves.resize(count, 0.0);
-        for ((line, pixel), nodes) in self.lines.iter().zip(&pair.pixel).zip(&pair.nodes) {
+        let lines = self.lines.iter().zip(&pair.pixel).zip(&pair.nodes);
+        for (l, ((line, pixel), nodes)) in lines.enumerate() {
             let (start, step) = pair.phase(at.x0, at.y, at.pitch, line.lambda);
             cosines(start, step, near.clone(), &mut row.cosines);
             let core = band(
@@ -712,7 +730,10 @@ impl FarField {
                 } else {
                     // One wavelength's mean is the edge's own, found already.
                     let mean = match &line.table {
-                        Some(table) => table.received(c, at.beta, at.gamma, self.sending)[0],
+                        Some(table) => match at.line_means.get(l).and_then(|m| m.at(c)) {
+                            Some(mean) => mean[0],
+                            None => table.received(c, at.beta, at.gamma, self.sending)[0],
+                        },
                         None => row.means[i],
                     };
                     mean * pixel * row.cosines[i] * pair.beat(c, line.lambda)
@@ -752,7 +773,9 @@ impl Pair {
 /// Where a row's pixels lie about an edge's ray: the row's first pixel
 /// at (`x0`, `y`), the offset across the ray of the first and its step,
 /// u per offset (L/f), and the pixel's half projections in u.
-struct Strip {
+struct Strip<'a> {
+    /// The edge's means per line ([`Edge::line_means`]).
+    line_means: &'a [Received],
     x0: f64,
     y: f64,
     pitch: f64,
