@@ -174,6 +174,8 @@ fn scatter(
         .collect();
     let mut out = vec![0.0; w * h];
     for_each_row(&mut out, w, control, |y, row| {
+        // Written before read, as the combs are.
+        row.fill(0.0);
         for dy in -reach..=reach {
             let source = y as i64 - dy;
             if source < 0 || source >= h as i64 {
