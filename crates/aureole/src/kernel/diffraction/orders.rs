@@ -409,15 +409,10 @@ impl Cores {
         let reach = ((12.0 * lambda_n_px).ceil() as usize).clamp(3, 24);
         let side = 2 * reach + 2;
         let places = (PHASES + 1) * (PHASES + 1);
-        // A pupil that delays no part of the light gives a centrosymmetric
-        // pattern: the place (1 − fx, 1 − fy) sees the block of (fx, fy)
-        // turned by half a turn, so only the first half of the places is
-        // evaluated.
-        let evaluated = if optics.pupil.is_real() {
-            places / 2 + 1
-        } else {
-            places
-        };
+        let sources: Vec<Source> = (0..places)
+            .map(|k| Source::of(k, optics.pupil.is_round(), optics.pupil.is_real()))
+            .collect();
+        let evaluated: Vec<usize> = (0..places).filter(|&k| sources[k].place == k).collect();
         let singles: Vec<Spectrum> = spectrum
             .iter()
             .map(|(lambda_nm, _)| vec![(*lambda_nm, vec![1.0])])
@@ -426,11 +421,12 @@ impl Cores {
             .iter()
             .map(|single| NearField::new(optics, single, (pitch_mm, sending)))
             .collect();
-        let exact: Vec<Vec<f64>> = (0..spectrum.len() * evaluated)
+        let count = evaluated.len();
+        let exact: Vec<Vec<f64>> = (0..spectrum.len() * count)
             .into_par_iter()
             .map(|n| {
-                let (fx, fy) = place(n % evaluated);
-                pattern_about(&nears[n / evaluated], reach, fx, fy, pitch_mm)
+                let (fx, fy) = place(evaluated[n % count]);
+                pattern_about(&nears[n / count], reach, fx, fy, pitch_mm)
             })
             .collect();
         let blocks = windows
@@ -438,28 +434,25 @@ impl Cores {
             .map(|window| {
                 (0..spectrum.len())
                     .map(|line| {
-                        let mut line_blocks: Vec<Vec<f64>> = Vec::with_capacity(places);
-                        for k in 0..places {
-                            if k >= evaluated {
-                                let turned = line_blocks[places - 1 - k].iter().rev().copied();
-                                line_blocks.push(turned.collect());
-                                continue;
-                            }
-                            let (fx, fy) = place(k);
-                            let pattern = &exact[line * evaluated + k];
-                            let mut block = vec![0.0; side * side];
-                            for (n, value) in block.iter_mut().enumerate() {
-                                let x = (n % side) as i64 - reach as i64;
-                                let y = (n / side) as i64 - reach as i64;
-                                let placed = (1.0 - fx) * (1.0 - fy) * window.at(x, y)
-                                    + fx * (1.0 - fy) * window.at(x - 1, y)
-                                    + (1.0 - fx) * fy * window.at(x, y - 1)
-                                    + fx * fy * window.at(x - 1, y - 1);
-                                *value = pattern[n] / window.sum - placed;
-                            }
-                            line_blocks.push(block);
-                        }
-                        line_blocks
+                        (0..places)
+                            .map(|k| {
+                                let (fx, fy) = place(k);
+                                let source = &sources[k];
+                                let at = evaluated.partition_point(|&e| e < source.place);
+                                let pattern = &exact[line * count + at];
+                                let mut block = vec![0.0; side * side];
+                                for (n, value) in block.iter_mut().enumerate() {
+                                    let x = (n % side) as i64 - reach as i64;
+                                    let y = (n / side) as i64 - reach as i64;
+                                    let placed = (1.0 - fx) * (1.0 - fy) * window.at(x, y)
+                                        + fx * (1.0 - fy) * window.at(x - 1, y)
+                                        + (1.0 - fx) * fy * window.at(x, y - 1)
+                                        + fx * fy * window.at(x - 1, y - 1);
+                                    *value = pattern[source.pixel(n, side)] / window.sum - placed;
+                                }
+                                block
+                            })
+                            .collect()
                     })
                     .collect()
             })
@@ -605,6 +598,66 @@ fn weakest_corrected(lattice: &Lattice, lines: &Lines, planes: usize) -> Vec<f64
             f64::INFINITY
         })
         .collect()
+}
+
+/// Where the exact pattern about a sub-pixel place comes from: the place
+/// evaluated, and how its block is turned. A pupil that delays no part of
+/// the light gives a centrosymmetric pattern: the place (1 − fx, 1 − fy)
+/// sees the block of (fx, fy) turned by half a turn, so half the places
+/// are evaluated. A round one's pattern is mirrored across both axes and
+/// the diagonals too: 15 places of the 81 are evaluated, those with
+/// fx ≤ fy ≤ ½.
+struct Source {
+    place: usize,
+    /// The block's rows and columns swapped, then its columns and its
+    /// rows reversed.
+    transposed: bool,
+    mirrored: [bool; 2],
+}
+
+impl Source {
+    fn of(k: usize, round: bool, real: bool) -> Source {
+        let (a, b) = (k % (PHASES + 1), k / (PHASES + 1));
+        let alone = Source {
+            place: k,
+            transposed: false,
+            mirrored: [false, false],
+        };
+        if round {
+            let fold = |a: usize| (a.min(PHASES - a), a > PHASES - a);
+            let ((a1, mirror_u), (b1, mirror_v)) = (fold(a), fold(b));
+            let (a2, b2) = (a1.min(b1), a1.max(b1));
+            Source {
+                place: b2 * (PHASES + 1) + a2,
+                transposed: a1 > b1,
+                mirrored: [mirror_u, mirror_v],
+            }
+        } else if real && k > (PHASES + 1) * (PHASES + 1) / 2 {
+            Source {
+                place: (PHASES + 1) * (PHASES + 1) - 1 - k,
+                transposed: false,
+                mirrored: [true, true],
+            }
+        } else {
+            alone
+        }
+    }
+
+    /// The pixel of the evaluated block that pixel `n` of this place's
+    /// block is, blocks `side` wide.
+    fn pixel(&self, n: usize, side: usize) -> usize {
+        let (mut u, mut v) = (n % side, n / side);
+        if self.mirrored[0] {
+            u = side - 1 - u;
+        }
+        if self.mirrored[1] {
+            v = side - 1 - v;
+        }
+        if self.transposed {
+            (u, v) = (v, u);
+        }
+        v * side + u
+    }
 }
 
 /// The sub-pixel place (fx, fy) of block `k`.
@@ -759,6 +812,48 @@ mod tests {
                 })
                 .sum();
             assert_eq!(count, all, "plane {c}");
+        }
+    }
+
+    #[test]
+    fn a_places_core_turned_from_another_is_its_own() {
+        // A round stop (the star filter's) and a 7-blade one: every place's
+        // pattern about an order, evaluated, against the block of the
+        // place it is taken from, turned.
+        let (round, _, _) = star();
+        let camera = crate::Camera {
+            sensor_width_mm: Some(36.0),
+            focal_length_mm: Some(50.0),
+            f_number: Some(8.0),
+        };
+        let bladed = crate::optics::Aperture::new(7)
+            .optics(&camera, 1.0, 0)
+            .unwrap();
+        assert!(round.pupil.is_round() && !bladed.pupil.is_round() && bladed.pupil.is_real());
+        let (pitch, reach) = (0.004, 4);
+        let side = 2 * reach + 2;
+        let light = vec![(550.0, vec![1.0])];
+        for optics in [&round, &bladed] {
+            let near = NearField::new(optics, &light, (pitch, Sending::Pixel));
+            let places = (PHASES + 1) * (PHASES + 1);
+            let mut evaluated = 0;
+            for k in 0..places {
+                let source = Source::of(k, optics.pupil.is_round(), optics.pupil.is_real());
+                evaluated += usize::from(source.place == k);
+                let (fx, fy) = place(k);
+                let own = pattern_about(&near, reach, fx, fy, pitch);
+                let (sx, sy) = place(source.place);
+                let theirs = pattern_about(&near, reach, sx, sy, pitch);
+                let peak = own.iter().fold(0.0f64, |a, b| a.max(*b));
+                for (n, value) in own.iter().enumerate() {
+                    let turned = theirs[source.pixel(n, side)];
+                    assert!(
+                        (value - turned).abs() <= 1e-12 * peak,
+                        "place {k}, pixel {n}: {value} against {turned}"
+                    );
+                }
+            }
+            assert_eq!(evaluated, if optics.pupil.is_round() { 15 } else { 41 });
         }
     }
 

@@ -255,6 +255,16 @@ impl Pupil {
         self.elements.iter().all(|e| e.weight[1] == 0.0)
     }
 
+    /// Whether it is round: discs about the axis, transmitting real
+    /// amplitudes. Then its pattern has the square's symmetries, mirrors
+    /// across both axes and the diagonals.
+    pub fn is_round(&self) -> bool {
+        self.elements.iter().all(|e| {
+            e.weight[1] == 0.0
+                && matches!(e.shape, Outline::Disc { centre, .. } if centre == [0.0, 0.0])
+        })
+    }
+
     /// The amplitude the pupil transmits at `point` (mm).
     pub fn transmission(&self, point: [f64; 2]) -> Amplitude {
         let mut sum = [0.0, 0.0];
