@@ -15,7 +15,7 @@ mod gpu;
 mod grid;
 mod lamps;
 mod placement;
-mod pool;
+pub(crate) mod pool;
 mod simd;
 mod single;
 

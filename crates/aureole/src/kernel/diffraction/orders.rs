@@ -6,6 +6,7 @@
 use super::near::NearField;
 use super::Spectrum;
 use crate::control::{for_each, for_each_row, Control};
+use crate::convolve::pool::Scratch;
 use crate::convolve::{self, Composing};
 use crate::error::Result;
 use crate::kernel::{Extent, Kernel, Sending};
@@ -40,7 +41,7 @@ pub(super) fn through_filter(
         .map(|plane| centre_window(plane, extent, ORDER_REACH))
         .collect();
     let cores = Cores::new(optics, spectrum, &windows, pitch_mm, extent.sending);
-    let lattice = Lattice::new(optics);
+    let lattice = Lattice(&optics.orders);
     let lines = Lines::new(optics, spectrum, pitch_mm, weights_total);
     let combs = combs(&lattice, &lines, extent, &mut control.part(0.0, 0.1))?;
     let weakest = weakest_corrected(&lattice, &lines, weights_total.len());
@@ -74,7 +75,7 @@ const ORDER_REACH: usize = 64;
 /// scattering or by FFT convolution, whichever the operation counts say is
 /// cheaper.
 fn spread_orders(
-    comb: &[f64],
+    comb: &[f32],
     window: &Window,
     extent: &Extent,
     composing: &mut Composing,
@@ -94,12 +95,11 @@ fn spread_orders(
     let plane: Vec<f32> = window.values.iter().map(|&v| v as f32).collect();
     match Kernel::from_planes(side, side, vec![plane]) {
         Ok(kernel) => {
-            let comb: Vec<f32> = comb.par_iter().map(|&v| v as f32).collect();
             let size = (extent.width, extent.height);
             let composed = convolve::compose(
                 &kernel.planes()[0],
                 (side, side),
-                &comb,
+                comb,
                 size,
                 composing,
                 control,
@@ -154,7 +154,7 @@ impl Window {
 /// extent). Each output row gathers the comb rows within reach, so rows run
 /// in parallel and the sums come out in the same order every run.
 fn scatter(
-    comb: &[f64],
+    comb: &[f32],
     window: &Window,
     extent: &Extent,
     control: &mut Control,
@@ -168,7 +168,7 @@ fn scatter(
             row.iter()
                 .enumerate()
                 .filter(|(_, v)| **v != 0.0)
-                .map(|(x, v)| (x, *v))
+                .map(|(x, v)| (x, f64::from(*v)))
                 .collect()
         })
         .collect();
@@ -195,28 +195,17 @@ fn scatter(
     Ok(out)
 }
 
-/// The filter's non-zero orders, (ν_x, ν_y, share |c_m|²), sorted by ν_y,
-/// so that those of one wavelength that land in a band of rows lie
-/// together. A star filter has millions (pairs of families: 3.2 million
-/// for four families at 200 µm, in every wavelength of the light).
-struct Lattice(Vec<[f64; 3]>);
+/// The filter's orders, (ν, share |c_m|²), sorted by ν_y (as
+/// [`Optics::orders`] are), so that those of one wavelength that land in a
+/// band of rows lie together; the zero order among them is skipped. A
+/// star filter has millions (pairs of families: 3.2 million for four
+/// families at 200 µm, in every wavelength of the light).
+struct Lattice<'a>(&'a [([f64; 2], f64)]);
 
-impl Lattice {
-    fn new(optics: &Optics) -> Lattice {
-        let mut orders: Vec<[f64; 3]> = optics
-            .orders
-            .iter()
-            .filter(|(nu, _)| nu[0] != 0.0 || nu[1] != 0.0)
-            .map(|(nu, share)| [nu[0], nu[1], *share])
-            .collect();
-        // Orders equal in all three are interchangeable: the order is
-        // the same on every run.
-        orders.par_sort_unstable_by(|a, b| {
-            (a[1].total_cmp(&b[1]))
-                .then(a[0].total_cmp(&b[0]))
-                .then(a[2].total_cmp(&b[2]))
-        });
-        Lattice(orders)
+impl Lattice<'_> {
+    /// The non-zero orders.
+    fn moved(&self) -> impl Iterator<Item = &([f64; 2], f64)> {
+        self.0.iter().filter(|(nu, _)| nu != &[0.0, 0.0])
     }
 }
 
@@ -249,17 +238,20 @@ const COMB_ROWS: usize = 16;
 
 /// Each plane's orders spread bilinearly over the pixels about them, the
 /// planes together: the orders' places are found once for all of them.
+/// Summed in f64 band by band and kept in f32, the precision the FFT that
+/// spreads them takes: three planes' combs hold the memory one plane's
+/// did in f64 beside its f32 copy.
 fn combs(
     lattice: &Lattice,
     lines: &Lines,
     extent: &Extent,
     control: &mut Control,
-) -> Result<Vec<Vec<f64>>> {
+) -> Result<Vec<Vec<f32>>> {
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = ((width / 2) as f64, (height / 2) as f64);
     let planes = lines.0.first().map_or(0, |(_, shares)| shares.len());
-    let mut combs: Vec<Vec<f64>> = (0..planes).map(|_| vec![0.0; width * height]).collect();
-    let mut bands: Vec<Vec<&mut [f64]>> = Vec::new();
+    let mut combs: Vec<Vec<f32>> = (0..planes).map(|_| vec![0.0; width * height]).collect();
+    let mut bands: Vec<Vec<&mut [f32]>> = Vec::new();
     for comb in &mut combs {
         for (b, band) in comb.chunks_mut(COMB_ROWS * width).enumerate() {
             if b == bands.len() {
@@ -268,27 +260,29 @@ fn combs(
             bands[b].push(band);
         }
     }
-    let orders = &lattice.0;
+    let orders = lattice.0;
+    let sums: Scratch<Vec<f64>> = Scratch::default();
     for_each(&mut bands, control, |b, band| {
         let top = b * COMB_ROWS;
         let rows = band.first().map_or(0, |plane| plane.len() / width);
         let (first, end) = (top as f64, (top + rows) as f64);
-        // Written before they are read: a page of the calloc'd planes read
-        // first maps the shared zero page, and the write after it costs a
-        // copy and a TLB flush on every core.
-        for plane in band.iter_mut() {
-            plane.fill(0.0);
-        }
+        let size = rows * width;
+        let mut sum = sums.lend(Vec::new);
+        sum.clear();
+        sum.resize(size * planes, 0.0);
         for (to_px, shares) in &lines.0 {
             // The orders whose rows y0 = ⌊y⌋ or y0 + 1 lie in the band,
             // y = cy − ν_y·to_px, and a row more on either side against
             // round-off: each is checked below.
             let lowest = (cy - end - 1.0) / to_px;
             let highest = (cy - first + 2.0) / to_px;
-            let from = orders.partition_point(|o| o[1] < lowest);
-            let to = orders.partition_point(|o| o[1] <= highest);
-            for o in &orders[from..to.max(from)] {
-                let (x, y) = (cx + o[0] * to_px, cy - o[1] * to_px);
+            let from = orders.partition_point(|(nu, _)| nu[1] < lowest);
+            let to = orders.partition_point(|(nu, _)| nu[1] <= highest);
+            for (nu, share) in &orders[from..to.max(from)] {
+                if nu == &[0.0, 0.0] {
+                    continue;
+                }
+                let (x, y) = (cx + nu[0] * to_px, cy - nu[1] * to_px);
                 let (x0, y0) = (x.floor(), y.floor());
                 let (fx, fy) = (x - x0, y - y0);
                 for (dx, dy, w) in [
@@ -300,11 +294,16 @@ fn combs(
                     let (x, y) = (x0 + dx, y0 + dy);
                     if x >= 0.0 && y >= first && x < width as f64 && y < end {
                         let at = (y as usize - top) * width + x as usize;
-                        for (plane, share) in band.iter_mut().zip(shares) {
-                            plane[at] += o[2] * share * w;
+                        for (c, plane_share) in shares.iter().enumerate() {
+                            sum[c * size + at] += share * plane_share * w;
                         }
                     }
                 }
+            }
+        }
+        for (c, plane) in band.iter_mut().enumerate() {
+            for (value, s) in plane.iter_mut().zip(&sum[c * size..(c + 1) * size]) {
+                *value = *s as f32;
             }
         }
     })?;
@@ -314,28 +313,28 @@ fn combs(
 /// The orders bright enough to have their cores corrected in some plane
 /// and wavelength (a share of at least `weakest`), the brightest first.
 struct Corrected<'a> {
-    lattice: &'a Lattice,
+    lattice: &'a Lattice<'a>,
     lines: &'a Lines,
     by_share: Vec<usize>,
     weakest: Vec<f64>,
 }
 
 impl<'a> Corrected<'a> {
-    fn new(lattice: &'a Lattice, lines: &'a Lines, weakest: Vec<f64>) -> Corrected<'a> {
+    fn new(lattice: &'a Lattice<'a>, lines: &'a Lines, weakest: Vec<f64>) -> Corrected<'a> {
         // An order is corrected in plane c where its share times its
         // wavelength's weight reaches the plane's weakest, so in some
         // wavelength where it does with the largest weight.
         let largest: Vec<f64> = (0..weakest.len())
             .map(|c| lines.0.iter().map(|(_, s)| s[c]).fold(0.0, f64::max))
             .collect();
-        let orders = &lattice.0;
+        let orders = lattice.0;
         let mut by_share: Vec<usize> = (0..orders.len())
             .filter(|&i| {
-                let share = orders[i][2];
-                largest.iter().zip(&weakest).any(|(l, w)| share * l >= *w)
+                let (nu, share) = orders[i];
+                nu != [0.0, 0.0] && largest.iter().zip(&weakest).any(|(l, w)| share * l >= *w)
             })
             .collect();
-        by_share.sort_unstable_by(|&a, &b| orders[b][2].total_cmp(&orders[a][2]).then(a.cmp(&b)));
+        by_share.sort_unstable_by(|&a, &b| orders[b].1.total_cmp(&orders[a].1).then(a.cmp(&b)));
         Corrected {
             lattice,
             lines,
@@ -349,17 +348,17 @@ impl<'a> Corrected<'a> {
     /// its share of the plane and its wavelength's index, the brightest of
     /// each wavelength first.
     fn each(&self, c: usize, centre: (f64, f64), mut visit: impl FnMut(f64, f64, f64, usize)) {
-        let orders = &self.lattice.0;
+        let orders = self.lattice.0;
         for (line, (to_px, shares)) in self.lines.0.iter().enumerate() {
             for &i in &self.by_share {
-                let o = &orders[i];
-                let weight = o[2] * shares[c];
+                let (nu, share) = orders[i];
+                let weight = share * shares[c];
                 if weight < self.weakest[c] {
                     break;
                 }
                 visit(
-                    centre.0 + o[0] * to_px,
-                    centre.1 - o[1] * to_px,
+                    centre.0 + nu[0] * to_px,
+                    centre.1 - nu[1] * to_px,
                     weight,
                     line,
                 );
@@ -512,13 +511,23 @@ impl Cores {
             starts[k] += starts[k - 1];
         }
         let mut next = starts.clone();
-        let mut order = vec![0; placed.len()];
-        for (i, p) in placed.iter().enumerate() {
-            let slot = &mut next[(p.y0 - lowest) as usize];
-            order[*slot] = i;
-            *slot += 1;
+        let mut slots: Vec<usize> = placed
+            .iter()
+            .map(|p| {
+                let slot = &mut next[(p.y0 - lowest) as usize];
+                *slot += 1;
+                *slot - 1
+            })
+            .collect();
+        // Each to its slot, in place, cycle by cycle: a second list of
+        // them would hold a hundred bytes per order more.
+        for i in 0..placed.len() {
+            while slots[i] != i {
+                let j = slots[i];
+                placed.swap(i, j);
+                slots.swap(i, j);
+            }
         }
-        let placed: Vec<Placed> = order.into_iter().map(|i| placed[i]).collect();
         let start = |y0: i64| starts[(y0 - lowest).clamp(0, starts.len() as i64 - 1) as usize];
         // Each output row gathers the orders whose blocks cover it, so rows
         // run in parallel and the sums come out in the same order every
@@ -577,9 +586,9 @@ fn weakest_corrected(lattice: &Lattice, lines: &Lines, planes: usize) -> Vec<f64
         .par_iter()
         .map(|(_, shares)| {
             let mut light = vec![0.0; EXPONENTS * planes];
-            for o in &lattice.0 {
+            for (_, order) in lattice.moved() {
                 for (c, share) in shares.iter().enumerate() {
-                    let w = o[2] * share;
+                    let w = order * share;
                     light[c * EXPONENTS + exponent(w)] += w;
                 }
             }
@@ -733,14 +742,14 @@ mod tests {
         let pitch = 0.012;
         let (optics, spectrum, totals) = star();
         let extent = Extent::new(203, 87).unwrap();
-        let lattice = Lattice::new(&optics);
+        let lattice = Lattice(&optics.orders);
         let lines = Lines::new(&optics, &spectrum, pitch, &totals);
         let cancel = Cancel::new();
         let combs = combs(&lattice, &lines, &extent, &mut Control::quiet(&cancel)).unwrap();
         let (w, h) = (203usize, 87usize);
         let mut one: Vec<Vec<f64>> = vec![vec![0.0; w * h]; 3];
         for (to_px, shares) in &lines.0 {
-            for (nu, share) in optics.orders.iter().filter(|(nu, _)| nu != &[0.0, 0.0]) {
+            for (nu, share) in Lattice(&optics.orders).moved() {
                 let (x, y) = (101.0 + nu[0] * to_px, 43.0 - nu[1] * to_px);
                 let (x0, y0) = (x.floor(), y.floor());
                 let (fx, fy) = (x - x0, y - y0);
@@ -759,11 +768,16 @@ mod tests {
                 }
             }
         }
+        // The bands' sums are the single pass's to 1e-12, kept in f32.
         for (banded, one) in combs.iter().zip(&one) {
             let total: f64 = one.iter().sum();
             assert!(total > 1e-3, "{total}");
             for (a, b) in banded.iter().zip(one) {
-                assert!((a - b).abs() <= 1e-12 * total, "{a} against {b}");
+                let a = f64::from(*a);
+                assert!(
+                    (a - b).abs() <= 6e-8 * b.abs() + 1e-12 * total,
+                    "{a} against {b}"
+                );
             }
         }
     }
@@ -774,15 +788,15 @@ mod tests {
         // each plane's light, and below twice it, more: the threshold is
         // the highest power of two that keeps to it.
         let (optics, spectrum, totals) = star();
-        let lattice = Lattice::new(&optics);
+        let lattice = Lattice(&optics.orders);
         let lines = Lines::new(&optics, &spectrum, 0.012, &totals);
         let weakest = weakest_corrected(&lattice, &lines, 3);
         for (c, weakest) in weakest.iter().enumerate() {
             let below = |threshold: f64| -> f64 {
                 let mut light = 0.0;
                 for (_, shares) in &lines.0 {
-                    for o in &lattice.0 {
-                        let w = o[2] * shares[c];
+                    for (_, share) in lattice.moved() {
+                        let w = share * shares[c];
                         if w < threshold {
                             light += w;
                         }
@@ -805,9 +819,8 @@ mod tests {
                 .iter()
                 .map(|(_, s)| {
                     lattice
-                        .0
-                        .iter()
-                        .filter(|o| o[2] * s[c] >= weakest[c])
+                        .moved()
+                        .filter(|(_, o)| o * s[c] >= weakest[c])
                         .count()
                 })
                 .sum();
@@ -860,7 +873,7 @@ mod tests {
     #[test]
     fn scattering_and_fft_spread_orders_alike() {
         let extent = Extent::new(47, 33).unwrap().sent_by(Sending::Point);
-        let mut comb = vec![0.0; 47 * 33];
+        let mut comb = vec![0.0f32; 47 * 33];
         for (i, v) in [
             (5usize, 0.3),
             (400, 0.01),
@@ -882,11 +895,10 @@ mod tests {
         let direct = scatter(&comb, &window, &extent, &mut quiet).unwrap();
         let plane: Vec<f32> = window.values.iter().map(|&v| v as f32).collect();
         let kernel = Kernel::from_planes(7, 7, vec![plane]).unwrap();
-        let comb32: Vec<f32> = comb.iter().map(|&v| v as f32).collect();
         let fft = convolve::compose(
             &kernel.planes()[0],
             (7, 7),
-            &comb32,
+            &comb,
             (47, 33),
             &mut Composing::cpu(),
             &mut quiet,

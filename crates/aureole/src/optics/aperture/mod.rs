@@ -10,6 +10,7 @@ mod dirt;
 pub mod pupil;
 pub mod spectrum;
 
+use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
 use serde::{Deserialize, Serialize};
@@ -505,10 +506,10 @@ impl Model for Aperture {
     /// wavelength and 7 over the spectrum.
     ///
     /// Through a filter (kernel/diffraction/orders.rs) come, beside the
-    /// pattern: the filtered planes in f64 (2 plane bytes each), and for the
-    /// plane at work its comb of orders and the light they move, in f64 (4),
-    /// and the f32 convolution that spreads the comb: the comb, the result
-    /// and the spectrum with its buffers (about 4).
+    /// pattern: the filtered planes in f64 (2 plane bytes each), every
+    /// plane's comb of orders in f32 (1 each), for the plane at work the
+    /// light they move in f64 (2), and the f32 convolution that spreads the
+    /// comb: the result and the spectrum with its buffers (about 4).
     fn building_bytes(&self, plane_bytes: u64) -> u64 {
         let planes = self.planes() as u64;
         let pattern = plane_bytes * (2 * planes + 1);
@@ -732,6 +733,16 @@ impl Aperture {
             }
             orders = next;
         }
-        orders.into_iter().map(|(nu, w, _)| (nu, w)).collect()
+        let mut orders: Vec<([f64; 2], f64)> =
+            orders.into_iter().map(|(nu, w, _)| (nu, w)).collect();
+        // By ν_y (then ν_x and share, so that equal orders are alike): the
+        // orders of one wavelength that land in a band of the kernel's rows
+        // lie together (kernel/diffraction/orders.rs).
+        orders.par_sort_unstable_by(|(a, wa), (b, wb)| {
+            (a[1].total_cmp(&b[1]))
+                .then(a[0].total_cmp(&b[0]))
+                .then(wa.total_cmp(wb))
+        });
+        orders
     }
 }
