@@ -743,7 +743,7 @@ mod jinc {
                 -0.25 + z2 / 16.0,
             ];
         }
-        let (j0, j1) = (libm::j0(z), libm::j1(z));
+        let (j0, j1) = (libm::j0(z), crate::math::j1(z));
         let j2 = 2.0 * j1 / z - j0;
         [
             2.0 * j1 / z,
@@ -843,7 +843,7 @@ pub(crate) fn jinc(z: f64) -> f64 {
     if z.abs() < 1e-6 {
         1.0
     } else {
-        2.0 * libm::j1(z) / z
+        2.0 * crate::math::j1(z) / z
     }
 }
 
