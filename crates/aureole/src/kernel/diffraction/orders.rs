@@ -428,28 +428,43 @@ impl Cores {
                 pattern_about(&nears[n / count], reach, fx, fy, pitch_mm)
             })
             .collect();
+        // Each place's evaluated pattern, by its index in `exact`.
+        let at: Vec<usize> = sources
+            .iter()
+            .map(|source| evaluated.partition_point(|&e| e < source.place))
+            .collect();
         let blocks = windows
             .iter()
             .map(|window| {
+                // The window placed bilinearly at each place: the same for
+                // every wavelength.
+                let placed: Vec<Vec<f64>> = (0..places)
+                    .map(|k| {
+                        let (fx, fy) = place(k);
+                        (0..side * side)
+                            .map(|n| {
+                                let x = (n % side) as i64 - reach as i64;
+                                let y = (n / side) as i64 - reach as i64;
+                                (1.0 - fx) * (1.0 - fy) * window.at(x, y)
+                                    + fx * (1.0 - fy) * window.at(x - 1, y)
+                                    + (1.0 - fx) * fy * window.at(x, y - 1)
+                                    + fx * fy * window.at(x - 1, y - 1)
+                            })
+                            .collect()
+                    })
+                    .collect();
                 (0..spectrum.len())
                     .map(|line| {
                         (0..places)
                             .map(|k| {
-                                let (fx, fy) = place(k);
-                                let source = &sources[k];
-                                let at = evaluated.partition_point(|&e| e < source.place);
-                                let pattern = &exact[line * count + at];
-                                let mut block = vec![0.0; side * side];
-                                for (n, value) in block.iter_mut().enumerate() {
-                                    let x = (n % side) as i64 - reach as i64;
-                                    let y = (n / side) as i64 - reach as i64;
-                                    let placed = (1.0 - fx) * (1.0 - fy) * window.at(x, y)
-                                        + fx * (1.0 - fy) * window.at(x - 1, y)
-                                        + (1.0 - fx) * fy * window.at(x, y - 1)
-                                        + fx * fy * window.at(x - 1, y - 1);
-                                    *value = pattern[source.pixel(n, side)] / window.sum - placed;
-                                }
-                                block
+                                let pattern = &exact[line * count + at[k]];
+                                placed[k]
+                                    .iter()
+                                    .enumerate()
+                                    .map(|(n, placed)| {
+                                        pattern[sources[k].pixel(n, side)] / window.sum - placed
+                                    })
+                                    .collect()
                             })
                             .collect()
                     })

@@ -156,7 +156,7 @@ pub struct Optics {
     /// Focal length f, mm.
     pub focal_mm: f64,
     /// Filter orders: the spatial frequency each order is shifted by
-    /// (cycles/mm) and its share of the light, |c|².
+    /// (cycles/mm) and its share of the light, |c|²; sorted by ν_y.
     pub orders: Vec<([f64; 2], f64)>,
 }
 
