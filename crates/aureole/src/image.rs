@@ -350,6 +350,18 @@ pub(crate) fn zeros<T: Copy + Default + Send + Sync>(n: usize) -> Vec<T> {
     (0..n).into_par_iter().map(|_| T::default()).collect()
 }
 
+/// `v` made `n` long, its new values zeros written on every core: a
+/// buffer lent empty grows by hundreds of megabytes at 4K, and `resize`
+/// would take each of its fresh pages' faults on one core.
+pub(crate) fn grow_zeroed<T: Copy + Default + Send + Sync>(v: &mut Vec<T>, n: usize) {
+    if v.len() >= n {
+        v.truncate(n);
+    } else {
+        let more = n - v.len();
+        v.par_extend((0..more).into_par_iter().map(|_| T::default()));
+    }
+}
+
 /// For each of `to` cells spanning `from` old ones, the old cells it
 /// covers and the fraction of the new cell each fills (summing to 1).
 fn area_weights(from: usize, to: usize) -> Vec<Vec<(usize, f64)>> {

@@ -31,6 +31,7 @@ use super::pool::{Lent, Pool, Scratch};
 use super::{Centre, Engine, Footprint, Load, Spread};
 use crate::control::{Cancel, Control};
 use crate::error::Result;
+use crate::image::{grow_zeroed, zeros};
 
 /// The spectra of one plane, in tiles: its row spectra, then, in the same
 /// tiles, its column results (each strip task owns its tiles).
@@ -352,11 +353,10 @@ impl Convolver {
         }
         let h = self.height;
         let strips = self.grid.spectrum_width().div_ceil(STRIP);
-        let zero = Complex::new(0.0, 0.0);
         let mut buffers = self.buffers.lease();
         buffers.resize_with(inputs.len(), Default::default);
         for tiles in buffers.iter_mut() {
-            tiles.resize(h.div_ceil(BLOCK) * strips * TILE, zero);
+            grow_zeroed(tiles, h.div_ceil(BLOCK) * strips * TILE);
         }
         for (input, rows) in inputs.iter().zip(buffers.iter_mut()) {
             self.forward_rows(input, rows, strips, &control.cancel());
@@ -388,7 +388,7 @@ impl Convolver {
             .zip(buffers.iter())
             .zip(recycled)
             .map(|((input, results), mut out)| {
-                out.resize(self.width * h, 0.0);
+                grow_zeroed(&mut out, self.width * h);
                 self.inverse_rows(input, results, &mut out, strips, &control.cancel());
                 if let (Some(near), false) = (near, input.lamps.is_empty()) {
                     near.add(
@@ -1011,7 +1011,7 @@ impl Convolver {
         let side = 2 * radius + 1;
         let px = self.grid.px;
         let count = self.grid.spectrum_width();
-        let mut spectra = vec![Complex::new(0.0, 0.0); side * count];
+        let mut spectra = zeros(side * count);
         let mut input = row_fft.make_input_vec();
         let mut scratch = row_fft.make_scratch_vec();
         for (row, out) in window.chunks(side).zip(spectra.chunks_mut(count)) {
@@ -1087,7 +1087,7 @@ fn kernel_spectrum(
     let count = grid.spectrum_width();
     let zero = Complex::new(0.0, 0.0);
     let cancel = control.cancel();
-    let mut rows = vec![zero; kh * count];
+    let mut rows = zeros(kh * count);
     rows.par_chunks_mut(count).enumerate().for_each_init(
         || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
         |(input, scratch), (j, out)| {
@@ -1102,7 +1102,7 @@ fn kernel_spectrum(
     control.report(0.5);
     // Column transforms, a strip of columns per task, gathered a cache line
     // or two per row rather than one value per row.
-    let mut spectrum = vec![zero; count * py];
+    let mut spectrum = zeros(count * py);
     spectrum
         .par_chunks_mut(STRIP * py)
         .enumerate()
