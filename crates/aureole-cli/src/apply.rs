@@ -231,7 +231,6 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         batch: jobs.len() > 1,
         // One frame keeps nothing: its buffers are freed as soon as done.
         spares: if jobs.len() > 1 {
-            crate::allocator::keep_freed_memory();
             Spares::keeping()
         } else {
             Spares::default()

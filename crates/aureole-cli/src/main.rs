@@ -118,6 +118,9 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if !matches!(cli.command, Command::Studio(_)) {
+        allocator::keep_freed_memory();
+    }
     if let Some(threads) = cli.threads {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(usize::from(threads))
