@@ -8,6 +8,7 @@
 
 pub mod diffraction;
 pub mod profile;
+mod radial;
 mod raster;
 mod split;
 

@@ -110,6 +110,10 @@ impl SpreadShape for BloomShape {
         true
     }
 
+    fn radial(&self) -> bool {
+        true
+    }
+
     fn density(&self, x: f64, y: f64) -> f64 {
         let q2 = (x * x + y * y) / (self.radius * self.radius);
         math::power(1.0 + q2, -self.beta)

@@ -385,6 +385,10 @@ impl SpreadShape for HaloShape {
         true
     }
 
+    fn radial(&self) -> bool {
+        true
+    }
+
     fn density(&self, x: f64, y: f64) -> f64 {
         self.at((x * x + y * y).sqrt())
     }

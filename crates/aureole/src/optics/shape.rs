@@ -24,6 +24,14 @@ pub(crate) trait SpreadShape: Sync {
         false
     }
 
+    /// Whether f, its grid and its dark test depend on the distance from
+    /// the centre alone (then f is mirror-symmetric too), so that the
+    /// pixels of a kernel away from the centre are read from tables of
+    /// that distance (`kernel::radial`).
+    fn radial(&self) -> bool {
+        false
+    }
+
     /// What the rasteriser needs of the pixel (or unit square) centred at
     /// (x, y), in one call: whether f is exactly 0 (in f64) over all of it
     /// (only a cheap, conservative test: `Dark` must be true), else its

@@ -86,6 +86,10 @@ impl SpreadShape for VosShape {
         true
     }
 
+    fn radial(&self) -> bool {
+        true
+    }
+
     fn density(&self, x: f64, y: f64) -> f64 {
         let t = (x * x + y * y).sqrt() * self.radians_per_px;
         // cos(atan t) = 1/√(1 + t²), without a cosine.
