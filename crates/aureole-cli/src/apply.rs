@@ -185,7 +185,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         None => {
             let (config, defaulted) = args.chain.compose_or_default(matches)?;
             if defaulted && !quiet {
-                eprintln!(
+                say!(
                     "aureole: note: no --preset or --config: using the default camera, preset {}",
                     aureole::presets::DEFAULT_PRESET
                 );
@@ -213,7 +213,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     if let [job] = jobs.as_slice() {
         if skipped == 1 {
             if !quiet {
-                eprintln!(
+                say!(
                     "aureole: note: {} exists: skipped (--skip-existing)",
                     job.output.display()
                 );
@@ -245,7 +245,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     }
     let written = jobs.len() - failed - skipped;
     if !quiet || failed > 0 {
-        eprintln!(
+        say!(
             "aureole: {written} of {} frames written, {skipped} skipped (already there), {failed} failed",
             jobs.len()
         );

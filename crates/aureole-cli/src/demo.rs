@@ -68,7 +68,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     )?;
     progress.finish();
     if !quiet {
-        eprintln!(
+        say!(
             "wrote {}: night street {}x{}, lamps of 2e4-1e5 cd/m², kernel {}x{}{}, {:.2} s",
             args.output.display(),
             width,

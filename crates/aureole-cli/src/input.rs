@@ -57,7 +57,7 @@ pub fn read(
     let loaded = read_image_reusing(path, limits, choice, spares)?;
     let input = read_loaded(path, loaded, options, quiet)?;
     if !quiet {
-        eprintln!(
+        say!(
             "aureole: note: {}: luminance scale {} cd/m² per unit ({})",
             path.display(),
             input.frame.scale(),
@@ -79,14 +79,14 @@ pub fn read_loaded(
     let input = aureole_io::job::input(path, loaded, options).map_err(|e| failure(path, e))?;
     let note = |text: &str| {
         if !quiet {
-            eprintln!("aureole: note: {}: {text}", path.display());
+            say!("aureole: note: {}: {text}", path.display());
         }
     };
     for text in &input.notes {
         note(text);
     }
     if input.display_referred {
-        eprintln!(
+        say!(
             "aureole: warning: {}: an 8/16-bit {} is a display image: decoded from sRGB to linear, its luminance is only relative (set --input-scale for cd/m²)",
             path.display(),
             input.format
@@ -100,7 +100,7 @@ pub fn read_loaded(
         ));
     }
     if frame.replaced() > 0 {
-        eprintln!(
+        say!(
             "aureole: warning: {}: {} NaN, infinite or negative samples replaced by 0 (--sanitize)",
             path.display(),
             frame.replaced()

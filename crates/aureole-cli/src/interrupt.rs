@@ -17,13 +17,13 @@ pub fn install() {
     let installed = ctrlc::set_handler(|| {
         let _writing = WRITING.lock().unwrap_or_else(|p| p.into_inner());
         let written = WRITTEN.load(Ordering::SeqCst);
-        eprintln!(
+        say!(
             "aureole: interrupted: stopped with {written} output(s) written whole; no partial file is left"
         );
         std::process::exit(INTERRUPTED);
     });
     if let Err(e) = installed {
-        eprintln!("aureole: warning: cannot handle Ctrl-C ({e}); an interrupted write may leave a .part file");
+        say!("aureole: warning: cannot handle Ctrl-C ({e}); an interrupted write may leave a .part file");
     }
 }
 

@@ -2,6 +2,16 @@
 
 #![deny(unsafe_code)]
 
+/// `eprintln!` that gives up quietly where stderr is gone (a closed pipe,
+/// `2>&1 | head -1`): a message nobody can read is no reason to fail the
+/// work, and `eprintln!` would panic.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 mod allocator;
 mod apply;
 mod batch;
@@ -114,7 +124,7 @@ fn main() -> ExitCode {
             if let Some(ContextValue::Strings(values)) = e.get(ContextKind::ValidValue) {
                 line.push_str(&format!("; allowed: {}", values.join(", ")));
             }
-            eprintln!("aureole: {line}");
+            say!("aureole: {line}");
             return ExitCode::from(2);
         }
     };
@@ -126,7 +136,7 @@ fn main() -> ExitCode {
             .num_threads(usize::from(threads))
             .build_global();
         if let Err(e) = pool {
-            eprintln!("aureole: error: cannot start {threads} threads: {e}");
+            say!("aureole: error: cannot start {threads} threads: {e}");
             return ExitCode::from(1);
         }
     }
@@ -143,11 +153,11 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Usage(e)) => {
-            eprintln!("aureole: error: {}", one_line(&e));
+            say!("aureole: error: {}", one_line(&e));
             ExitCode::from(2)
         }
         Err(Failure::Run(e)) => {
-            eprintln!("aureole: error: {}", one_line(&e));
+            say!("aureole: error: {}", one_line(&e));
             ExitCode::from(1)
         }
     }

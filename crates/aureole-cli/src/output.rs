@@ -35,7 +35,7 @@ pub fn tidy<'a>(outputs: impl IntoIterator<Item = &'a Path>, quiet: bool) {
                 .filter_map(|p| p.file_name())
                 .map(|n| n.to_string_lossy().into_owned())
                 .collect();
-            eprintln!(
+            say!(
                 "aureole: note: {}: removed {} temporary files older than a day, left by a run that was killed while writing: {}",
                 folder.display(),
                 removed.len(),

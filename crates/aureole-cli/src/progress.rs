@@ -50,7 +50,7 @@ impl Progress {
 
     /// A line on stderr, the bar out of its way.
     pub fn println(&self, line: &str) {
-        self.bar.suspend(|| eprintln!("{line}"));
+        self.bar.suspend(|| say!("{line}"));
     }
 
     /// A note on stderr, unless `--quiet`.

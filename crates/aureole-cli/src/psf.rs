@@ -132,7 +132,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         measured.load(aureole_io::measured::read_picture(file, limits)?);
         let survey = measured.survey()?;
         if !quiet {
-            eprintln!("{}", describe(file, &measured, &survey));
+            say!("{}", describe(file, &measured, &survey));
         }
         config.effects.push(aureole::Effect::Image(measured));
     }
@@ -205,7 +205,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         let sums: Vec<String> = (0..kernel.planes().len())
             .map(|c| format!("{:.6}", kernel.sum(c)))
             .collect();
-        eprintln!(
+        say!(
             "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, built in {:.2} s{}, {:.2} s in all",
             args.output.display(),
             kernel.width(),

@@ -62,7 +62,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     let roots = Roots::new(&folders).map_err(|e| Failure::Usage(anyhow!("{e}")))?;
     let address = args.listen.unwrap_or(IpAddr::V4(Ipv4Addr::LOCALHOST));
     if !address.is_loopback() {
-        eprintln!(
+        say!(
             "aureole: warning: listening on {address}: other machines can reach the studio and read the images under its folders"
         );
     }
@@ -101,9 +101,12 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         }
         let studio = Studio::new(roots, default_memory_limit(), args.device.into(), access);
         // The URL goes to stdout so that a script can read it.
-        println!("{url}");
+        {
+            use std::io::Write as _;
+            let _ = writeln!(std::io::stdout(), "{url}");
+        }
         if !quiet {
-            eprintln!("aureole: studio at {url} (Ctrl-C stops it)");
+            say!("aureole: studio at {url} (Ctrl-C stops it)");
         }
         if !args.no_browser {
             open_browser(&url, quiet);
@@ -141,6 +144,6 @@ fn open_browser(url: &str, quiet: bool) {
         .stderr(std::process::Stdio::null())
         .spawn();
     if spawned.is_err() && !quiet {
-        eprintln!("aureole: note: cannot open a browser ({opener}); open {url}");
+        say!("aureole: note: cannot open a browser ({opener}); open {url}");
     }
 }

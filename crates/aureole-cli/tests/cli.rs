@@ -901,3 +901,24 @@ fn psf_composes_on_the_device_chosen() {
         &dir.path().join("none.exr"),
     );
 }
+
+/// A reader of stderr that has gone (`aureole … 2>&1 | head -1`) loses
+/// the messages, not the work: the kernel is written and the exit is 0,
+/// where `eprintln!` panicked (exit 101).
+#[test]
+fn a_closed_stderr_does_not_fail_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("k.pfm");
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("aureole"))
+        .args(["psf", "--preset", "paper-fig4-bloom", "--size", "33", "-o"])
+        .arg(&out)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stderr.take());
+    let status = child.wait().unwrap();
+    assert!(status.success(), "{status}");
+    assert_eq!(read_pfm(&out).width, 33);
+}
