@@ -66,8 +66,7 @@ pub(super) fn quarter(
     value: &(dyn Fn(f64, f64) -> f64 + Sync),
     control: &mut Control,
 ) -> Result<Vec<f32>> {
-    let far = (((span_x * span_x + span_y * span_y) as f64).sqrt() + SAME_GRID + 1.0) as usize;
-    let tables = Tables::new(shape, far, value);
+    let tables = Tables::new(shape, (span_x, span_y), value);
     let mut quarter = zeros(span_x * span_y);
     for_each_row(&mut quarter, span_x, control, |dy, row| {
         for (c, chunk) in row.chunks_mut(CHUNK).enumerate() {
@@ -84,14 +83,10 @@ pub(super) fn held(
     (span_x, span_y): (usize, usize),
     value: &(dyn Fn(f64, f64) -> f64 + Sync),
 ) -> usize {
-    let far = (((span_x * span_x + span_y * span_y) as f64).sqrt() + SAME_GRID + 1.0) as usize;
-    let tables = Tables::new(shape, far, value);
+    let tables = Tables::new(shape, (span_x, span_y), value);
     (0..span_y)
         .flat_map(|y| (0..span_x).map(move |x| (x, y)))
-        .filter(|&(x, y)| {
-            let k = ((x * x + y * y) as f64).sqrt() * NODES_PER_PX;
-            tables.smooth[k as usize]
-        })
+        .filter(|&(x, y)| tables.hold(((x * x + y * y) as f64).sqrt() * NODES_PER_PX))
         .count()
 }
 
@@ -109,11 +104,13 @@ struct Tables {
 }
 
 impl Tables {
+    /// The tables for a quarter of `span` pixels.
     fn new(
         shape: &dyn SpreadShape,
-        far: usize,
+        (span_x, span_y): (usize, usize),
         value: &(dyn Fn(f64, f64) -> f64 + Sync),
     ) -> Tables {
+        let far = (((span_x * span_x + span_y * span_y) as f64).sqrt() + SAME_GRID + 1.0) as usize;
         let nodes = far * NODES_PER_PX as usize + 8;
         let (cos8, sin8) = (libm::cos(PI / 8.0), libm::sin(PI / 8.0));
         // V along θ = 0 (a), π/4 (d) and π/8 (b): a = A₀ + A₄ + A₈,
@@ -181,6 +178,11 @@ impl Tables {
         tables
     }
 
+    /// Whether the tables hold a pixel t nodes from the centre.
+    fn hold(&self, t: f64) -> bool {
+        self.smooth.get(t as usize).copied().unwrap_or(false)
+    }
+
     /// A₀ + A₄ cos 4θ + A₈ cos 8θ at t nodes of distance (t ≥ 2, within
     /// the tables), given cos 4θ.
     fn model(&self, t: f64, c4: f64) -> f64 {
@@ -225,12 +227,11 @@ impl Tables {
             *w = lagrange(t - t.floor());
         }
         for (i, v) in out.iter_mut().enumerate() {
-            let k = t[i] as usize;
-            if !self.smooth.get(k).copied().unwrap_or(false) {
-                *v = exact(x0 + i, y) as f32;
-                continue;
-            }
-            *v = self.combine(k, &w[i], c4[i]) as f32;
+            *v = if self.hold(t[i]) {
+                self.combine(t[i] as usize, &w[i], c4[i])
+            } else {
+                exact(x0 + i, y)
+            } as f32;
         }
     }
 }

@@ -284,14 +284,8 @@ fn combs(
                 }
                 let (x, y) = (cx + nu[0] * to_px, cy - nu[1] * to_px);
                 let (x0, y0) = (x.floor(), y.floor());
-                let (fx, fy) = (x - x0, y - y0);
-                for (dx, dy, w) in [
-                    (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
-                    (1.0, 0.0, fx * (1.0 - fy)),
-                    (0.0, 1.0, (1.0 - fx) * fy),
-                    (1.0, 1.0, fx * fy),
-                ] {
-                    let (x, y) = (x0 + dx, y0 + dy);
+                for (dx, dy, w) in bilinear(x - x0, y - y0) {
+                    let (x, y) = (x0 + dx as f64, y0 + dy as f64);
                     if x >= 0.0 && y >= first && x < width as f64 && y < end {
                         let at = (y as usize - top) * width + x as usize;
                         for (c, plane_share) in shares.iter().enumerate() {
@@ -441,14 +435,15 @@ impl Cores {
                 let placed: Vec<Vec<f64>> = (0..places)
                     .map(|k| {
                         let (fx, fy) = place(k);
+                        let corners = bilinear(fx, fy);
                         (0..side * side)
                             .map(|n| {
                                 let x = (n % side) as i64 - reach as i64;
                                 let y = (n / side) as i64 - reach as i64;
-                                (1.0 - fx) * (1.0 - fy) * window.at(x, y)
-                                    + fx * (1.0 - fy) * window.at(x - 1, y)
-                                    + (1.0 - fx) * fy * window.at(x, y - 1)
-                                    + fx * fy * window.at(x - 1, y - 1)
+                                corners
+                                    .iter()
+                                    .map(|&(dx, dy, w)| w * window.at(x - dx as i64, y - dy as i64))
+                                    .sum()
                             })
                             .collect()
                     })
@@ -500,12 +495,7 @@ impl Cores {
             let (ta, tb) = (px - a as f64, py - b as f64);
             let blocks = &self.blocks[c][line];
             let at = |a: usize, b: usize| blocks[b * (PHASES + 1) + a].as_slice();
-            let mix = [
-                (at(a, b), (1.0 - ta) * (1.0 - tb)),
-                (at(a + 1, b), ta * (1.0 - tb)),
-                (at(a, b + 1), (1.0 - ta) * tb),
-                (at(a + 1, b + 1), ta * tb),
-            ];
+            let mix = bilinear(ta, tb).map(|(da, db, t)| (at(a + da, b + db), t));
             let placed_order = Placed {
                 x0: x0 as i64,
                 y0: y0 as i64,
@@ -684,6 +674,17 @@ impl Source {
     }
 }
 
+/// The four corners about a point (fx, fy) past the first, as offsets
+/// from it, with their bilinear weights.
+fn bilinear(fx: f64, fy: f64) -> [(usize, usize, f64); 4] {
+    [
+        (0, 0, (1.0 - fx) * (1.0 - fy)),
+        (1, 0, fx * (1.0 - fy)),
+        (0, 1, (1.0 - fx) * fy),
+        (1, 1, fx * fy),
+    ]
+}
+
 /// The sub-pixel place (fx, fy) of block `k`.
 fn place(k: usize) -> (f64, f64) {
     let step = PHASES as f64;
@@ -767,14 +768,8 @@ mod tests {
             for (nu, share) in Lattice(&optics.orders).moved() {
                 let (x, y) = (101.0 + nu[0] * to_px, 43.0 - nu[1] * to_px);
                 let (x0, y0) = (x.floor(), y.floor());
-                let (fx, fy) = (x - x0, y - y0);
-                for (dx, dy, f) in [
-                    (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
-                    (1.0, 0.0, fx * (1.0 - fy)),
-                    (0.0, 1.0, (1.0 - fx) * fy),
-                    (1.0, 1.0, fx * fy),
-                ] {
-                    let (x, y) = (x0 + dx, y0 + dy);
+                for (dx, dy, f) in bilinear(x - x0, y - y0) {
+                    let (x, y) = (x0 + dx as f64, y0 + dy as f64);
                     if x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64 {
                         for (plane, s) in one.iter_mut().zip(shares) {
                             plane[y as usize * w + x as usize] += share * s * f;

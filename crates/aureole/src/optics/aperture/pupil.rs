@@ -259,10 +259,11 @@ impl Pupil {
     /// amplitudes. Then its pattern has the square's symmetries, mirrors
     /// across both axes and the diagonals.
     pub fn is_round(&self) -> bool {
-        self.elements.iter().all(|e| {
-            e.weight[1] == 0.0
-                && matches!(e.shape, Outline::Disc { centre, .. } if centre == [0.0, 0.0])
-        })
+        self.is_real()
+            && self
+                .elements
+                .iter()
+                .all(|e| matches!(e.shape, Outline::Disc { centre, .. } if centre == [0.0, 0.0]))
     }
 
     /// The amplitude the pupil transmits at `point` (mm).
