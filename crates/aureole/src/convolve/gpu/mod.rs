@@ -52,13 +52,21 @@ pub(super) fn footprint(load: &Load) -> Footprint {
     }
 }
 
-/// `planes` one after another as half floats, two to a word (a zero after
-/// an odd count), when every value is one exactly, as every value decoded
-/// from a half-float EXR is; `None` at the first that is not.
-fn as_halves(planes: &[&[f32]]) -> Option<Vec<u16>> {
-    const CHUNK: usize = 1 << 16;
+/// Values a thread copies out of the mapped results at a time.
+const CHUNK: usize = 1 << 16;
+
+/// Bytes one thread hands the queue to send up at a time: the queue
+/// copies each into host memory of its own outside its locks, so a frame
+/// goes up from every core.
+const PIECE: usize = 1 << 22;
+
+/// `planes` one after another as half floats into `halves` (made as long
+/// as they are, and one more for an odd count: two to a word), when every
+/// value is one exactly, as every value decoded from a half-float EXR is;
+/// `false` at the first that is not.
+fn as_halves(planes: &[&[f32]], halves: &mut Vec<u16>) -> bool {
     let count: usize = planes.iter().map(|plane| plane.len()).sum();
-    let mut halves = vec![0u16; count + count % 2];
+    crate::image::grow_zeroed(halves, count + count % 2);
     let mut rest = halves.as_mut_slice();
     for plane in planes {
         let (these, after) = rest.split_at_mut(plane.len());
@@ -79,11 +87,12 @@ fn as_halves(planes: &[&[f32]]) -> Option<Vec<u16>> {
                 })
             });
         if !exact {
-            return None;
+            return false;
         }
         rest = after;
     }
-    Some(halves)
+    rest.fill(0);
+    true
 }
 
 /// The bits of the half float `v` is, and whether it is one exactly
@@ -194,6 +203,8 @@ struct Work {
     fractions: wgpu::Buffer,
     results: wgpu::Buffer,
     staging: wgpu::Buffer,
+    /// A pair's planes as half floats on the host, on their way up.
+    halves: Mutex<Vec<u16>>,
     /// The passes of a frame: rows forward over its rows, columns both
     /// ways, rows back over its rows.
     rows_forward: Passes,
@@ -321,6 +332,7 @@ impl GpuConvolver {
                     frame_bytes,
                     wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 ),
+                halves: Mutex::new(Vec::new()),
                 planes: [first, second],
                 twiddles,
                 rows_forward,
@@ -505,21 +517,20 @@ impl GpuConvolver {
         control: &Control,
     ) -> Result<Vec<Vec<f32>>> {
         let device = &self.gpu.device;
-        let queue = &self.gpu.queue;
         let n = self.width * self.height;
         let outputs: Vec<&Spread> = std::iter::once(a).chain(b).collect();
         let planes: Vec<&[f32]> = outputs.iter().map(|output| output.plane).collect();
-        let halves = self.halves_up.then(|| as_halves(&planes)).flatten();
-        match &halves {
-            Some(halves) => queue.write_buffer(&work.frame, 0, bytemuck::cast_slice(halves)),
-            None => {
-                for (p, plane) in planes.iter().enumerate() {
-                    queue.write_buffer(
-                        &work.frame,
-                        (p * n * 4) as u64,
-                        bytemuck::cast_slice(plane),
-                    );
-                }
+        let halves = {
+            let mut host = work.halves.lock().unwrap_or_else(PoisonError::into_inner);
+            let halves = self.halves_up && as_halves(&planes, &mut host);
+            if halves {
+                self.up(&work.frame, 0, bytemuck::cast_slice(&host));
+            }
+            halves
+        };
+        if !halves {
+            for (p, plane) in planes.iter().enumerate() {
+                self.up(&work.frame, p * n * 4, bytemuck::cast_slice(plane));
             }
         }
         let fractions = a.fractions;
@@ -528,7 +539,7 @@ impl GpuConvolver {
             planes: outputs.len() as u32,
             fractions: fractions.is_some(),
             lamps: split.map_or(0, |_| a.lamps.len() as u32),
-            halves_up: halves.is_some(),
+            halves_up: halves,
             ..self.grid_uniform()
         };
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
@@ -633,16 +644,15 @@ impl GpuConvolver {
         let bytes = (outputs.len() * n * 4) as u64;
         encoder.copy_buffer_to_buffer(&work.results, 0, &work.staging, 0, Some(bytes));
         self.run(encoder, control)?;
-        let read = self.read(&work.staging, bytes, control)?;
-        let mut planes = Vec::with_capacity(outputs.len());
-        for (values, output) in read.chunks(n.max(1)).zip(&outputs) {
-            let mut plane = recycled.pop().unwrap_or_default();
-            plane.clear();
-            plane.extend_from_slice(values);
-            if let Some(split) = split {
-                self.add_near(&split.near, output, &mut plane, &control.cancel());
+        let mut planes: Vec<Vec<f32>> = outputs
+            .iter()
+            .map(|_| recycled.pop().unwrap_or_default())
+            .collect();
+        self.read(&work.staging, &mut planes, control)?;
+        if let Some(split) = split {
+            for (plane, output) in planes.iter_mut().zip(&outputs) {
+                self.add_near(&split.near, output, plane, &control.cancel());
             }
-            planes.push(plane);
         }
         control.check()?;
         Ok(planes)
@@ -789,10 +799,31 @@ impl GpuConvolver {
         })
     }
 
-    /// The first `bytes` of `staging` as f32.
-    fn read(&self, staging: &wgpu::Buffer, bytes: u64, control: &Control) -> Result<Vec<f32>> {
+    /// Sends `bytes` up to `buffer` from `offset` with the next
+    /// submission, from every core.
+    fn up(&self, buffer: &wgpu::Buffer, offset: usize, bytes: &[u8]) {
+        bytes.par_chunks(PIECE).enumerate().for_each(|(i, piece)| {
+            self.gpu
+                .queue
+                .write_buffer(buffer, (offset + i * PIECE) as u64, piece);
+        });
+    }
+
+    /// The first planes of `staging`, into `planes` (each made a frame
+    /// long), on every core.
+    fn read(
+        &self,
+        staging: &wgpu::Buffer,
+        planes: &mut [Vec<f32>],
+        control: &Control,
+    ) -> Result<()> {
+        let n = self.width * self.height;
+        let bytes = (planes.len() * n * 4) as u64;
+        for plane in planes.iter_mut() {
+            crate::image::grow_zeroed(plane, n);
+        }
         if bytes == 0 {
-            return Ok(Vec::new());
+            return Ok(());
         }
         let (sender, receiver) = std::sync::mpsc::channel();
         staging.map_async(wgpu::MapMode::Read, 0..bytes, move |mapped| {
@@ -803,14 +834,24 @@ impl GpuConvolver {
             .recv()
             .map_err(|_| Error::Gpu("the results were not read back".into()))?
             .map_err(|error| Error::Gpu(format!("reading the results back: {error}")))?;
-        let values = {
+        {
             let view = staging
                 .get_mapped_range(0..bytes)
                 .map_err(|error| Error::Gpu(format!("reading the results back: {error}")))?;
-            bytemuck::pod_collect_to_vec::<u8, f32>(&view)
-        };
+            planes
+                .par_iter_mut()
+                .zip(view.par_chunks(4 * n))
+                .for_each(|(plane, values)| {
+                    plane
+                        .par_chunks_mut(CHUNK)
+                        .zip(values.par_chunks(4 * CHUNK))
+                        .for_each(|(out, bytes)| {
+                            bytemuck::cast_slice_mut::<f32, u8>(out).copy_from_slice(bytes)
+                        });
+                });
+        }
         staging.unmap();
-        Ok(values)
+        Ok(())
     }
 }
 
@@ -970,19 +1011,24 @@ mod tests {
             -3.5,
         ];
         let second = [1024.0, 2.0f32.powi(-14)];
-        let halves = as_halves(&[&first, &second]).unwrap();
+        // Into a buffer kept from a longer frame, its words stale.
+        let halves_of = |planes: &[&[f32]]| {
+            let mut halves = vec![0xffffu16; 13];
+            as_halves(planes, &mut halves).then_some(halves)
+        };
+        let halves = halves_of(&[&first, &second]).unwrap();
         assert_eq!(halves.len(), 10);
         let bits = [
             0x0000, 0x8000, 0x3c00, 0x2e66, 0x7bff, 0x7c00, 0x0001, 0xc300,
         ];
         assert_eq!(halves[..8], bits);
         assert_eq!(halves[8..], [0x6400, 0x0400]);
-        let odd = as_halves(&[&first[..3]]).unwrap();
+        let odd = halves_of(&[&first[..3]]).unwrap();
         assert_eq!(odd, [0x0000, 0x8000, 0x3c00, 0]);
         // 0.1, a half's neighbour plus a bit, and a value beyond the
         // halves' range are not half floats.
         for not in [0.1, 1.0 + 2f32.powi(-11), 65536.0, tiny / 2.0] {
-            assert!(as_halves(&[&first, &[not]]).is_none(), "{not}");
+            assert!(halves_of(&[&first, &[not]]).is_none(), "{not}");
         }
     }
 
@@ -998,25 +1044,32 @@ mod tests {
             .map(|i| f16::from_f32(0.01 * 1.3f32.powi((i * 7 % 45) as i32)).to_f32())
             .collect();
         let kernel: Vec<f32> = (0..31 * 25).map(|i| (i % 13) as f32 + 0.5).collect();
-        assert!(as_halves(&[&plane]).is_some());
+        assert!(as_halves(&[&plane], &mut Vec::new()));
         let cancel = Cancel::new();
-        let spread = |halves_up| {
+        let spread = |halves_up, recycled| {
             let mut engine =
                 GpuConvolver::new(gpu.clone(), &[&kernel], (31, 25), (w, h), Centre::Leave)
                     .unwrap();
             engine.halves_up = halves_up;
             let mut control = Control::quiet(&cancel);
             engine.prepare(&[&kernel], &mut control).unwrap();
-            let outputs = [&plane, &plane].map(|plane| Spread {
+            let outputs = [&plane, &plane, &plane].map(|plane| Spread {
                 plane,
                 fractions: None,
                 terms: Term::alone(0),
                 lamps: &[],
             });
-            engine.spread(&outputs, Vec::new(), &mut control).unwrap()
+            engine.spread(&outputs, recycled, &mut control).unwrap()
         };
-        let (halves, words) = (spread(true), spread(false));
+        let (halves, words) = (spread(true, Vec::new()), spread(false, Vec::new()));
         assert!(halves == words, "halves and f32 gave different bits");
         assert!(halves[0].iter().any(|v| *v != 0.0));
+        // The results come back into planes a frame lends, whatever they
+        // held and however long they were.
+        let lent = vec![vec![f32::NAN; w * h + 5], vec![7.0; 3], vec![-1.0; w * h]];
+        assert!(
+            spread(true, lent) == halves,
+            "lent planes changed the results"
+        );
     }
 }
