@@ -13,8 +13,8 @@
 //! frees: every buffer comes from the one heap, which is never trimmed.
 //! Freed buffers are then taken again for the next ones, and the peak
 //! stays about what it was (a 4K still 0.89 → 0.95 GB, a batch of 4K
-//! frames as before). The studio, a server that lives on, keeps glibc's
-//! own policy.
+//! frames as before). The studio, a server that lives on within a memory
+//! budget, has a bounded policy of its own (aureole-studio's budget.rs).
 
 /// Serves every allocation from the main heap (no buffers mapped on their
 /// own, one arena for every thread, so that what one thread frees another

@@ -45,7 +45,7 @@ impl Drop for Lease {
 impl Budget {
     /// A budget of `total` bytes.
     pub fn new(total: u64) -> Arc<Budget> {
-        return_freed_buffers();
+        reuse_freed_buffers();
         Arc::new(Budget {
             total,
             used: Mutex::new(0),
@@ -114,22 +114,30 @@ impl Budget {
     }
 }
 
-/// Makes the allocator give every freed buffer of 1 MiB or more back to
-/// the system. glibc otherwise raises its mmap threshold to the largest
-/// block freed (up to 32 MiB), after which a frame's planes come from the
-/// heaps of the threads that ran them and stay there once freed: measured
-/// by the HTTP fuzz test, the process then held up to 1 GB under a 512 MB
-/// budget of live buffers, and 0.27–0.51 GB with the threshold fixed.
-fn return_freed_buffers() {
+/// Serves buffers below 64 MiB from one heap for every thread, which
+/// keeps up to 128 MiB freed at its top. glibc's own policy raises its
+/// threshold for mapping a buffer on its own as larger ones are freed,
+/// and gives an arena to each thread: each kept what its threads freed
+/// (1 GB under a 512 MB budget in the HTTP fuzz test) until the
+/// threshold was fixed at 1 MiB, after which every preview mapped its
+/// buffers afresh and took their pages again through page faults and the
+/// kernel's zeroing, half of a 1280×720 bloom preview's time
+/// (`bench/studio_latency.py`). With one arena, what one render frees the
+/// next takes, whichever threads ran them; the largest buffers (a 4K
+/// frame's spectra) are still mapped and given back when freed; the fuzz
+/// test's peak is 0.64 GB under its 512 MB budget (0.74 GB before).
+fn reuse_freed_buffers() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
         static ONCE: std::sync::Once = std::sync::Once::new();
         ONCE.call_once(|| {
             #[allow(unsafe_code)]
-            // SAFETY: mallopt only sets an allocator parameter; it is
+            // SAFETY: mallopt only sets allocator parameters; it is
             // called once, and glibc serialises it with allocations.
             unsafe {
-                libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
+                libc::mallopt(libc::M_MMAP_THRESHOLD, 64 << 20);
+                libc::mallopt(libc::M_ARENA_MAX, 1);
+                libc::mallopt(libc::M_TRIM_THRESHOLD, 128 << 20);
             }
         });
     }

@@ -5,6 +5,7 @@
 use aureole::kernel::profile;
 use aureole::Image;
 use aureole_io::display::Picture;
+use rayon::prelude::*;
 
 use crate::error::StudioError;
 
@@ -62,18 +63,62 @@ pub(super) fn spread_overlay(image: &Image, scale: f64, threshold: f64, knee: f6
 /// The image in cd/m² as little-endian f32 R, G, B per pixel (a
 /// luminance image in all three).
 pub(super) fn linear_bytes(image: &Image, scale: f64) -> Vec<u8> {
-    let n = image.width * image.height;
-    let mut bytes = Vec::with_capacity(n * 12);
-    for i in 0..n {
-        for c in 0..3 {
-            let plane = &image.planes[c.min(image.planes.len() - 1)];
-            bytes.extend_from_slice(&((f64::from(plane[i]) * scale) as f32).to_le_bytes());
-        }
-    }
+    let width = image.width.max(1);
+    let plane = |c: usize| &image.planes[c.min(image.planes.len() - 1)];
+    let mut bytes = vec![0u8; image.width * image.height * 12];
+    bytes
+        .par_chunks_mut(12 * width)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, pixel) in row.chunks_exact_mut(12).enumerate() {
+                for (c, sample) in pixel.chunks_exact_mut(4).enumerate() {
+                    let value = (f64::from(plane(c)[y * width + x]) * scale) as f32;
+                    sample.copy_from_slice(&value.to_le_bytes());
+                }
+            }
+        });
     bytes
 }
 
 /// A picture as the PNG a page shows.
 pub(super) fn png(picture: &Picture) -> Result<Vec<u8>, StudioError> {
     aureole_io::write::preview_png(picture).map_err(StudioError::Internal)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aureole::image::Layout;
+
+    #[test]
+    fn linear_samples_are_each_pixels_rgb_in_cd_per_m2() {
+        let (w, h) = (5, 3);
+        let mut rgb = Image::filled(w, h, Layout::Rgb, 0.0);
+        for (c, plane) in rgb.planes.iter_mut().enumerate() {
+            for (i, v) in plane.iter_mut().enumerate() {
+                *v = (100 * c + i) as f32 + 0.25;
+            }
+        }
+        let mut grey = Image::filled(w, h, Layout::Luminance, 0.0);
+        for (i, v) in grey.planes[0].iter_mut().enumerate() {
+            *v = i as f32 * 0.5;
+        }
+        let floats = |bytes: Vec<u8>| -> Vec<f32> {
+            bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect()
+        };
+        let samples = floats(linear_bytes(&rgb, 2.0));
+        assert_eq!(samples.len(), 3 * w * h);
+        for i in 0..w * h {
+            for c in 0..3 {
+                assert_eq!(samples[3 * i + c], 2.0 * ((100 * c + i) as f32 + 0.25));
+            }
+        }
+        let samples = floats(linear_bytes(&grey, 4.0));
+        for i in 0..w * h {
+            assert_eq!(samples[3 * i..3 * i + 3], [2.0 * i as f32; 3]);
+        }
+    }
 }
