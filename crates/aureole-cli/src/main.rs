@@ -2,10 +2,15 @@
 
 #![deny(unsafe_code)]
 
-/// `eprintln!` that gives up quietly where stderr is gone (a closed pipe,
-/// `2>&1 | head -1`): a message nobody can read is no reason to fail the
-/// work, and `eprintln!` would panic.
+/// `eprintln!` (or with `stdout:`, `println!`) that gives up quietly
+/// where the stream is gone (a closed pipe, `2>&1 | head -1`): a message
+/// nobody can read is no reason to fail the work, and `eprintln!` would
+/// panic.
 macro_rules! say {
+    (stdout: $($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
     ($($arg:tt)*) => {{
         use std::io::Write as _;
         let _ = writeln!(std::io::stderr(), $($arg)*);

@@ -101,10 +101,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         }
         let studio = Studio::new(roots, default_memory_limit(), args.device.into(), access);
         // The URL goes to stdout so that a script can read it.
-        {
-            use std::io::Write as _;
-            let _ = writeln!(std::io::stdout(), "{url}");
-        }
+        say!(stdout: "{url}");
         if !quiet {
             say!("aureole: studio at {url} (Ctrl-C stops it)");
         }

@@ -210,6 +210,9 @@ impl Convolver {
         out
     }
 
+    /// One output in f64 throughout: O = I − B + Σ w (K′ ⊛ B + c·B), with
+    /// K′ the kernel plane less its centre weight c; then rounded to f32
+    /// once, into `out`.
     fn output(&self, spread: &Spread, out: &mut Vec<f32>, control: &mut Control) -> Result<()> {
         let plane = spread.plane;
         let bright: Vec<f64> = match spread.fractions {

@@ -106,10 +106,6 @@ struct BloomShape {
 }
 
 impl SpreadShape for BloomShape {
-    fn mirror_symmetric(&self) -> bool {
-        true
-    }
-
     fn radial(&self) -> bool {
         true
     }

@@ -381,10 +381,6 @@ impl HaloShape {
 }
 
 impl SpreadShape for HaloShape {
-    fn mirror_symmetric(&self) -> bool {
-        true
-    }
-
     fn radial(&self) -> bool {
         true
     }

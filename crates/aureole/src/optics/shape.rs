@@ -19,15 +19,14 @@ pub(crate) trait SpreadShape: Sync {
     }
 
     /// Whether f(x, y) = f(|x|, |y|), so that a quarter of the kernel can
-    /// be computed and mirrored.
+    /// be computed and mirrored: every radial shape is.
     fn mirror_symmetric(&self) -> bool {
-        false
+        self.radial()
     }
 
     /// Whether f, its grid and its dark test depend on the distance from
-    /// the centre alone (then f is mirror-symmetric too), so that the
-    /// pixels of a kernel away from the centre are read from tables of
-    /// that distance (`kernel::radial`).
+    /// the centre alone, so that the pixels of a kernel away from the
+    /// centre are read from tables of that distance (`kernel::radial`).
     fn radial(&self) -> bool {
         false
     }

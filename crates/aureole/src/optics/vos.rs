@@ -82,10 +82,6 @@ struct VosShape {
 }
 
 impl SpreadShape for VosShape {
-    fn mirror_symmetric(&self) -> bool {
-        true
-    }
-
     fn radial(&self) -> bool {
         true
     }
