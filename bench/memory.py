@@ -28,6 +28,10 @@ WORKLOADS = [
     ("4K street, paper-fig4-bloom + camera-f8-7blade", "3840x2160",
      ["--preset", "paper-fig4-bloom", "--preset", "camera-f8-7blade"]),
     ("1080p street, camera-f8-7blade", "1920x1080", ["--preset", "camera-f8-7blade"]),
+    # A star filter's orders fill the same millimetres of the sensor at
+    # any size: a thumbnail holds as many as 4K.
+    ("64x36 thumbnail, star-filter-8pt", "64x36", ["--preset", "star-filter-8pt"]),
+    ("320x180 street, star-filter-6pt", "320x180", ["--preset", "star-filter-6pt"]),
     ("12000x8000, paper-fig4-bloom, --max-kernel 101", "12000x8000",
      ["--preset", "paper-fig4-bloom", "--max-kernel", "101"]),
 ]

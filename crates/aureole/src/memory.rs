@@ -39,6 +39,9 @@ pub struct Workload {
     /// How far each effect's light reaches from the centre, in pixels
     /// (the first [`REACHES`] effects; `u32::MAX` for the whole kernel).
     pub reaches: [u32; REACHES],
+    /// The most bytes an effect's building holds beside its planes,
+    /// whatever their size (a star filter's orders).
+    pub fixed: u64,
 }
 
 /// The effects whose reach a [`Workload`] records; later ones count as
@@ -60,7 +63,8 @@ impl Workload {
         let extent = Extent::for_image_within(width, height, max_extent)?;
         let pitch_mm = config.camera.pixel_pitch_mm(extent.image_width);
         let mut reaches = [u32::MAX; REACHES];
-        for (index, (reach, effect)) in reaches.iter_mut().zip(&config.effects).enumerate() {
+        let mut fixed = 0;
+        for (index, effect) in config.effects.iter().enumerate() {
             let context = Context {
                 camera: &config.camera,
                 pitch_mm,
@@ -72,7 +76,9 @@ impl Workload {
                 kernel_size: (extent.width, extent.height),
                 sending: extent.sending,
             };
-            if let Some(px) = effect.reach_px(&context).filter(|r| r.is_finite()) {
+            fixed = effect.fixed_building_bytes(&context).max(fixed);
+            let px = effect.reach_px(&context).filter(|r| r.is_finite());
+            if let (Some(reach), Some(px)) = (reaches.get_mut(index), px) {
                 *reach = px.ceil().clamp(0.0, f64::from(u32::MAX - 1)) as u32;
             }
         }
@@ -85,6 +91,7 @@ impl Workload {
             kernel_planes: config.effects.iter().map(Effect::planes).max().unwrap_or(1),
             backend: Backend::default(),
             reaches,
+            fixed,
         })
     }
 
@@ -94,7 +101,7 @@ impl Workload {
     /// as if every effect's light reached the whole extent (it is cut to
     /// the shorter reach once built); an eighth and the program's own
     /// baseline are added to stay on the safe side, and measured peaks of
-    /// whole runs lie below it (`bench/memory.sh`).
+    /// whole runs lie below it (`bench/memory.py`).
     pub fn estimate(&self, effects: &[Effect]) -> Estimate {
         const BASELINE: u64 = 16 << 20;
         let pixels = self.width as u64 * self.height as u64;
@@ -127,7 +134,7 @@ impl Workload {
             } else {
                 0
             };
-            building = building.max(layer * chain + pattern + composing);
+            building = building.max(layer * chain + pattern + composing + self.fixed);
             chain = chain.max(layers);
             chain_reach = chain_reach.max(reach(index));
         }
@@ -238,6 +245,7 @@ mod tests {
             kernel_planes: 1,
             backend: Backend::Cpu,
             reaches: [u32::MAX; REACHES],
+            fixed: 0,
         };
         let half = Workload {
             kernel: (999, 599),
@@ -280,5 +288,36 @@ mod tests {
         );
         assert_eq!(whole.stage, "building the kernel");
         assert!(cut.bytes < whole.bytes, "{cut:?} {whole:?}");
+    }
+
+    #[test]
+    fn a_star_filters_orders_are_counted_whatever_the_images_size() {
+        for preset in ["star-filter-4pt", "star-filter-6pt", "star-filter-8pt"] {
+            let mut config = Config::default();
+            config.apply(crate::presets::find(preset).unwrap().config().unwrap());
+            let Some(Effect::Aperture(aperture)) = config.effects.first() else {
+                panic!("{preset} starts with an aperture");
+            };
+            let mut fixed = Vec::new();
+            for (width, height) in [(64, 36), (1280, 720)] {
+                let workload = Workload::of_config(&config, width, height, 3, false, None).unwrap();
+                let pitch_mm = config.camera.pixel_pitch_mm(width).unwrap();
+                let reach = crate::optics::aperture::orders_reach(pitch_mm, workload.kernel);
+                let orders = aperture.optics(&config.camera, reach, 0).unwrap().orders;
+                assert!(
+                    workload.fixed >= 96 * orders.len() as u64,
+                    "{preset} at {width}x{height}: {} bytes for {} orders",
+                    workload.fixed,
+                    orders.len()
+                );
+                fixed.push(workload.fixed);
+            }
+            // The orders fill the same millimetres of the sensor however
+            // many pixels cover them.
+            assert!(
+                fixed[0] > 10 << 20 && fixed[0] * 10 > fixed[1] * 9,
+                "{fixed:?}"
+            );
+        }
     }
 }

@@ -108,6 +108,12 @@ pub(crate) trait Model:
         plane_bytes * self.planes() as u64 + plane_bytes / 2
     }
 
+    /// The bytes its building holds beside its planes, whatever their
+    /// size: a star filter's orders, as many for a thumbnail as for 4K.
+    fn fixed_building_bytes(&self, _context: &Context) -> u64 {
+        0
+    }
+
     /// How far from the centre, in pixels, its PSF can hold light; `None`
     /// when it may reach the whole kernel. Composing the chain cuts the
     /// transforms to the shorter reach, which the memory estimate follows.
@@ -179,6 +185,12 @@ macro_rules! effects {
             pub(crate) fn building_bytes(&self, plane_bytes: u64) -> u64 {
                 match self {
                     $(Effect::$variant(model) => model.building_bytes(plane_bytes),)*
+                }
+            }
+
+            pub(crate) fn fixed_building_bytes(&self, context: &Context) -> u64 {
+                match self {
+                    $(Effect::$variant(model) => model.fixed_building_bytes(context),)*
                 }
             }
 

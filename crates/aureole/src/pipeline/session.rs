@@ -478,6 +478,7 @@ impl Session {
                     kernel_planes: kernel.planes().len(),
                     backend: Backend::default(),
                     reaches: [u32::MAX; crate::memory::REACHES],
+                    fixed: 0,
                 };
                 Ok((workload, &[]))
             }

@@ -340,6 +340,15 @@ impl Cumulative {
 /// Nodes of [`Received`] per shortest wavelength in u.
 const RECEIVED_NODES: f64 = 256.0;
 
+/// The most nodes of a [`Received`] that follow the pixel's footprint:
+/// about 900 for a 4K kernel's blades at f/11, 11 000 for a 320 px wide
+/// image's (which keep every node). The footprint grows with the pixel,
+/// and a thumbnail's pixel spans thousands of wavelengths (a 3 px wide
+/// image through a 6-blade stop held 280 MB of tables for 15 pixels);
+/// beyond the table a pixel's mean is computed from
+/// [`Cumulative::received`] itself, which the table only interpolates.
+const MOST_FOOTPRINT: f64 = 16384.0;
+
 /// One edge's [`Cumulative::received`] as a function of the offset u
 /// across its ray alone: every pixel projects onto u with the same β and
 /// γ, so the mean is tabulated once per edge, every λ/256 of the shortest
@@ -363,16 +372,21 @@ struct Received {
 
 impl Received {
     /// The means of `table` for an edge whose pixels project as `beta`
-    /// and `gamma`, sent as `sending`, out to `reach` in u.
+    /// and `gamma`, sent as `sending`, out to `pattern` in u and the
+    /// pixel's footprint beyond (at most [`MOST_FOOTPRINT`] nodes of it),
+    /// and no further than `limit`: every pixel whose mean the pattern
+    /// within `pattern` reaches lies within it and a pixel's step beyond.
     fn new(
         table: &Cumulative,
         (beta, gamma): (f64, f64),
         sending: Sending,
-        reach: f64,
+        (pattern, limit): (f64, f64),
     ) -> Received {
         let step = table.step * 32.0 / RECEIVED_NODES;
         let planes = table.planes;
-        let nodes = (reach / step).ceil() as usize + 3;
+        let footprint =
+            (spread(beta, gamma, sending) + 2.0 * (beta + gamma)).min(MOST_FOOTPRINT * step);
+        let nodes = ((pattern + footprint).min(limit) / step).ceil() as usize + 3;
         let mut values = Vec::with_capacity((nodes + 1) * planes);
         for k in 0..=nodes {
             let u = (k as f64 - 1.0) * step;
@@ -470,19 +484,16 @@ impl FarField {
             .map(|(e, pairs)| {
                 let k = e.length / f;
                 let (beta, gamma) = projections(e.along, k, pitch);
-                // Every pixel the table's band holds lies within the band
-                // and a pixel's step beyond it, and within the kernel.
-                let band = table.end + spread(beta, gamma, sending) + 2.0 * (beta + gamma);
-                let received = Received::new(&table, (beta, gamma), sending, band.min(reach * k));
-                let near =
-                    PAIR_REACH * longest + spread(beta, gamma, sending) + 2.0 * (beta + gamma);
+                let within = reach * k;
+                let received = Received::new(&table, (beta, gamma), sending, (table.end, within));
+                let near = PAIR_REACH * longest;
                 let line_means = if pairs.is_empty() {
                     Vec::new()
                 } else {
                     lines
                         .iter()
                         .filter_map(|line| line.table.as_ref())
-                        .map(|own| Received::new(own, (beta, gamma), sending, near.min(reach * k)))
+                        .map(|own| Received::new(own, (beta, gamma), sending, (near, within)))
                         .collect()
                 };
                 Edge {
@@ -997,6 +1008,36 @@ mod tests {
     }
 
     #[test]
+    fn a_thumbnails_pixel_keeps_its_table_small_and_is_computed_beyond_it() {
+        // A pixel spanning 10⁵ wavelengths across the ray (a 3 px wide
+        // image): its footprint would take millions of nodes.
+        let table = Cumulative::new(&[vec![(550e-6, 1.0)]]);
+        let (beta, gamma) = (30.0, 12.0);
+        for sending in [Sending::Point, Sending::Pixel] {
+            let received =
+                Received::new(&table, (beta, gamma), sending, (table.end, f64::INFINITY));
+            let step = 1.0 / received.inverse_step;
+            let nodes = received.values.len() / received.planes;
+            assert!(
+                nodes as f64 <= table.end / step + MOST_FOOTPRINT + 5.0,
+                "{nodes} nodes"
+            );
+            let last = (nodes - 4) as f64 * step;
+            assert!(received.at(last + 4.0 * step).is_none());
+            for u in [0.0, 0.37 * last, last] {
+                let (ours, direct) = (
+                    received.at(u).unwrap()[0],
+                    table.received(u, beta, gamma, sending)[0],
+                );
+                assert!(
+                    (ours - direct).abs() <= 1e-9 * direct.abs(),
+                    "u {u}: {ours} against {direct}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn an_edges_tabulated_means_are_as_close_to_the_pixels_as_its_tables() {
         // Seventeen lines (the table to 32 λ) and one (to 256 λ); the
         // projections of a blade's pixel and of a scratch's end (far
@@ -1013,7 +1054,8 @@ mod tests {
             for (beta, gamma) in [(2.5e-4, 1.1e-4), (2.8e-6, 1.9e-6)] {
                 for sending in [Sending::Point, Sending::Pixel] {
                     let reach = table.end + spread(beta, gamma, sending);
-                    let received = Received::new(&table, (beta, gamma), sending, reach);
+                    let received =
+                        Received::new(&table, (beta, gamma), sending, (table.end, reach));
                     let step = 1.0 / received.inverse_step;
                     let mut worst = [0.0f64; 2];
                     for k in (0..(reach / step) as usize).step_by(97) {

@@ -9,6 +9,9 @@ use crate::kernel::Sending;
 use crate::math::sin_cos;
 use crate::optics::aperture::pupil::{DiscTerm, EdgeTerm};
 
+/// The most nodes of a wave's table of pixel means.
+const MOST_NODES: usize = 1 << 16;
+
 /// The discs' fringes. Far out a disc's amplitude is, by stationary
 /// phase, s√R cos(z − 3π/4)/(πρ^{3/2}), z = 2πρR, ρ = r/(λf), so that
 /// concentric discs add to their means R/(2π²ρ³) the waves −R sin 2z of
@@ -216,8 +219,15 @@ impl Fringes {
         let shortest = lines.iter().map(|l| l.lambda).fold(f64::INFINITY, f64::min);
         let widest = forms.iter().map(|s| s.2).fold(0.0, f64::max) * TAU / (shortest * f);
         // The means turn by at most 0.02 rad per step: linear
-        // interpolation is then within 5·10⁻⁵ of them.
-        let step = (0.02 / (0.5 * widest * pitch)).min(0.01);
+        // interpolation is then within 5·10⁻⁵ of them. Past MOST_NODES
+        // they turn faster than the table follows, but then a pixel spans
+        // over 590 of the widest wave's cycles and its means are below
+        // 8·10⁻⁴ of its amplitude: interpolated, they stay that small,
+        // and a thumbnail's table stays a few MB (it grew with the pitch:
+        // 180 MB for a 1 px wide image through a spectral stop).
+        let step = (0.02 / (0.5 * widest * pitch))
+            .min(0.01)
+            .max(FRAC_1_SQRT_2 / MOST_NODES as f64);
         let nodes = (FRAC_1_SQRT_2 / step).ceil() as usize + 2;
         let waves = lines
             .iter()
