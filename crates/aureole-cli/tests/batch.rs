@@ -284,6 +284,8 @@ fn thread_counts_give_the_same_bytes() {
 
 #[test]
 fn a_run_over_the_memory_limit_stops_before_allocating_and_says_how_to_fit() {
+    // 64 MB of the limit are the GPU's drivers, which `auto` loads to
+    // look for one: what is left holds the run with a smaller kernel.
     let temp = sequence(1, (400, 300));
     let dir = temp.path();
     let run = aureole()
@@ -294,7 +296,7 @@ fn a_run_over_the_memory_limit_stops_before_allocating_and_says_how_to_fit() {
             "-o",
             "r.exr",
             "--max-memory",
-            "30M",
+            "90M",
         ])
         .args(["--preset", "paper-fig5-both"])
         .assert()
@@ -309,7 +311,7 @@ fn a_run_over_the_memory_limit_stops_before_allocating_and_says_how_to_fit() {
     for expected in [
         "shot.0001.exr: needs about",
         "MiB",
-        "--max-memory is 30.0 MiB",
+        "--max-memory is 90.0 MiB",
         "--max-kernel",
     ] {
         assert!(stderr.contains(expected), "{expected:?} not in {stderr}");
@@ -331,7 +333,7 @@ fn a_run_over_the_memory_limit_stops_before_allocating_and_says_how_to_fit() {
             "-o",
             "r.exr",
             "--max-memory",
-            "30M",
+            "90M",
         ])
         .args(["--preset", "paper-fig5-both", "--max-kernel", &cap])
         .assert()

@@ -183,6 +183,30 @@ fn a_run_beyond_the_memory_limit_stops_before_it_allocates_and_says_what_fits() 
         .is_ok());
 }
 
+#[test]
+fn looking_for_a_gpu_counts_the_drivers_it_loads() {
+    let camera = config("paper-fig4-bloom");
+    let workload = aureole::memory::Workload::of_config(&camera, 200, 120, 3, false, None).unwrap();
+    // Room for the run on the processor, not for Vulkan's drivers beside it.
+    let limit = workload.estimate(&camera.effects).bytes + (16 << 20);
+    let run = |device| {
+        Session::new(camera.clone())
+            .with_device(device)
+            .with_memory_limit(limit)
+            .apply(
+                &frame(street(200, 120, Layout::Rgb)),
+                &ApplyOptions::default(),
+                &mut |_, _| {},
+            )
+    };
+    assert!(run(aureole::Device::Cpu).is_ok());
+    let refused = run(aureole::Device::Auto).unwrap_err();
+    assert!(
+        matches!(refused, Error::Memory { needed, .. } if needed > limit),
+        "{refused}"
+    );
+}
+
 /// Applies `method` to a 4-lamp street through `session`, cancelling at
 /// the first report of `stage`, and returns the result.
 fn cancelled_at(

@@ -16,6 +16,11 @@ use crate::kernel::Kernel;
 use crate::memory::Workload;
 use crate::optics::Effect;
 
+/// What looking for a GPU holds: Vulkan's loader and the drivers installed
+/// (Mesa's radv links LLVM), 55–60 MB resident more than `--device cpu`
+/// where Debian's mesa-vulkan-drivers are installed (`bench/memory.py`).
+const GPU_DRIVERS: u64 = 64 << 20;
+
 /// How to take an image as luminance.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FrameOptions {
@@ -502,9 +507,15 @@ impl Session {
         let planes = workload.planes + usize::from(workload.alpha);
         let frame = (image.width * image.height * planes * 4) as u64;
         let in_flight = self.in_flight as u64 * frame;
-        needed.bytes += in_flight;
-        // What is left for the run once the frames in flight are held.
-        let limit_left = limit.saturating_sub(in_flight);
+        let drivers = if self.device == Device::Cpu {
+            0
+        } else {
+            GPU_DRIVERS
+        };
+        needed.bytes += in_flight + drivers;
+        // What is left for the run once the frames in flight and the
+        // drivers are held.
+        let limit_left = limit.saturating_sub(in_flight + drivers);
         if needed.bytes <= limit {
             let double = needed.bytes + workload.double_extra();
             return Ok((double > limit).then_some(DoubleRefused {
