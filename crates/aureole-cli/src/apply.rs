@@ -237,6 +237,8 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         },
         progress: Progress::new(quiet),
     };
+    // The drivers load while the first frame is read.
+    aureole::convolve::look_ahead(args.device.into());
     let failures = run.all(session, &todo);
     run.progress.finish();
     let failed = failures.len();

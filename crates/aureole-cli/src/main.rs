@@ -155,6 +155,7 @@ fn main() -> ExitCode {
         Command::Presets(args) => presets::run(args),
         Command::Studio(args) => studio::run(args, cli.quiet),
     };
+    aureole::convolve::looked_ahead();
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Usage(e)) => {

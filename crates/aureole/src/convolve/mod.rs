@@ -142,6 +142,20 @@ impl Device {
     }
 }
 
+/// Starts looking for a GPU in the background where `device` may take
+/// one, while a front end reads its first frame; [`looked_ahead`] before
+/// the process exits.
+pub fn look_ahead(device: Device) {
+    if device != Device::Cpu {
+        gpu::look_ahead();
+    }
+}
+
+/// Waits for a look [`look_ahead`] started.
+pub fn looked_ahead() {
+    gpu::looked();
+}
+
 /// Where the convolutions will run for `device`, and in words where and
 /// why: the GPU's name, or why the processor (no adapter, a software
 /// one). Only [`Device::Gpu`] without any adapter is an error.

@@ -97,15 +97,54 @@ pub fn gpu() -> std::result::Result<Arc<Gpu>, String> {
     GPU.get_or_init(|| open(adapter()?).map(Arc::new)).clone()
 }
 
-fn find() -> std::result::Result<wgpu::Adapter, String> {
-    // Mesa's implicit device_select layer looks for a Wayland display
-    // while the adapters are listed, and without XDG_RUNTIME_DIR (a
-    // render node, CI, ssh) libwayland prints two error lines on every
-    // run. The engine picks its adapter itself: the layer is turned off,
-    // once, before any Vulkan thread exists.
+/// The adapter looked for on a thread of its own ([`look_ahead`]).
+static LOOKING: Mutex<Option<std::thread::JoinHandle<()>>> = Mutex::new(None);
+
+/// Starts looking for the process's adapter on a thread of its own, once:
+/// loading the drivers (Mesa's link LLVM) took 40 ms of a 1.2 s 4K still
+/// on two cores, which the reading of its frame now hides. [`looked`]
+/// waits for it.
+pub fn look_ahead() {
+    static STARTED: std::sync::Once = std::sync::Once::new();
+    STARTED.call_once(|| {
+        // Here, not on the thread: nothing sets the environment while
+        // another thread may read it.
+        quiet_device_select();
+        let looking = std::thread::Builder::new()
+            .name("aureole-gpu-probe".into())
+            .spawn(|| drop(adapter()));
+        if let Ok(handle) = looking {
+            *LOOKING.lock().unwrap_or_else(PoisonError::into_inner) = Some(handle);
+        }
+    });
+}
+
+/// Waits for a look started by [`look_ahead`] to end, so that a process
+/// never exits while drivers are still being loaded.
+pub fn looked() {
+    let handle = LOOKING
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .take();
+    if let Some(handle) = handle {
+        // A panic in the drivers has been answered by `adapter` already.
+        drop(handle.join());
+    }
+}
+
+/// Mesa's implicit device_select layer looks for a Wayland display while
+/// the adapters are listed, and without XDG_RUNTIME_DIR (a render node,
+/// CI, ssh) libwayland prints two error lines on every run. The engine
+/// picks its adapter itself: the layer is turned off, once, before any
+/// Vulkan thread exists.
+fn quiet_device_select() {
     if std::env::var_os("NODEVICE_SELECT").is_none() {
         std::env::set_var("NODEVICE_SELECT", "1");
     }
+}
+
+fn find() -> std::result::Result<wgpu::Adapter, String> {
+    quiet_device_select();
     let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle();
     descriptor.backends = wgpu::Backends::PRIMARY;
     // Buffers beyond 90 % of the device's memory budget are refused with

@@ -16,7 +16,7 @@
 mod device;
 mod fft;
 
-pub use device::{gpu, software_adapter, Gpu};
+pub use device::{gpu, look_ahead, looked, software_adapter, Gpu};
 
 use std::sync::{Arc, Mutex, PoisonError};
 
