@@ -1,7 +1,9 @@
-//! The f32 engine's loops with AVX2 and their scalar twin give the same
-//! bits (RustFFT keeps and tests its scalar twin the same way): the same
-//! IEEE operations in the same order, whatever the vector width. In a test
-//! binary of its own, since the switch holds for the whole process.
+//! The f32 engine's loops and the pupil transform's inner loop (which
+//! builds every diffraction kernel's near field) with AVX2 and their
+//! scalar twin give the same bits (RustFFT keeps and tests its scalar twin
+//! the same way): the same IEEE operations in the same order, whatever the
+//! vector width. In a test binary of its own, since the switch holds for
+//! the whole process.
 
 use aureole::convolve::{force_scalar, vectors_in_use};
 use aureole::{presets, ApplyOptions, Config, Frame, FrameOptions, Image, Layout, Method, Session};
@@ -40,7 +42,12 @@ fn the_vector_and_scalar_loops_give_the_same_bits() {
         eprintln!("this CPU has no AVX2: both runs take the scalar loops");
     }
     let image = scene();
-    for preset in ["paper-fig5-both", "camera-f8-7blade", "human-eye-vos"] {
+    for preset in [
+        "paper-fig5-both",
+        "camera-f8-7blade",
+        "camera-f11-6blade",
+        "human-eye-vos",
+    ] {
         force_scalar(false);
         let vector = through(preset, &image);
         force_scalar(true);

@@ -21,6 +21,7 @@ mod single;
 
 pub use gpu::{software_adapter, Gpu};
 pub use grid::{fast_size, padded_size};
+pub(crate) use simd::widest;
 pub use simd::{force_scalar, vectors_in_use};
 pub use single::Convolver;
 

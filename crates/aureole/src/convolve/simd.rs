@@ -1,6 +1,8 @@
 //! The one module with `unsafe` code: work compiled for AVX2 where the CPU
 //! has it. The f32 engine's element-wise complex loops around the FFTs
-//! (its column strips, [`super::single`]) then take 8 lanes instead of 4.
+//! (its column strips, [`super::single`]) then take 8 lanes instead of 4,
+//! and the pupil transform's sum over a pixel's samples (the near field of
+//! every diffraction kernel) 4 f64 lanes instead of 2.
 //! They are the same IEEE operations in the same order (Rust never fuses a
 //! multiply and an add), so the result has the same bits either way; the
 //! scalar twin is the same code without the feature.
@@ -33,7 +35,7 @@ pub fn vectors_in_use() -> bool {
 /// be `#[inline(always)]` (and what it calls), so that it is compiled into
 /// the caller that has the feature.
 #[inline(always)]
-pub(super) fn widest<R>(work: impl FnOnce() -> R) -> R {
+pub(crate) fn widest<R>(work: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
     if vectors_in_use() {
         // SAFETY: the CPU was just found to have AVX2.
