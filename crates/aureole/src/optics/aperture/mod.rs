@@ -540,22 +540,18 @@ impl Model for Aperture {
         else {
             return 0;
         };
-        let reach_mm = orders_reach(pitch_mm, context.kernel_size);
-        let moved: Vec<u64> = self
-            .filters
-            .iter()
-            .map(|family| 2 * family.orders_within(focal, reach_mm) as u64)
-            .collect();
-        let pairs: u64 = (0..moved.len())
-            .flat_map(|f| {
-                let first = moved[f];
-                moved[f + 1..].iter().map(move |g| first * g)
-            })
-            .sum();
         if self.filters.is_empty() {
             return 0;
         }
-        96 * (1 + moved.iter().sum::<u64>() + pairs)
+        let reach_mm = orders_reach(pitch_mm, context.kernel_size);
+        let moved = self
+            .filters
+            .iter()
+            .map(|family| 2 * family.orders_within(focal, reach_mm) as u64);
+        let (alone, squares) = moved.fold((0, 0), |(sum, squares), m| (sum + m, squares + m * m));
+        // Σ_{f<g} m_f·m_g, the orders two families move together.
+        let pairs = (alone * alone - squares) / 2;
+        96 * (1 + alone + pairs)
     }
 }
 

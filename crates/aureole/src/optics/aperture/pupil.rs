@@ -516,22 +516,18 @@ impl Pupil {
             for e in edges {
                 let by_offset = &offsets.phases[edge_index];
                 edge_index += 1;
-                for (i, &x) in nu_x.iter().enumerate() {
-                    let point = edge_phases(e, TAU * x, TAU * nu_y);
-                    let row = i * count..(i + 1) * count;
-                    crate::convolve::widest(
-                        #[inline(always)]
-                        || {
-                            add_edge(
-                                e,
-                                point,
-                                by_offset,
-                                (&qx[row.clone()], &qy[row.clone()]),
-                                (&mut sums_re[row.clone()], &mut sums_im[row.clone()]),
-                            )
-                        },
-                    );
-                }
+                crate::convolve::widest(
+                    #[inline(always)]
+                    || {
+                        add_edge(
+                            e,
+                            (nu_x, nu_y),
+                            by_offset,
+                            (&qx, &qy),
+                            (&mut sums_re, &mut sums_im),
+                        )
+                    },
+                );
             }
             let sums = sums_re.iter().zip(&sums_im);
             for (at, (t, (s_re, s_im))) in total.iter_mut().zip(sums).enumerate() {
@@ -679,34 +675,42 @@ impl Offsets {
 /// (re, im) pairs.
 type EdgePhases = ([f64; 2], [f64; 2]);
 
-/// Adds edge `e`'s terms of the samples (`qx`, `qy`) about one point, whose
-/// own [`edge_phases`] are `point`, to the sums: the inner loop of
-/// [`Pupil::intensity_moments`], inlined where the CPU's widest vectors
-/// take it (four samples at once with AVX2, the same bits).
+/// Adds edge `e`'s terms to the sums of every point (`nu_x`[i], `nu_y`)
+/// and its samples, whose q are (`qx`, `qy`), the points' side by side:
+/// the inner loop of [`Pupil::intensity_moments`], inlined where the CPU's
+/// widest vectors take it (four samples at once with AVX2, the same bits).
 #[inline(always)]
 fn add_edge(
     e: &Edge,
-    (phase_i, half_i): EdgePhases,
+    (nu_x, nu_y): (&[f64], f64),
     [phase_re, phase_im, half_cos, half_sin]: &[Vec<f64>; 4],
     (qx, qy): (&[f64], &[f64]),
     (sums_re, sums_im): (&mut [f64], &mut [f64]),
 ) {
-    let n = qx.len();
-    let (phase_re, phase_im) = (&phase_re[..n], &phase_im[..n]);
-    let (half_cos, half_sin) = (&half_cos[..n], &half_sin[..n]);
-    let (qy, sums_re, sums_im) = (&qy[..n], &mut sums_re[..n], &mut sums_im[..n]);
-    for k in 0..n {
-        let q = [qx[k], qy[k]];
-        let z = 0.5 * (q[0] * e.delta[0] + q[1] * e.delta[1]);
-        let sin_z = half_i[0] * half_sin[k] + half_i[1] * half_cos[k];
-        // Both sides computed and one chosen, without a branch, so that
-        // the loop takes vectors.
-        let small = z.abs() < 1e-8;
-        let ratio = sin_z / if small { 1.0 } else { z };
-        let sinc = if small { 1.0 - z * z / 6.0 } else { ratio };
-        let weight = e.length * (q[0] * e.normal[0] + q[1] * e.normal[1]) * sinc;
-        sums_re[k] += weight * (phase_i[0] * phase_re[k] - phase_i[1] * phase_im[k]);
-        sums_im[k] += weight * (phase_i[0] * phase_im[k] + phase_i[1] * phase_re[k]);
+    let n = phase_re.len();
+    if n == 0 {
+        return;
+    }
+    let (phase_im, half_cos, half_sin) = (&phase_im[..n], &half_cos[..n], &half_sin[..n]);
+    let points = qx
+        .chunks_exact(n)
+        .zip(qy.chunks_exact(n))
+        .zip(sums_re.chunks_exact_mut(n).zip(sums_im.chunks_exact_mut(n)));
+    for (&x, ((qx, qy), (sums_re, sums_im))) in nu_x.iter().zip(points) {
+        let (phase_i, half_i) = edge_phases(e, TAU * x, TAU * nu_y);
+        for k in 0..n {
+            let q = [qx[k], qy[k]];
+            let z = 0.5 * (q[0] * e.delta[0] + q[1] * e.delta[1]);
+            let sin_z = half_i[0] * half_sin[k] + half_i[1] * half_cos[k];
+            // Both sides computed and one chosen, without a branch, so
+            // that the loop takes vectors.
+            let small = z.abs() < 1e-8;
+            let ratio = sin_z / if small { 1.0 } else { z };
+            let sinc = if small { 1.0 - z * z / 6.0 } else { ratio };
+            let weight = e.length * (q[0] * e.normal[0] + q[1] * e.normal[1]) * sinc;
+            sums_re[k] += weight * (phase_i[0] * phase_re[k] - phase_i[1] * phase_im[k]);
+            sums_im[k] += weight * (phase_i[0] * phase_im[k] + phase_i[1] * phase_re[k]);
+        }
     }
 }
 
