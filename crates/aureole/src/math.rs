@@ -29,24 +29,41 @@ pub fn nearest(v: f64) -> f64 {
 }
 
 /// 2^k for −1022 ≤ k ≤ 1023.
-#[inline]
+#[inline(always)]
 fn two_to(k: i64) -> f64 {
-    f64::from_bits(((k + 1023) as u64) << 52)
+    f64::from_bits((k.wrapping_add(1023) as u64) << 52)
+}
+
+/// The nearest whole number to `v` (|v| < 2³¹), as an f64 and as an
+/// integer: `v` + [`ROUNDER`] holds it in the low bits of its
+/// representation, which vector units read without an f64-to-integer
+/// conversion (AVX2 has none).
+#[inline(always)]
+pub(crate) fn nearest_and_whole(v: f64) -> (f64, i64) {
+    let shifted = v + ROUNDER;
+    (
+        shifted - ROUNDER,
+        shifted.to_bits().wrapping_sub(ROUNDER.to_bits()) as i64,
+    )
+}
+
+/// `a` where `c` holds, else `b`: both sides computed, one chosen, so that
+/// a loop of the functions below has no branch and takes vectors.
+#[inline(always)]
+fn pick(c: bool, a: f64, b: f64) -> f64 {
+    if c {
+        a
+    } else {
+        b
+    }
 }
 
 /// eˣ within 2 ulp; 0 below −745.2 (where it underflows), ∞ above 709.8.
-#[inline]
+/// Without branches (every case computed, one chosen), so that loops of it
+/// take vectors.
+#[inline(always)]
 pub fn exp(x: f64) -> f64 {
-    if !(x > -745.2 && x < 709.78) {
-        return if x.is_nan() {
-            x
-        } else if x > 0.0 {
-            f64::INFINITY
-        } else {
-            0.0
-        };
-    }
-    let k = nearest(x * std::f64::consts::LOG2_E);
+    let (k, whole) = nearest_and_whole(x * std::f64::consts::LOG2_E);
     // |r| ≤ ln2/2: the Taylor series to r¹³/13! leaves 4·10⁻¹⁸. Its terms
     // from r² on are summed by Estrin's scheme, products of independent
     // pairs rather than one chain of thirteen, then added to 1 + r.
@@ -61,42 +78,36 @@ pub fn exp(x: f64) -> f64 {
         + r8 * (pair(1.0 / 3_628_800.0, 1.0 / 39_916_800.0)
             + r2 * pair(1.0 / 479_001_600.0, 1.0 / 6_227_020_800.0));
     let p = 1.0 + (r + r2 * tail);
-    let k = k as i64;
-    if k < -1021 {
-        // Subnormal results: scaled in two steps, rounded once at the end.
-        p * two_to(k + 1000) * two_to(-1000)
-    } else if k > 1023 {
-        p * two_to(k - 1) * 2.0
+    // Subnormal results are scaled in two steps and rounded once, at the
+    // second; 2¹⁰²⁴ as 2¹⁰²³·2.
+    let (low, high) = (whole < -1021, whole > 1023);
+    let shift = if low {
+        1000
+    } else if high {
+        -1
     } else {
-        p * two_to(k)
-    }
+        0
+    };
+    let second = pick(low, two_to(-1000), pick(high, 2.0, 1.0));
+    let value = p * two_to(whole.wrapping_add(shift)) * second;
+    let outside = pick(x.is_nan(), x, pick(x > 0.0, f64::INFINITY, 0.0));
+    pick(x > -745.2 && x < 709.78, value, outside)
 }
 
-/// ln x within 2 ulp for positive finite x; −∞ at 0, NaN below.
-#[inline]
+/// ln x within 2 ulp for positive finite x; −∞ at 0, NaN below. Without
+/// branches, as [`exp`].
+#[inline(always)]
 pub fn ln(x: f64) -> f64 {
-    if !(f64::MIN_POSITIVE..f64::INFINITY).contains(&x) {
-        return if x > 0.0 {
-            // Subnormal, or ∞.
-            if x == f64::INFINITY {
-                x
-            } else {
-                ln(x * two_to(54)) - 54.0 * std::f64::consts::LN_2
-            }
-        } else if x == 0.0 {
-            f64::NEG_INFINITY
-        } else {
-            f64::NAN
-        };
-    }
-    let bits = x.to_bits();
-    let mut e = ((bits >> 52) & 0x7ff) as i64 - 1023;
-    let mut m = f64::from_bits((bits & 0x000f_ffff_ffff_ffff) | (1023 << 52));
-    if m > std::f64::consts::SQRT_2 {
-        m *= 0.5;
-        e += 1;
-    }
-    let e = e as f64;
+    // A subnormal x is scaled into the normal range first.
+    let subnormal = x < f64::MIN_POSITIVE;
+    let bits = pick(subnormal, x * two_to(54), x).to_bits();
+    let m = f64::from_bits((bits & 0x000f_ffff_ffff_ffff) | (1023 << 52));
+    let big = m > std::f64::consts::SQRT_2;
+    let m = pick(big, m * 0.5, m);
+    // The exponent, read as an f64 from a representation of 2⁵² + e + 1023
+    // rather than converted (AVX2 converts no 64-bit integers).
+    let biased = ((bits >> 52) & 0x7ff) + u64::from(big);
+    let e = f64::from_bits(0x4330_0000_0000_0000 | biased) - (4_503_599_627_370_496.0 + 1023.0);
     // ln m = 2 atanh s with s = f/(2 + f), |s| ≤ 0.172, written as
     // f − s(f − R) (f exact) with R ≈ Σ 2s²ʲ/(2j + 1): fdlibm's minimax
     // coefficients (error below 2⁻⁵⁸·⁴⁵), its even and odd terms summed
@@ -117,25 +128,21 @@ pub fn ln(x: f64) -> f64 {
     let odd = z * (LG[0] + w * (LG[2] + w * (LG[4] + w * LG[6])));
     let even = w * (LG[1] + w * (LG[3] + w * LG[5]));
     let big_r = odd + even;
-    e * LN2_HI + (f - (s * (f - big_r) - e * LN2_LO))
-}
-
-/// ln(1 + v) for v > −1, within 3 ulp: the digits of a v far below 1 are
-/// kept by correcting for the rounding of 1 + v.
-#[inline]
-pub fn ln_1p(v: f64) -> f64 {
-    let u = 1.0 + v;
-    if u == 1.0 {
-        return v;
-    }
-    ln(u) + (v - (u - 1.0)) / u
+    let value = e * LN2_HI + (f - (s * (f - big_r) - e * LN2_LO));
+    let value = pick(subnormal, value - 54.0 * std::f64::consts::LN_2, value);
+    let outside = pick(
+        x == f64::INFINITY,
+        x,
+        pick(x == 0.0, f64::NEG_INFINITY, f64::NAN),
+    );
+    pick(x > 0.0 && x < f64::INFINITY, value, outside)
 }
 
 /// (sin x, cos x) to within 4·10⁻¹⁶ for |x| < 10⁵ in plain arithmetic,
 /// so that rows of them vectorise and give the same bytes everywhere:
 /// x less the nearest multiple n of π/2, in two parts, then the Taylor
 /// series on [−π/4, π/4], turned by n quarter turns.
-#[inline]
+#[inline(always)]
 pub fn sin_cos(x: f64) -> (f64, f64) {
     const HIGH: f64 = 1.570_796_326_734_125_6;
     const LOW: f64 = 6.077_100_506_506_192e-11;
@@ -264,25 +271,29 @@ const J1_QS8: [f64; 6] = bits([
 /// Taylor series, whose next term is below 10⁻¹⁸ of the sum there;
 /// ln(1 − 2 sin²(x/2)) up to 1 (the digits a cosine near 1 loses);
 /// −ln sin(π/2 − |x|) nearer π/2 (the difference taken in two parts, so
-/// that a small cosine keeps its digits).
-#[inline]
+/// that a small cosine keeps its digits). Without branches, as [`exp`]:
+/// the last two share one sine and one logarithm.
+#[inline(always)]
 pub fn neg_ln_cos(x: f64) -> f64 {
     let a = x.abs();
     let x2 = a * a;
-    if x2 <= 0.0025 {
-        x2 * (1.0 / 2.0
+    let series = x2
+        * (1.0 / 2.0
             + x2 * (1.0 / 12.0
                 + x2 * (1.0 / 45.0
-                    + x2 * (17.0 / 2520.0 + x2 * (31.0 / 14175.0 + x2 * (691.0 / 467_775.0))))))
-    } else if a <= 1.0 {
-        let h = sin_cos(0.5 * a).0;
-        -ln_1p(-2.0 * h * h)
-    } else {
-        // HALF_PI_HI − a is exact by Sterbenz's lemma (a ∈ [1, π/2]); an a
-        // an ulp beyond π/2 is a cosine of 0.
-        let d = ((HALF_PI_HI - a) + HALF_PI_LO).max(0.0);
-        -ln(sin_cos(d).0)
-    }
+                    + x2 * (17.0 / 2520.0 + x2 * (31.0 / 14175.0 + x2 * (691.0 / 467_775.0))))));
+    let near = a <= 1.0;
+    // HALF_PI_HI − a is exact by Sterbenz's lemma (a ∈ [1, π/2]); an a
+    // an ulp beyond π/2 is a cosine of 0.
+    let d = ((HALF_PI_HI - a) + HALF_PI_LO).max(0.0);
+    let sine = sin_cos(pick(near, 0.5 * a, d)).0;
+    // Near: −ln(1 + v), v = −2 sin²(x/2), the digits of a small v kept by
+    // correcting for the rounding of 1 + v.
+    let v = -2.0 * sine * sine;
+    let u = 1.0 + v;
+    let log = ln(pick(near, u, sine));
+    let near_value = pick(u == 1.0, v, log + (v - (u - 1.0)) / u);
+    pick(x2 <= 0.0025, series, pick(near, -near_value, -log))
 }
 
 /// The eight anchors of [`atan2`]: atan((2i + 1)/16), correctly rounded.
@@ -301,17 +312,41 @@ const ATAN_ANCHORS: [f64; 8] = [
 /// `libm`'s results at zeros, infinities and NaN.
 #[inline]
 pub fn atan2(y: f64, x: f64) -> f64 {
+    if atan2_is_plain(y, x) {
+        atan2_plain(y, x)
+    } else {
+        libm::atan2(y, x)
+    }
+}
+
+/// Whether [`atan2_plain`] gives [`atan2`] at (y, x): neither is 0,
+/// infinite, NaN or beyond 10^±300.
+#[inline(always)]
+pub fn atan2_is_plain(y: f64, x: f64) -> bool {
     let (ax, ay) = (x.abs(), y.abs());
     let (small, large) = if ay > ax { (ax, ay) } else { (ay, ax) };
-    if !(small > 0.0 && large < f64::INFINITY) || large > 1e300 || small < 1e-300 {
-        return libm::atan2(y, x);
-    }
+    small > 0.0 && large < f64::INFINITY && large <= 1e300 && small >= 1e-300
+}
+
+/// [`atan2`] where [`atan2_is_plain`], without branches, so that loops of
+/// it take vectors (and elsewhere any number: those points are taken
+/// again by [`atan2`]).
+#[inline(always)]
+pub fn atan2_plain(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let steep = ay > ax;
+    let (small, large) = (pick(steep, ax, ay), pick(steep, ay, ax));
     let z = small / large;
     // z ∈ (0, 1]: atan z = atan c + atan((z − c)/(1 + zc)) about the
-    // nearest anchor c = (2i + 1)/16, |t| ≤ 1/16; atan t by its series to
-    // t¹⁷ (Estrin's scheme in t²) leaves 10⁻²⁴.
-    let i = ((z * 8.0) as usize).min(7);
-    let c = (2 * i + 1) as f64 / 16.0;
+    // nearest anchor c = (2i + 1)/16, i = ⌊8z⌋ (at most 7), |t| ≤ 1/16;
+    // atan t by its series to t¹⁷ (Estrin's scheme in t²) leaves 10⁻²⁴.
+    // The anchor is chosen by comparisons, not by an index.
+    let (mut c, mut anchor) = (1.0 / 16.0, ATAN_ANCHORS[0]);
+    for (i, &a) in ATAN_ANCHORS.iter().enumerate().skip(1) {
+        let above = z >= i as f64 / 8.0;
+        c = pick(above, (2 * i + 1) as f64 / 16.0, c);
+        anchor = pick(above, a, anchor);
+    }
     let t = (z - c) / (1.0 + z * c);
     let u = t * t;
     let u2 = u * u;
@@ -321,18 +356,10 @@ pub fn atan2(y: f64, x: f64) -> f64 {
         + u2 * pair(-1.0 / 7.0, 1.0 / 9.0)
         + u4 * (pair(-1.0 / 11.0, 1.0 / 13.0) + u2 * pair(-1.0 / 15.0, 1.0 / 17.0));
     let series = t + t * u * tail;
-    let mut a = ATAN_ANCHORS[i] + series;
-    if ay > ax {
-        a = (HALF_PI_HI - a) + HALF_PI_LO;
-    }
-    if x < 0.0 {
-        a = (PI - a) + 2.0 * HALF_PI_LO;
-    }
-    if y < 0.0 {
-        -a
-    } else {
-        a
-    }
+    let a = anchor + series;
+    let a = pick(steep, (HALF_PI_HI - a) + HALF_PI_LO, a);
+    let a = pick(x < 0.0, (PI - a) + 2.0 * HALF_PI_LO, a);
+    pick(y < 0.0, -a, a)
 }
 
 /// base^exponent: for a whole exponent (the bloom's β = 2 to 5, Vos's
@@ -460,17 +487,6 @@ mod tests {
         assert_eq!(ln(0.0), f64::NEG_INFINITY);
         assert!(ln(-1.0).is_nan());
         assert!(ulps(ln(1e-310), libm::log(1e-310)) <= 2.0);
-    }
-
-    #[test]
-    fn ln_1p_keeps_the_digits_of_small_arguments() {
-        let mut worst = 0f64;
-        for i in 1..100_000 {
-            let v = -libm::exp(-40.0 + 40.0 * i as f64 / 100_000.0) * 0.999_999;
-            worst = worst.max(ulps(ln_1p(v), libm::log1p(v)));
-            worst = worst.max(ulps(ln_1p(-v), libm::log1p(-v)));
-        }
-        assert!(worst <= 3.0, "{worst}");
     }
 
     #[test]

@@ -44,6 +44,9 @@ fn the_vector_and_scalar_loops_give_the_same_bits() {
     let image = scene();
     for preset in [
         "paper-fig5-both",
+        "paper-fig6a",
+        "paper-fig6b",
+        "paper-fig6c",
         "camera-f8-7blade",
         "camera-f11-6blade",
         "human-eye-vos",

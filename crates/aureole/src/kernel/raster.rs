@@ -158,18 +158,18 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
         // or for d = 0 the inner corner of the square at ½ twice.
         let (reach_x, reach_y) = (cx.max(width - 1 - cx), cy.max(height - 1 - cy));
         let sides = |d: usize| [(d, false), (d.saturating_sub(1), d > 0)];
+        // Inner is toward the centre: left and below.
+        let corner = |outer_x: bool, outer_y: bool| match (outer_x, outer_y) {
+            (false, false) => BOTTOM_LEFT,
+            (true, false) => BOTTOM_RIGHT,
+            (false, true) => TOP_LEFT,
+            (true, true) => TOP_RIGHT,
+        };
         let combine = |dy: usize, dx: usize, squares: &dyn Fn(usize, usize) -> Corners| {
             let mut sum = 0.0;
             for (q, outer_y) in sides(dy) {
                 for (p, outer_x) in sides(dx) {
-                    // Inner is toward the centre: left and below.
-                    let corner = match (outer_x, outer_y) {
-                        (false, false) => BOTTOM_LEFT,
-                        (true, false) => BOTTOM_RIGHT,
-                        (false, true) => TOP_LEFT,
-                        (true, true) => TOP_RIGHT,
-                    };
-                    sum += squares(q, p)[corner];
+                    sum += squares(q, p)[corner(outer_x, outer_y)];
                 }
             }
             sum
@@ -193,7 +193,22 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
                 (&mut quarter, reach_x + 1),
                 &|q| q as f64 + 0.5,
                 0.5,
-                &combine,
+                &|dy, columns, rows, row| {
+                    // `combine`'s sums, a row at a time.
+                    let near = [
+                        (rows.get(dy), false),
+                        (rows.get(dy.saturating_sub(1)), dy > 0),
+                    ];
+                    for (dx, value) in columns.clone().zip(&mut row[columns]) {
+                        let mut sum = 0.0;
+                        for (squares, outer_y) in near {
+                            for (p, outer_x) in sides(dx) {
+                                sum += squares[p][corner(outer_x, outer_y)];
+                            }
+                        }
+                        *value = sum as f32;
+                    }
+                },
                 control,
             )?;
             quarter
@@ -207,11 +222,15 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
             (&mut plane, width),
             &|k| cy as f64 - k as f64 + 0.5,
             -(cx as f64) - 0.5,
-            &|j, i, squares| {
-                squares(j, i)[BOTTOM_RIGHT]
-                    + squares(j, i + 1)[BOTTOM_LEFT]
-                    + squares(j + 1, i)[TOP_RIGHT]
-                    + squares(j + 1, i + 1)[TOP_LEFT]
+            &|r, columns, rows, row| {
+                let ends = columns.start..columns.end + 1;
+                let (above, below) = (&rows.get(r)[ends.clone()], &rows.get(r + 1)[ends]);
+                let pairs = above.windows(2).zip(below.windows(2));
+                for (value, (a, b)) in row[columns].iter_mut().zip(pairs) {
+                    *value =
+                        (a[0][BOTTOM_RIGHT] + a[1][BOTTOM_LEFT] + b[0][TOP_RIGHT] + b[1][TOP_LEFT])
+                            as f32;
+                }
             },
             control,
         )?;
@@ -235,11 +254,26 @@ fn mirror(quarter: &[f32], span: usize, plane: &mut [f32], width: usize, centre:
         });
 }
 
-/// A pixel's value from the squares about it: `combine`(row, column,
-/// squares) with squares(k, i) the corners of square i of square row k.
-type Combine<'a> = dyn Fn(usize, usize, &dyn Fn(usize, usize) -> Corners) -> f64 + Sync + 'a;
+/// A band's square rows, from square row `first` on.
+#[derive(Clone, Copy)]
+struct SquareRows<'a> {
+    squares: &'a [Corners],
+    first: usize,
+    per_row: usize,
+}
 
-/// Fills `out` (rows of `width` pixels) band by band: first the square
+impl<'a> SquareRows<'a> {
+    /// The corners of square row k's squares.
+    fn get(&self, k: usize) -> &'a [Corners] {
+        let at = (k - self.first) * self.per_row;
+        &self.squares[at..at + self.per_row]
+    }
+}
+
+/// Fills `out` (rows of `width` pixels) band by band, pixel row r's
+/// `columns` by `combine`(r, columns, rows, row) from the squares about
+/// them (a row at a time, so that the squares are read in line, not
+/// through a call per pixel): first the square
 /// rows the band needs (from the one before its first pixel row to the one
 /// after its last), square row k at height `y_of`(k) and square i at
 /// `x0` + i for i in 0..=width, evaluated in parallel pieces and left
@@ -250,7 +284,7 @@ fn rasterise_bands(
     (out, width): (&mut [f32], usize),
     y_of: &(dyn Fn(usize) -> f64 + Sync),
     x0: f64,
-    combine: &Combine<'_>,
+    combine: &(impl Fn(usize, std::ops::Range<usize>, SquareRows<'_>, &mut [f32]) + Sync),
     control: &mut Control,
 ) -> Result<()> {
     let bands = (out.len() / width.max(1)).div_ceil(BAND).max(1);
@@ -277,8 +311,12 @@ fn rasterise_bands(
     };
     // One band's squares at a time, in one buffer: a band of a 4K kernel
     // holds 8 MB of them, and fresh memory for each band cost more than
-    // the squares of a small spread. Each band clears what it lit.
+    // the squares of a small spread. A row of squares writes every square
+    // of its range, dark ones too, and clears what the band before left
+    // outside it: outside its range a row holds zeros, and a spread that
+    // lights whole rows clears nothing.
     let mut held = vec![[0.0; 4]; (BAND + 2) * per_row];
+    let mut written = vec![0..0; BAND + 2];
     for (b, band) in out.chunks_mut(BAND * width.max(1)).enumerate() {
         control.check()?;
         let first = b * BAND;
@@ -288,11 +326,20 @@ fn rasterise_bands(
         // dark and their pixels stay 0.
         let ranges: Vec<std::ops::Range<usize>> = squares
             .par_chunks_mut(per_row)
+            .zip(&mut written)
             .enumerate()
-            .map(|(n, row)| {
+            .map(|(n, (row, written))| {
                 let y = y_of(k0 + n);
                 let spans = shape.lit_spans(y);
                 let range = lit_range(&spans);
+                let before = written.start..range.start.min(written.end);
+                let after = range.end.max(written.start)..written.end;
+                for stale in [before, after] {
+                    if !stale.is_empty() {
+                        row[stale].fill([0.0; 4]);
+                    }
+                }
+                *written = range.clone();
                 row[range.clone()]
                     .par_chunks_mut(PIECE)
                     .enumerate()
@@ -309,6 +356,7 @@ fn rasterise_bands(
                         let mut m = 0;
                         while m < piece.len() {
                             if !lit(m) {
+                                piece[m] = [0.0; 4];
                                 m += 1;
                                 continue;
                             }
@@ -319,14 +367,25 @@ fn rasterise_bands(
                             let x = start + run as f64;
                             shape.sample_row(x, y, &mut samples[run..m]);
                             for (i, c) in (run..m).zip(&mut piece[run..m]) {
-                                *c = corners(shape, start + i as f64, y, samples[i]);
+                                let x = start + i as f64;
+                                // `corners`' answers where they are one value.
+                                let centre = x.abs() <= 0.5 && y.abs() <= 0.5;
+                                *c = match samples[i] {
+                                    Sample::Dark if !centre => [0.0; 4],
+                                    Sample::One(f) if !centre => [0.25 * f; 4],
+                                    sample => corners(shape, x, y, sample),
+                                };
                             }
                         }
                     });
                 range
             })
             .collect();
-        let lookup = |k: usize, i: usize| squares[(k - k0) * per_row + i];
+        let rows = SquareRows {
+            squares,
+            first: k0,
+            per_row,
+        };
         band.par_chunks_mut(width).enumerate().for_each(|(n, row)| {
             // A pixel meets the squares of the rows beside its own and
             // the columns beside its own.
@@ -340,15 +399,8 @@ fn rasterise_bands(
             if lo >= hi {
                 return;
             }
-            let columns = lo.saturating_sub(1)..(hi + 1).min(width);
-            for i in columns {
-                row[i] = combine(r, i, &lookup) as f32;
-            }
+            combine(r, lo.saturating_sub(1)..(hi + 1).min(width), rows, row);
         });
-        squares
-            .par_chunks_mut(per_row)
-            .zip(&ranges)
-            .for_each(|(row, range)| row[range.clone()].fill([0.0; 4]));
         control.report((b + 1) as f64 / bands as f64);
     }
     Ok(())

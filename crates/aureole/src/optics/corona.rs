@@ -289,6 +289,9 @@ impl Corona {
             dark_radius,
             lobes_never_dark: false,
             faded_radius: (libm::log(brightest) - libm::log(FADED)) / slowest_fade,
+            fades: side_by_side(&rays, |r| r.fade_per_px),
+            widths: side_by_side(&rays, |r| r.width),
+            intensities: side_by_side(&rays, |r| r.intensity),
             rays,
         };
         // The dark angle is least at infinite radius.
@@ -296,6 +299,11 @@ impl Corona {
             && shape.dark_angle(shape.unit_spread_exponent, f64::INFINITY) >= 0.5 * TAU / shape.k;
         Ok(shape)
     }
+}
+
+/// One quantity of every ray, ray 0 again at the end.
+fn side_by_side(rays: &[Ray], quantity: impl Fn(&Ray) -> f64) -> Vec<f64> {
+    rays.iter().chain(rays.first()).map(quantity).collect()
 }
 
 /// A standard normal deviate by Box–Muller, with libm so that every
@@ -342,7 +350,57 @@ struct CoronaShape {
     /// Where the brightest ray falls below [`FADED`] of its start.
     faded_radius: f64,
     rays: Vec<Ray>,
+    /// The rays' σ / l_m, w_m and I_m side by side, ray 0 again at the end
+    /// (the nearest ray to a direction just short of a full turn), for the
+    /// vector passes of [`CoronaShape::chunk`].
+    fades: Vec<f64>,
+    widths: Vec<f64>,
+    intensities: Vec<f64>,
 }
+
+/// What [`CoronaShape::chunk`] finds for a chunk of points.
+struct Chunk {
+    /// Distance from the centre, px.
+    r: [f64; CHUNK_POINTS],
+    /// Angle from the nearest ray's axis, in (−π/k, π/k].
+    offset: [f64; CHUNK_POINTS],
+    /// The nearest ray, an index of `fades`, `widths` and `intensities`.
+    ray: [usize; CHUNK_POINTS],
+    /// n of that ray there, and [`CoronaShape::spacing`] for it.
+    n: [f64; CHUNK_POINTS],
+    spacing: ([f64; CHUNK_POINTS], [f64; CHUNK_POINTS]),
+    /// Whether `sample`'s dark test holds: the lobes leave the whole pixel
+    /// at exactly 0.
+    dark: [bool; CHUNK_POINTS],
+    /// f there.
+    f: [f64; CHUNK_POINTS],
+}
+
+impl Chunk {
+    fn new() -> Chunk {
+        Chunk {
+            r: [0.0; CHUNK_POINTS],
+            offset: [0.0; CHUNK_POINTS],
+            ray: [0; CHUNK_POINTS],
+            n: [0.0; CHUNK_POINTS],
+            spacing: ([0.0; CHUNK_POINTS], [0.0; CHUNK_POINTS]),
+            dark: [false; CHUNK_POINTS],
+            f: [0.0; CHUNK_POINTS],
+        }
+    }
+}
+
+/// 0, 1, 2, …: a row's offsets from its chunk's first point, read rather
+/// than converted from the index, so that the loops take vectors.
+const STEPS: [f64; CHUNK_POINTS] = {
+    let mut steps = [0.0; CHUNK_POINTS];
+    let mut i = 0;
+    while i < CHUNK_POINTS {
+        steps[i] = i as f64;
+        i += 1;
+    }
+    steps
+};
 
 impl CoronaShape {
     /// The angle from a ray's axis beyond which a pixel centred at distance
@@ -392,21 +450,12 @@ impl CoronaShape {
     fn exponent(&self, r: f64, width: f64) -> f64 {
         // The paper's cases s = 0 and s = 1 without a pow: millions of
         // samples near the rays need this.
-        let omega = if self.spread == 0.0 {
-            width / r
-        } else if self.spread == 1.0 {
-            return self.unit_spread_exponent;
+        if self.spread == 1.0 {
+            self.unit_spread_exponent
+        } else if self.spread == 0.0 {
+            exponent_of(width / r)
         } else {
-            math::exp(math::ln(r / width) * (self.spread - 1.0))
-        };
-        if omega >= FRAC_PI_2 || omega.is_nan() {
-            return 0.0;
-        }
-        let g = math::neg_ln_cos(omega);
-        if g <= 0.0 {
-            f64::INFINITY
-        } else {
-            1.0 / g
+            exponent_of(math::exp(math::ln(r / width) * (self.spread - 1.0)))
         }
     }
 
@@ -503,76 +552,186 @@ impl SpreadShape for CoronaShape {
         one[0]
     }
 
-    /// f in three passes over the points, as [`CoronaShape::sample_row`]'s
-    /// (distance and direction; ray and terms; the lobe and the fade).
+    /// f in passes over the points, as [`CoronaShape::sample_row`]'s.
     fn density_at(&self, xs: &[f64], ys: &[f64], out: &mut [f64]) {
+        let mut chunk = Chunk::new();
         shape::in_chunks(xs, ys, out, |xs, ys, out| {
-            let mut r = [0.0; CHUNK_POINTS];
-            let mut phi = [0.0; CHUNK_POINTS];
-            for (((r, phi), &x), &y) in r.iter_mut().zip(&mut phi).zip(xs).zip(ys) {
-                *r = (x * x + y * y).sqrt();
-                *phi = math::atan2(y, x);
-            }
-            let mut terms = [[0.0; 4]; CHUNK_POINTS];
-            for ((terms, &r), &phi) in terms.iter_mut().zip(&r).zip(&phi).take(xs.len()) {
-                let (ray, offset) = self.nearest_ray(phi);
-                *terms = self.terms(ray, r, offset);
-            }
-            for (f, &terms) in out.iter_mut().zip(&terms) {
-                *f = Self::light(terms);
-            }
+            self.chunk(xs, ys, &mut chunk, false);
+            out.copy_from_slice(&chunk.f[..out.len()]);
         });
     }
 
-    /// The test, the grid and f with one direction and one nearest ray per
-    /// point, in three passes over the row (distance and direction; ray,
-    /// test and grid; the lobe and the fade), each of independent points.
+    /// The test, the grid and f from one pass over each chunk of the row
+    /// ([`CoronaShape::chunk`]), then a pixel's answer from them.
     fn sample_row(&self, x0: f64, y: f64, out: &mut [Sample]) {
-        const CHUNK: usize = 64;
-        for (c, chunk) in out.chunks_mut(CHUNK).enumerate() {
-            let first = x0 + (c * CHUNK) as f64;
-            let mut r = [0.0; CHUNK];
-            let mut phi = [0.0; CHUNK];
-            for (i, (r, phi)) in r.iter_mut().zip(&mut phi).take(chunk.len()).enumerate() {
-                let x = first + i as f64;
-                *r = (x * x + y * y).sqrt();
-                *phi = math::atan2(y, x);
+        let mut chunk = Chunk::new();
+        let ys = [y; CHUNK_POINTS];
+        for (c, samples) in out.chunks_mut(CHUNK_POINTS).enumerate() {
+            let first = x0 + (c * CHUNK_POINTS) as f64;
+            let mut xs = [0.0; CHUNK_POINTS];
+            for (x, step) in xs.iter_mut().zip(&STEPS) {
+                *x = first + step;
             }
-            // Per point sampled once, the terms of its f.
-            let mut once = [[0.0; 4]; CHUNK];
-            for ((sample, once), (&r, &phi)) in
-                chunk.iter_mut().zip(&mut once).zip(r.iter().zip(&phi))
-            {
-                *sample = Sample::Dark;
-                if r > self.dark_radius {
-                    continue;
-                }
-                if r < 2.0 {
+            let n = samples.len();
+            self.chunk(&xs[..n], &ys[..n], &mut chunk, !self.lobes_never_dark);
+            for (i, sample) in samples.iter_mut().enumerate() {
+                let r = chunk.r[i];
+                *sample = if r > self.dark_radius {
+                    Sample::Dark
+                } else if r < 2.0 {
                     // Every ray meets here, within a pixel or two.
-                    *sample = Sample::Grid(Supersampling::square(8));
-                    continue;
-                }
-                let (ray, offset) = self.nearest_ray(phi);
-                if !self.lobes_never_dark {
-                    let n = self.least_exponent(r - FRAC_1_SQRT_2, r + FRAC_1_SQRT_2);
-                    if offset.abs() > self.dark_angle(n, r) {
-                        continue;
+                    Sample::Grid(Supersampling::square(8))
+                } else if chunk.dark[i] {
+                    Sample::Dark
+                } else {
+                    // Ray k is ray 0.
+                    let ray = self.rays.get(chunk.ray[i]).unwrap_or(&self.rays[0]);
+                    let grid = self.grid_with(
+                        r,
+                        ray,
+                        chunk.offset[i],
+                        (chunk.spacing.0[i], chunk.spacing.1[i]),
+                    );
+                    if grid.x > 1 || grid.y > 1 {
+                        Sample::Grid(grid)
+                    } else {
+                        Sample::One(chunk.f[i])
                     }
-                }
-                let grid = self.grid_at(r, ray, offset);
-                if grid.x > 1 || grid.y > 1 {
-                    *sample = Sample::Grid(grid);
-                    continue;
-                }
-                *once = self.terms(ray, r, offset);
-                *sample = Sample::One(0.0);
-            }
-            for (sample, &terms) in chunk.iter_mut().zip(&once) {
-                if let Sample::One(f) = sample {
-                    *f = Self::light(terms);
                 }
             }
         }
+    }
+}
+
+impl CoronaShape {
+    /// Distance, nearest ray, n, the dark test (where `dark_test`) and f
+    /// for the points (`xs`[i], `ys`[i]), at most [`CHUNK_POINTS`] of
+    /// them: each a pass over the points without branches, in the CPU's
+    /// widest vectors, with the same bits as [`SpreadShape::density`]'s
+    /// and [`CoronaShape::nearest_ray`]'s scalar steps.
+    fn chunk(&self, xs: &[f64], ys: &[f64], chunk: &mut Chunk, dark_test: bool) {
+        crate::convolve::widest(
+            #[inline(always)]
+            || self.chunk_passes(xs, ys, chunk, dark_test),
+        );
+    }
+
+    #[inline(always)]
+    fn chunk_passes(&self, xs: &[f64], ys: &[f64], chunk: &mut Chunk, dark_test: bool) {
+        let len = xs.len().min(CHUNK_POINTS);
+        let (xs, ys) = (&xs[..len], &ys[..len]);
+        let mut phi = [0.0; CHUNK_POINTS];
+        for (((r, phi), &x), &y) in chunk.r.iter_mut().zip(&mut phi).zip(xs).zip(ys) {
+            *r = (x * x + y * y).sqrt();
+            *phi = math::atan2_plain(y, x);
+        }
+        // The axes and other points the plain arctangent leaves.
+        for ((phi, &x), &y) in phi.iter_mut().zip(xs).zip(ys) {
+            if !math::atan2_is_plain(y, x) {
+                *phi = math::atan2(y, x);
+            }
+        }
+        let period = TAU / self.k;
+        // Every index below `last` is in bounds, and the loops know it.
+        let Some(last) = self.fades.len().checked_sub(1) else {
+            return;
+        };
+        let (fades, widths, intensities) = (
+            &self.fades[..=last],
+            &self.widths[..=last],
+            &self.intensities[..=last],
+        );
+        // In arrays of this frame's own, which the gathers from the rays'
+        // quantities cannot alias: that lets the loop take vectors.
+        let mut offsets = [0.0; CHUNK_POINTS];
+        let mut rays = [0usize; CHUNK_POINTS];
+        let (mut fade, mut width, mut intensity) = (
+            [0.0; CHUNK_POINTS],
+            [0.0; CHUNK_POINTS],
+            [0.0; CHUNK_POINTS],
+        );
+        for (i, &phi) in phi[..len].iter().enumerate() {
+            // As `nearest_ray`: φ − φ₀ in [0, 2π], then the nearest axis.
+            let mut u = phi - self.rotation;
+            u = if u < 0.0 { u + TAU } else { u };
+            u = if u < 0.0 { u + TAU } else { u };
+            let (m, whole) = math::nearest_and_whole(u / period);
+            let ray = (whole as usize).min(last);
+            offsets[i] = u - m * period;
+            rays[i] = ray;
+            fade[i] = fades[ray];
+            width[i] = widths[ray];
+            intensity[i] = intensities[ray];
+        }
+        chunk.offset = offsets;
+        chunk.ray = rays;
+        let r = &chunk.r[..len];
+        self.exponents(r, &width[..len], &mut chunk.n[..len]);
+        let (ts, acrosses) = (&mut chunk.spacing.0, &mut chunk.spacing.1);
+        for (((t, across), &r), &n) in ts.iter_mut().zip(acrosses).zip(r).zip(&chunk.n) {
+            (*t, *across) = self.spacing(r, n);
+        }
+        if dark_test {
+            // `least_exponent` over the pixel, then `dark_angle`.
+            let (mut reach, mut least) = ([0.0; CHUNK_POINTS], [0.0; CHUNK_POINTS]);
+            let (reach, least) = (&mut reach[..len], &mut least[..len]);
+            let width = if self.spread > 1.0 {
+                for (reach, &r) in reach.iter_mut().zip(r) {
+                    *reach = r + FRAC_1_SQRT_2;
+                }
+                self.narrowest
+            } else {
+                for (reach, &r) in reach.iter_mut().zip(r) {
+                    *reach = (r - FRAC_1_SQRT_2).max(0.0);
+                }
+                self.widest
+            };
+            self.exponents(reach, &[width; CHUNK_POINTS][..len], least);
+            let lanes = chunk.dark.iter_mut().zip(least.iter()).zip(r);
+            for (((dark, &n), &r), &offset) in lanes.zip(&chunk.offset) {
+                *dark = offset.abs() > self.dark_angle(n, r);
+            }
+        } else {
+            chunk.dark = [false; CHUNK_POINTS];
+        }
+        let terms = chunk.f[..len].iter_mut().zip(r).zip(&chunk.offset);
+        let rays = fade.iter().zip(&intensity).zip(&chunk.n);
+        for (((f, &r), &offset), ((&fade, &intensity), &n)) in terms.zip(rays) {
+            // As `terms` and `light`.
+            let fade = fade * r;
+            let lobe = n * math::neg_ln_cos(0.5 * self.k * offset);
+            let lobe = if n == 0.0 { 0.0 } else { lobe };
+            *f = intensity * math::exp(-fade - lobe);
+        }
+    }
+
+    /// [`CoronaShape::exponent`] at each r for each width, into `out`:
+    /// the spread's case chosen once, outside the loop.
+    #[inline(always)]
+    fn exponents(&self, r: &[f64], width: &[f64], out: &mut [f64]) {
+        if self.spread == 1.0 {
+            out.fill(self.unit_spread_exponent);
+        } else if self.spread == 0.0 {
+            for ((n, &r), &width) in out.iter_mut().zip(r).zip(width) {
+                *n = exponent_of(width / r);
+            }
+        } else {
+            for ((n, &r), &width) in out.iter_mut().zip(r).zip(width) {
+                *n = exponent_of(math::exp(math::ln(r / width) * (self.spread - 1.0)));
+            }
+        }
+    }
+}
+
+/// n = −1/ln cos ω; 0 where ω ≥ π/2 (or NaN), ∞ where cos ω rounds to 1.
+#[inline(always)]
+fn exponent_of(omega: f64) -> f64 {
+    let g = math::neg_ln_cos(omega);
+    let n = if g <= 0.0 { f64::INFINITY } else { 1.0 / g };
+    if omega >= FRAC_PI_2 || omega.is_nan() {
+        0.0
+    } else {
+        n
     }
 }
 
@@ -608,6 +767,27 @@ impl CoronaShape {
     /// The grid of the pixel at distance r ≥ 2 from the centre and `offset`
     /// from the axis of its nearest ray `ray`.
     fn grid_at(&self, r: f64, ray: &Ray, offset: f64) -> Supersampling {
+        self.grid_with(r, ray, offset, self.spacing(r, self.exponent(r, ray.width)))
+    }
+
+    /// Across a ray, |cos(kδ/2)|^n ≈ exp(−n k² δ²/8): a Gaussian of
+    /// standard deviation t = 2r / (k √n) pixels across the ray (n at
+    /// least 1). A spacing of t/6.5 keeps the midpoint rule within 10⁻³ of
+    /// the pixel's mean (and sums the profile far better): t, and the
+    /// samples across a pixel that this asks for, 1 to 64.
+    #[inline(always)]
+    fn spacing(&self, r: f64, n: f64) -> (f64, f64) {
+        let t = 2.0 * r / (self.k * n.max(1.0).sqrt());
+        let across = if t.is_finite() && t > 0.0 {
+            (6.5 / t).ceil().clamp(1.0, 64.0)
+        } else {
+            64.0
+        };
+        (t, across)
+    }
+
+    /// [`CoronaShape::grid_at`] given [`CoronaShape::spacing`] there.
+    fn grid_with(&self, r: f64, ray: &Ray, offset: f64, (t, across): (f64, f64)) -> Supersampling {
         // The same test as exp(−σr/l)·brightest < FADED, its exp taken
         // only within a hair of the radius where it turns.
         let faded = if (r - self.faded_radius).abs() > 1e-6 * self.faded_radius {
@@ -619,18 +799,10 @@ impl CoronaShape {
             return Supersampling::square(1);
         }
         let along = ray.along;
-        // Across it, |cos(kδ/2)|^n ≈ exp(−n k² δ²/8): a Gaussian of standard
-        // deviation t = 2r / (k √n) pixels across the ray. A spacing of t/6.5
-        // keeps the midpoint rule within 10⁻³ of the pixel's mean (and sums
-        // the profile far better).
-        let n = self.exponent(r, ray.width).max(1.0);
-        let t = 2.0 * r / (self.k * n.sqrt());
         let across = if self.farther_than(r, offset, 0.75 + 6.0 * t) {
             1
-        } else if t.is_finite() && t > 0.0 {
-            ((6.5 / t).ceil() as u32).clamp(1, 64)
         } else {
-            64
+            across as u32
         };
         if across <= along {
             return Supersampling::square(along);
@@ -793,7 +965,11 @@ mod tests {
                 ..corona()
             };
             let shape = c.shape(None, 9, 0).unwrap();
-            let rows = (-130..130).map(|j| (-200.5, f64::from(j) + 0.5, 401));
+            // Rows between pixel centres, and along and across the axes,
+            // where the arctangent is libm's.
+            let rows = (-130..130)
+                .map(|j| (-200.5, f64::from(j) + 0.5, 401))
+                .chain([(-200.0, 0.0, 401), (0.0, 17.0, 3), (0.0, -3.0, 1)]);
             let [ones, grids, dark] =
                 assert_rows_agree(&shape, rows, |x, y| assert_dark(&shape, x, y, spread));
             assert!(
