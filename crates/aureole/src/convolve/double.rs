@@ -125,6 +125,13 @@ impl Convolver {
         // a strip of columns reads a cache line or two of every row
         // spectrum, where a column alone would read one value of each.
         grow_zeroed(columns, half * py);
+        // An image's rows fill each column's first `rows` values: only the
+        // padding below them is cleared (a kernel's rows wrap around).
+        let rows = spectra.len();
+        let leading = spectra
+            .iter()
+            .enumerate()
+            .all(|(i, (index, _))| *index == i);
         columns
             .par_chunks_mut(STRIP * py)
             .enumerate()
@@ -132,7 +139,13 @@ impl Convolver {
                 if cancel.is_cancelled() {
                     return;
                 }
-                strip.fill(Complex::new(0.0, 0.0));
+                if leading {
+                    for column in strip.chunks_mut(py) {
+                        column[rows..].fill(Complex::new(0.0, 0.0));
+                    }
+                } else {
+                    strip.fill(Complex::new(0.0, 0.0));
+                }
                 let first = s * STRIP;
                 for (index, spectrum) in &spectra {
                     for (c, &v) in spectrum[first..first + strip.len() / py].iter().enumerate() {
@@ -153,8 +166,9 @@ impl Convolver {
         let rows = (0..h)
             .into_par_iter()
             .map(|y| {
-                let mut row = vec![0.0; px];
-                row[..w].copy_from_slice(&plane[y * w..(y + 1) * w]);
+                let mut row = Vec::with_capacity(px);
+                row.extend_from_slice(&plane[y * w..(y + 1) * w]);
+                row.resize(px, 0.0);
                 (y, row)
             })
             .collect();
@@ -180,33 +194,41 @@ impl Convolver {
         let mut out = zeros(w * h);
         // A block of rows at a time: each column gives a run of values
         // for all of them.
-        out.par_chunks_mut(w * STRIP)
-            .enumerate()
-            .for_each(|(b, rows)| {
+        // Each task keeps its block's spectra and real row from block to
+        // block: every value of them is written before it is read.
+        let buffers = || {
+            (
+                vec![vec![Complex::new(0.0, 0.0); half]; STRIP],
+                self.transforms.row_ifft.make_output_vec(),
+            )
+        };
+        out.par_chunks_mut(w * STRIP).enumerate().for_each_init(
+            buffers,
+            |(spectra, real), (b, rows)| {
                 if cancel.is_cancelled() {
                     return;
                 }
                 let first = b * STRIP;
                 let count = rows.len() / w;
-                let mut spectra = vec![vec![Complex::new(0.0, 0.0); half]; count];
+                let spectra = &mut spectra[..count];
                 for u in 0..half {
                     let run = &columns[u * py + first..u * py + first + count];
                     for (spectrum, &v) in spectra.iter_mut().zip(run) {
                         spectrum[u] = v;
                     }
                 }
-                let mut real = self.transforms.row_ifft.make_output_vec();
-                for (row, spectrum) in rows.chunks_mut(w).zip(&mut spectra) {
+                for (row, spectrum) in rows.chunks_mut(w).zip(spectra.iter_mut()) {
                     // The inverse real transform wants exactly real end
                     // bins; after the column passes they hold round-off.
                     spectrum[0].im = 0.0;
                     if px % 2 == 0 {
                         spectrum[half - 1].im = 0.0;
                     }
-                    let _ = self.transforms.row_ifft.process(spectrum, &mut real);
+                    let _ = self.transforms.row_ifft.process(spectrum, real);
                     row.copy_from_slice(&real[..w]);
                 }
-            });
+            },
+        );
         out
     }
 
