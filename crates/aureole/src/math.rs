@@ -22,20 +22,14 @@ const LN2_LO: f64 = 1.9082149292705877e-10;
 const HALF_PI_HI: f64 = FRAC_PI_2;
 const HALF_PI_LO: f64 = 6.123_233_995_736_766e-17;
 
-/// The nearest whole number to `v` (|v| < 2⁵¹), ties to even, as an f64.
-#[inline]
-pub fn nearest(v: f64) -> f64 {
-    (v + ROUNDER) - ROUNDER
-}
-
 /// 2^k for −1022 ≤ k ≤ 1023.
 #[inline(always)]
 fn two_to(k: i64) -> f64 {
     f64::from_bits((k.wrapping_add(1023) as u64) << 52)
 }
 
-/// The nearest whole number to `v` (|v| < 2³¹), as an f64 and as an
-/// integer: `v` + [`ROUNDER`] holds it in the low bits of its
+/// The nearest whole number to `v` (|v| < 2⁵¹), ties to even, as an f64
+/// and as an integer: `v` + [`ROUNDER`] holds it in the low bits of its
 /// representation, which vector units read without an f64-to-integer
 /// conversion (AVX2 has none).
 #[inline(always)]
@@ -568,9 +562,14 @@ mod tests {
 
     #[test]
     fn nearest_rounds_ties_to_even() {
-        assert_eq!(nearest(2.5), 2.0);
-        assert_eq!(nearest(3.5), 4.0);
-        assert_eq!(nearest(-1.4), -1.0);
-        assert_eq!(nearest(1e15 + 0.75), 1e15 + 1.0);
+        for (v, whole) in [
+            (2.5, 2),
+            (3.5, 4),
+            (-1.4, -1),
+            (-2.5, -2),
+            (1e15 + 0.75, 1e15 as i64 + 1),
+        ] {
+            assert_eq!(nearest_and_whole(v), (whole as f64, whole), "{v}");
+        }
     }
 }

@@ -158,18 +158,18 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
         // or for d = 0 the inner corner of the square at ½ twice.
         let (reach_x, reach_y) = (cx.max(width - 1 - cx), cy.max(height - 1 - cy));
         let sides = |d: usize| [(d, false), (d.saturating_sub(1), d > 0)];
-        // Inner is toward the centre: left and below.
-        let corner = |outer_x: bool, outer_y: bool| match (outer_x, outer_y) {
-            (false, false) => BOTTOM_LEFT,
-            (true, false) => BOTTOM_RIGHT,
-            (false, true) => TOP_LEFT,
-            (true, true) => TOP_RIGHT,
-        };
         let combine = |dy: usize, dx: usize, squares: &dyn Fn(usize, usize) -> Corners| {
             let mut sum = 0.0;
             for (q, outer_y) in sides(dy) {
                 for (p, outer_x) in sides(dx) {
-                    sum += squares(q, p)[corner(outer_x, outer_y)];
+                    // Inner is toward the centre: left and below.
+                    let corner = match (outer_x, outer_y) {
+                        (false, false) => BOTTOM_LEFT,
+                        (true, false) => BOTTOM_RIGHT,
+                        (false, true) => TOP_LEFT,
+                        (true, true) => TOP_RIGHT,
+                    };
+                    sum += squares(q, p)[corner];
                 }
             }
             sum
@@ -194,19 +194,10 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
                 &|q| q as f64 + 0.5,
                 0.5,
                 &|dy, columns, rows, row| {
-                    // `combine`'s sums, a row at a time.
-                    let near = [
-                        (rows.get(dy), false),
-                        (rows.get(dy.saturating_sub(1)), dy > 0),
-                    ];
+                    // Only shapes that are mirror symmetric but not radial
+                    // (none in the crate yet) come here: a pixel at a time.
                     for (dx, value) in columns.clone().zip(&mut row[columns]) {
-                        let mut sum = 0.0;
-                        for (squares, outer_y) in near {
-                            for (p, outer_x) in sides(dx) {
-                                sum += squares[p][corner(outer_x, outer_y)];
-                            }
-                        }
-                        *value = sum as f32;
+                        *value = combine(dy, dx, &|q, p| rows.get(q)[p]) as f32;
                     }
                 },
                 control,
@@ -367,14 +358,7 @@ fn rasterise_bands(
                             let x = start + run as f64;
                             shape.sample_row(x, y, &mut samples[run..m]);
                             for (i, c) in (run..m).zip(&mut piece[run..m]) {
-                                let x = start + i as f64;
-                                // `corners`' answers where they are one value.
-                                let centre = x.abs() <= 0.5 && y.abs() <= 0.5;
-                                *c = match samples[i] {
-                                    Sample::Dark if !centre => [0.0; 4],
-                                    Sample::One(f) if !centre => [0.25 * f; 4],
-                                    sample => corners(shape, x, y, sample),
-                                };
+                                *c = corners(shape, start + i as f64, y, samples[i]);
                             }
                         }
                     });
@@ -411,6 +395,9 @@ fn rasterise_bands(
 /// midpoint rule on the shape's grid, at least 16 × 16 where the centre is
 /// a corner of the square (its midpoints never fall on r = 0). `sample` is
 /// the shape's [`SpreadShape::sample`] there.
+/// The answers of one value in line (most squares of a kernel), a grid's
+/// sums out of line.
+#[inline(always)]
 fn corners(shape: &dyn SpreadShape, x: f64, y: f64, sample: Sample) -> Corners {
     let grid = if x.abs() <= 0.5 && y.abs() <= 0.5 {
         let grid = shape.grid(x, y);
@@ -427,6 +414,12 @@ fn corners(shape: &dyn SpreadShape, x: f64, y: f64, sample: Sample) -> Corners {
             Sample::Grid(grid) => grid,
         }
     };
+    grid_corners(shape, x, y, grid)
+}
+
+/// [`corners`] by the midpoint rule on `grid`.
+#[inline(never)]
+fn grid_corners(shape: &dyn SpreadShape, x: f64, y: f64, grid: Supersampling) -> Corners {
     let (mx, my) = (grid.x.max(1), grid.y.max(1));
     let (step_x, step_y) = (1.0 / f64::from(mx), 1.0 / f64::from(my));
     let mut sums = [0.0; 4];

@@ -428,25 +428,34 @@ impl CoronaShape {
     /// The nearest ray to direction φ (relative to φ₀) and the angle from its
     /// axis, in (−π/k, π/k].
     fn nearest_ray(&self, phi: f64) -> (&Ray, f64) {
+        let (index, offset) = self.axis(phi, self.rays.len());
+        (self.ray(index), offset)
+    }
+
+    /// The nearest ray's index to direction φ (relative to φ₀), at most
+    /// `last`, where ray k stands for ray 0, and the angle from its axis:
+    /// without branches, so that [`CoronaShape::chunk`]'s pass over the
+    /// points takes vectors.
+    #[inline(always)]
+    fn axis(&self, phi: f64, last: usize) -> (usize, f64) {
         let period = TAU / self.k;
         // φ ∈ [−π, π] and φ₀ ∈ [0, 2π): two turns at most bring u into
         // [0, 2π], without fmod's division.
         let mut u = phi - self.rotation;
-        if u < 0.0 {
-            u += TAU;
-        }
-        if u < 0.0 {
-            u += TAU;
-        }
-        let m = math::nearest(u / period);
-        let offset = u - m * period;
-        // u ≤ 2π: m ≤ k, and ray k is ray 0.
-        let index = m as usize;
-        let index = if index >= self.rays.len() { 0 } else { index };
-        (&self.rays[index], offset)
+        u = if u < 0.0 { u + TAU } else { u };
+        u = if u < 0.0 { u + TAU } else { u };
+        // u ≤ 2π: m ≤ k.
+        let (m, whole) = math::nearest_and_whole(u / period);
+        ((whole as usize).min(last), u - m * period)
+    }
+
+    /// Ray `index` of [`CoronaShape::axis`]: ray k is ray 0.
+    fn ray(&self, index: usize) -> &Ray {
+        self.rays.get(index).unwrap_or(&self.rays[0])
     }
 
     /// n(r) of docs/physics.md §4 for a ray of width `width`; 0 where ω ≥ π/2.
+    #[inline(always)]
     fn exponent(&self, r: f64, width: f64) -> f64 {
         // The paper's cases s = 0 and s = 1 without a pow: millions of
         // samples near the rays need this.
@@ -584,8 +593,7 @@ impl SpreadShape for CoronaShape {
                 } else if chunk.dark[i] {
                     Sample::Dark
                 } else {
-                    // Ray k is ray 0.
-                    let ray = self.rays.get(chunk.ray[i]).unwrap_or(&self.rays[0]);
+                    let ray = self.ray(chunk.ray[i]);
                     let grid = self.grid_with(
                         r,
                         ray,
@@ -631,7 +639,6 @@ impl CoronaShape {
                 *phi = math::atan2(y, x);
             }
         }
-        let period = TAU / self.k;
         // Every index below `last` is in bounds, and the loops know it.
         let Some(last) = self.fades.len().checked_sub(1) else {
             return;
@@ -651,13 +658,8 @@ impl CoronaShape {
             [0.0; CHUNK_POINTS],
         );
         for (i, &phi) in phi[..len].iter().enumerate() {
-            // As `nearest_ray`: φ − φ₀ in [0, 2π], then the nearest axis.
-            let mut u = phi - self.rotation;
-            u = if u < 0.0 { u + TAU } else { u };
-            u = if u < 0.0 { u + TAU } else { u };
-            let (m, whole) = math::nearest_and_whole(u / period);
-            let ray = (whole as usize).min(last);
-            offsets[i] = u - m * period;
+            let (ray, offset) = self.axis(phi, last);
+            offsets[i] = offset;
             rays[i] = ray;
             fade[i] = fades[ray];
             width[i] = widths[ray];
@@ -697,28 +699,16 @@ impl CoronaShape {
         let terms = chunk.f[..len].iter_mut().zip(r).zip(&chunk.offset);
         let rays = fade.iter().zip(&intensity).zip(&chunk.n);
         for (((f, &r), &offset), ((&fade, &intensity), &n)) in terms.zip(rays) {
-            // As `terms` and `light`.
-            let fade = fade * r;
-            let lobe = n * math::neg_ln_cos(0.5 * self.k * offset);
-            let lobe = if n == 0.0 { 0.0 } else { lobe };
-            *f = intensity * math::exp(-fade - lobe);
+            // As `terms`, with n from its own pass.
+            *f = Self::light([intensity, fade * r, n, 0.5 * self.k * offset]);
         }
     }
 
-    /// [`CoronaShape::exponent`] at each r for each width, into `out`:
-    /// the spread's case chosen once, outside the loop.
+    /// [`CoronaShape::exponent`] at each r for each width, into `out`.
     #[inline(always)]
     fn exponents(&self, r: &[f64], width: &[f64], out: &mut [f64]) {
-        if self.spread == 1.0 {
-            out.fill(self.unit_spread_exponent);
-        } else if self.spread == 0.0 {
-            for ((n, &r), &width) in out.iter_mut().zip(r).zip(width) {
-                *n = exponent_of(width / r);
-            }
-        } else {
-            for ((n, &r), &width) in out.iter_mut().zip(r).zip(width) {
-                *n = exponent_of(math::exp(math::ln(r / width) * (self.spread - 1.0)));
-            }
+        for ((n, &r), &width) in out.iter_mut().zip(r).zip(width) {
+            *n = self.exponent(r, width);
         }
     }
 }
@@ -755,12 +745,12 @@ impl CoronaShape {
 
     /// I·|cos(kδ/2)|^n·e^(−σr/l) from [`CoronaShape::terms`], as one
     /// exponential; the lobe is 1 in the isotropic core (n = 0).
+    /// Both sides of the core's test computed and one chosen, so that
+    /// rows of it take vectors.
+    #[inline(always)]
     fn light([intensity, fade, n, half_angle]: [f64; 4]) -> f64 {
-        let lobe = if n == 0.0 {
-            0.0
-        } else {
-            n * math::neg_ln_cos(half_angle)
-        };
+        let lobe = n * math::neg_ln_cos(half_angle);
+        let lobe = if n == 0.0 { 0.0 } else { lobe };
         intensity * math::exp(-fade - lobe)
     }
 
