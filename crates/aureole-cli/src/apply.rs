@@ -19,7 +19,7 @@ use crate::chain::ChainArgs;
 use crate::display_args::DisplayArgs;
 use crate::input::SourceArgs;
 use crate::progress::Progress;
-use crate::values::{parse_memory, parse_non_negative, parse_size};
+use crate::values::{parse_memory, parse_size};
 use crate::{batch, input, output, Failure};
 
 #[derive(clap::Args)]
@@ -82,12 +82,17 @@ input's name) or, with --frames, a pattern such as out/shot.%04d.exr",
 
     /// Luminance threshold in cd/m²: pixels at or below it keep their light
     /// in place (overrides the config's `threshold`; 0 spreads every pixel).
-    #[arg(long, value_name = "CD_PER_M2", value_parser = parse_non_negative)]
+    #[arg(long, value_name = "CD_PER_M2", allow_negative_numbers = true)]
     threshold: Option<f64>,
 
     /// Soft knee above the threshold, relative to it: the spread fraction
     /// rises smoothly from T to T·(1 + KNEE). 0 is the paper's hard threshold.
-    #[arg(long, value_name = "KNEE", default_value = "0", value_parser = parse_non_negative)]
+    #[arg(
+        long,
+        value_name = "KNEE",
+        default_value = "0",
+        allow_negative_numbers = true
+    )]
     knee: f64,
 
     #[command(flatten)]
@@ -109,7 +114,7 @@ input's name) or, with --frames, a pattern such as out/shot.%04d.exr",
     /// glare.aperture, glare.halation, …; negative where it took light
     /// away) and the total (glare), which they sum to. Each effect after
     /// the first costs a kernel and a spread more.
-    #[arg(long, conflicts_with = "glare_only")]
+    #[arg(long)]
     layers: bool,
 
     /// How to spread the bright pixels: auto picks by a cost estimate; fft
@@ -150,20 +155,39 @@ input's name) or, with --frames, a pattern such as out/shot.%04d.exr",
     display: DisplayArgs,
 }
 
+impl Args {
+    /// How the camera is applied: the threshold given, else the one the
+    /// --kernel file records (`kernel_threshold`).
+    fn options(&self, kernel_threshold: Option<f64>) -> ApplyOptions {
+        ApplyOptions {
+            threshold: self.threshold.or(kernel_threshold),
+            knee: self.knee,
+            glare_only: self.glare_only,
+            method: match self.method {
+                MethodArg::Auto => Method::Auto,
+                MethodArg::Fft => Method::Fft,
+                MethodArg::Splat => Method::Splat,
+            },
+        }
+    }
+}
+
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
     let jobs = batch::jobs(
         &args.inputs,
         &args.output,
         args.frames.as_ref().map(|f| f.0.as_slice()),
     )?;
+    let asked = args.options(None);
     for job in &jobs {
-        output::check(&job.output, Some(&job.input))?;
-        if args.glare_only {
-            refuse_unsigned(&job.output)?;
-        }
-        if args.layers {
-            aureole_io::job::check_layers_output(&job.output)?;
-        }
+        let request = aureole_io::job::Request {
+            output: &job.output,
+            input: Some(&job.input),
+            options: &asked,
+            layers: args.layers,
+        };
+        // The probe file it makes is removed before an interruption exits.
+        crate::interrupt::exclusive(|| request.check())?;
     }
     output::tidy(jobs.iter().map(|j| j.output.as_path()), quiet);
     let limit = args.max_memory.unwrap_or_else(default_memory_limit);
@@ -183,7 +207,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             Session::with_kernel(kernel)
         }
         None => {
-            let (config, defaulted) = args.chain.compose_or_default(matches)?;
+            let (config, defaulted) = args.chain.compose_or_default(matches, quiet)?;
             if defaulted && !quiet {
                 say!(
                     "aureole: note: no --preset or --config: using the default camera, preset {}",
@@ -256,22 +280,6 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         return Err(Failure::Run(anyhow::anyhow!(
             "{failed} of {} frames failed (see above); rerun with --skip-existing to do only those",
             jobs.len()
-        )));
-    }
-    Ok(())
-}
-
-/// A glare-only result has negative samples where the camera moved light
-/// away; a linear format without negatives would drop them, and adding the
-/// file back over the original would then create light.
-fn refuse_unsigned(output: &std::path::Path) -> Result<(), Failure> {
-    let format = aureole_io::write::output_format(output)?;
-    if format.kind() == aureole_io::formats::Kind::Linear && !format.signed {
-        return Err(Failure::Usage(anyhow::anyhow!(
-            "{}: {} holds no negative values, which a --glare-only result has (light moved away from the sources); write {}",
-            output.display(),
-            format.name,
-            aureole_io::formats::signed_outputs()
         )));
     }
     Ok(())
@@ -416,16 +424,7 @@ impl Run<'_> {
                 )));
             }
         }
-        let options = ApplyOptions {
-            threshold: args.threshold.or(self.kernel_threshold),
-            knee: args.knee,
-            glare_only: args.glare_only,
-            method: match args.method {
-                MethodArg::Auto => Method::Auto,
-                MethodArg::Fft => Method::Fft,
-                MethodArg::Splat => Method::Splat,
-            },
-        };
+        let options = args.options(self.kernel_threshold);
         if options.method == Method::Splat && !self.quiet {
             let costs = session
                 .costs(&read.input.frame, &options)

@@ -33,7 +33,9 @@ impl ChainArgs {
     /// The configuration the sources make, in the order they stand in
     /// `matches` (the subcommand's): later settings replace earlier ones,
     /// effects are appended.
-    pub fn compose(&self, matches: &ArgMatches) -> Result<Config, Failure> {
+    /// A measured PSF's picture that cannot hold it whole is warned about
+    /// unless `quiet`.
+    pub fn compose(&self, matches: &ArgMatches, quiet: bool) -> Result<Config, Failure> {
         let indices = |id| -> Vec<usize> {
             matches
                 .indices_of(id)
@@ -60,14 +62,22 @@ impl ChainArgs {
             config.seed = seed;
         }
         let limits = aureole_io::limits::Limits::default_for_machine();
-        aureole_io::measured::load(&mut config.effects, limits)?;
+        for warning in aureole_io::measured::load(&mut config.effects, limits)? {
+            if !quiet {
+                say!("aureole: warning: {warning}");
+            }
+        }
         Ok(config)
     }
 
     /// As [`compose`](Self::compose), with the default camera when no source
     /// was named.
-    pub fn compose_or_default(&self, matches: &ArgMatches) -> Result<(Config, bool), Failure> {
-        let mut config = self.compose(matches)?;
+    pub fn compose_or_default(
+        &self,
+        matches: &ArgMatches,
+        quiet: bool,
+    ) -> Result<(Config, bool), Failure> {
+        let mut config = self.compose(matches, quiet)?;
         let defaulted = self.is_empty();
         if defaulted {
             config.apply(presets::find(presets::DEFAULT_PRESET)?.config()?);

@@ -41,7 +41,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     if let Some(hdr) = &args.hdr {
         output::check(hdr, None)?;
     }
-    let (config, _) = args.chain.compose_or_default(matches)?;
+    let (config, _) = args.chain.compose_or_default(matches, quiet)?;
     let start = Instant::now();
     let scene = aureole_io::demo::night_street(args.size.0, args.size.1);
     if let Some(hdr) = &args.hdr {

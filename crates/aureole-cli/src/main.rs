@@ -101,7 +101,9 @@ impl From<aureole_io::Error> for Failure {
             E::Content { .. }
             | E::OutputFormat { .. }
             | E::OverwritesInput { .. }
-            | E::Output { .. } => Failure::Usage(error.into()),
+            | E::Output { .. }
+            | E::Refused { .. }
+            | E::Options(_) => Failure::Usage(error.into()),
         }
     }
 }

@@ -125,11 +125,15 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     if let Some(picture) = &args.pupil {
         check_output(picture, extension(picture) == "png", ".png".into())?;
     }
-    let mut config = args.chain.compose(matches)?;
+    let mut config = args.chain.compose(matches, quiet)?;
     if let (Some(file), Some(pitch)) = (&args.from_image, args.pitch_um) {
         let mut measured = aureole::Measured::new(file.to_string_lossy().into_owned(), pitch);
         let limits = aureole_io::limits::Limits::default_for_machine();
-        measured.load(aureole_io::measured::read_picture(file, limits)?);
+        let (picture, warning) = aureole_io::measured::read_picture(file, limits)?;
+        measured.load(picture);
+        if let (Some(warning), false) = (warning, quiet) {
+            say!("aureole: warning: {warning}");
+        }
         let survey = measured.survey()?;
         if !quiet {
             say!("{}", describe(file, &measured, &survey));

@@ -94,16 +94,23 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
             .map_err(|e| Failure::Run(anyhow!("{e}")))?;
         let access = Access::new(bound)
             .map_err(|e| Failure::Run(anyhow!("cannot start the studio: {e}")))?;
-        let mut url = access.url(bound);
-        if let Some(first) = &first {
-            url.push_str("&image=");
-            url.push_str(&query_escaped(&first.display().to_string()));
-        }
+        let opened = |mut url: String| {
+            if let Some(first) = &first {
+                url.push_str("&image=");
+                url.push_str(&query_escaped(&first.display().to_string()));
+            }
+            url
+        };
+        let url = opened(access.url(bound));
+        let others: Vec<String> = access.urls(bound).into_iter().skip(1).map(opened).collect();
         let studio = Studio::new(roots, default_memory_limit(), args.device.into(), access);
         // The URL goes to stdout so that a script can read it.
         say!(stdout: "{url}");
         if !quiet {
             say!("aureole: studio at {url} (Ctrl-C stops it)");
+            for other in &others {
+                say!("aureole: also at {other}");
+            }
         }
         if !args.no_browser {
             open_browser(&url, quiet);

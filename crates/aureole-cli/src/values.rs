@@ -10,15 +10,6 @@ pub fn parse_positive(text: &str) -> Result<f64, String> {
         .ok_or_else(|| format!("{text:?} is not a finite number above 0"))
 }
 
-/// A finite number of at least 0.
-pub fn parse_non_negative(text: &str) -> Result<f64, String> {
-    text.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite() && *v >= 0.0)
-        .ok_or_else(|| format!("{text:?} is not a finite number of at least 0"))
-}
-
 /// A size in pixels, `W` (square) or `WxH`.
 pub fn parse_size(text: &str) -> Result<(usize, usize), String> {
     let number = |s: &str| {

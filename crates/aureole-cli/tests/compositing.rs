@@ -641,6 +641,61 @@ fn each_eye_comes_out_as_it_would_alone() {
     );
 }
 
+/// Glare layers beside every view's result, each named as OpenEXR's
+/// multi-view convention names that view's layers: in the view's own part,
+/// or with the view's name before the channel's in one part; and each
+/// eye's layers are the ones a run of that eye alone writes.
+#[test]
+fn every_view_of_a_stereo_plate_gets_its_glare_layers() {
+    let dir = tempfile::tempdir().unwrap();
+    let layers = ["-q", "--layers", "--preset", "paper-fig5-both"];
+    for (name, wanted) in [
+        (
+            "Beachball/multipart.0001.exr",
+            &[
+                (0, "glare.bloom.R"),
+                (0, "glare.R"),
+                (4, "glare.corona.G"),
+                (4, "glare.R"),
+            ][..],
+        ),
+        (
+            "MultiView/Adjuster.exr",
+            &[
+                (0, "glare.R"),
+                (0, "glare.bloom.B"),
+                (0, "glare.left.R"),
+                (0, "glare.corona.left.G"),
+                (0, "glare.right.R"),
+                (0, "glare.bloom.right.B"),
+            ][..],
+        ),
+    ] {
+        let Some(input) = sample(name) else { return };
+        let output = dir.path().join("layers.exr");
+        apply(&input, &output, &layers);
+        let written = channels(&read_all(&output));
+        for (part, channel) in wanted {
+            let found = written.iter().find(|((p, c), _)| p == part && c == channel);
+            let Some((_, values)) = found else {
+                panic!("{name}: no {channel} in part {part}");
+            };
+            assert!(
+                values.iter().any(|&v| v != 0.0),
+                "{name}: {channel} is empty"
+            );
+        }
+    }
+    let Some(input) = sample("MultiView/Adjuster.exr") else {
+        return;
+    };
+    let (all, left) = (dir.path().join("all.exr"), dir.path().join("left.exr"));
+    apply(&input, &all, &layers);
+    apply(&input, &left, &[&layers[..], &["--layer", "left"]].concat());
+    let (a, b) = (channels(&read_all(&all)), channels(&read_all(&left)));
+    assert_eq!(a, b, "every channel of every view and its glare alike");
+}
+
 #[test]
 fn info_describes_a_deep_stereo_file_that_apply_refuses() {
     let Some(input) = sample("v2/Stereo/Trunks.exr") else {
@@ -735,5 +790,7 @@ fn glare_layers_need_an_exr_and_the_beauty() {
         .arg(dir.path().join("out.exr"))
         .assert()
         .code(2)
-        .stderr(predicate::str::contains("--glare-only"));
+        .stderr(predicate::str::contains(
+            aureole_io::job::LAYERS_WITH_GLARE_ONLY,
+        ));
 }

@@ -66,6 +66,23 @@ pub enum Error {
         reason: String,
     },
 
+    /// A request whose parts cannot go together, or that asks an output
+    /// for what its format cannot hold (a glare-only result, whose samples
+    /// are negative where light was moved away, into a format without
+    /// negative values).
+    #[error("{path}: {reason}")]
+    Refused {
+        /// The output path.
+        path: PathBuf,
+        /// Why, and what to ask instead.
+        reason: String,
+    },
+
+    /// Options outside their ranges (a negative threshold, a NaN knee),
+    /// in the library's words.
+    #[error("{0}")]
+    Options(aureole::Error),
+
     /// What a file holds is refused by the library (a kernel file whose
     /// weights are negative, say).
     #[error("{path}: {error}")]

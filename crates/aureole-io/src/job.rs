@@ -6,11 +6,12 @@
 
 use std::path::Path;
 
+use aureole::image::Shape;
 use aureole::{Applied, ApplyOptions, Frame, FrameOptions, Image, Session, Stage};
 
 use crate::atomic::folder_of;
 use crate::error::{Error, Result};
-use crate::formats::Original;
+use crate::formats::{Kind, Original};
 use crate::limits::Limits;
 use crate::read::{read_image_with, Choice, Loaded};
 use crate::write::{output_format, refuse_overwrite, write_image_into, WriteOptions, Written};
@@ -55,32 +56,90 @@ pub fn check_output(output: &Path, input: Option<&Path>) -> Result<()> {
         })
 }
 
-/// Refuses, before any work, glare layers for an output whose format
-/// cannot hold them: only OpenEXR has layers.
-pub fn check_layers_output(output: &Path) -> Result<()> {
-    if crate::formats::by_extension(output).is_some_and(|format| format.layers) {
-        return Ok(());
+/// Why glare layers and a glare-only result are not asked together, for
+/// every front end that can ask both.
+pub const LAYERS_WITH_GLARE_ONLY: &str =
+    "glare layers go beside the result, and a glare-only result has none: ask for the layers or for the glare alone";
+
+/// What a front end asks of one file: the output, the input it is made
+/// from (none for an image made in memory), how the camera is applied and
+/// whether the glare layers go beside the result. [`Request::check`]
+/// refuses, before any work, everything the command line, the studio's
+/// export and Python refuse, in the same words.
+#[derive(Debug, Clone, Copy)]
+pub struct Request<'a> {
+    /// The file to write.
+    pub output: &'a Path,
+    /// The file read, which the output must not overwrite.
+    pub input: Option<&'a Path>,
+    /// The threshold, knee, glare-only and method.
+    pub options: &'a ApplyOptions,
+    /// Whether the light each effect adds goes beside the result.
+    pub layers: bool,
+}
+
+impl Request<'_> {
+    /// Refuses options outside their ranges ([`ApplyOptions::check`]), an
+    /// output [`check_output`] refuses, glare layers with a glare-only
+    /// result or into a format without layers, and a glare-only result
+    /// into a linear format without negative values: adding such a file
+    /// back over the plate would create light where the camera took it
+    /// away.
+    pub fn check(&self) -> Result<()> {
+        self.check_asked()?;
+        check_output(self.output, self.input)
     }
-    let (names, extensions) = crate::formats::layered_outputs();
-    Err(Error::Output {
-        path: output.to_path_buf(),
-        reason: format!("glare layers are written only into {names}; write to a {extensions} file"),
-    })
+
+    /// The checks of [`Request::check`] that read no file system: what a
+    /// command line for the request would be refused for, wherever it
+    /// runs.
+    pub fn check_asked(&self) -> Result<()> {
+        self.options.check().map_err(Error::Options)?;
+        let refuse = |reason: String| Error::Refused {
+            path: self.output.to_path_buf(),
+            reason,
+        };
+        let format = output_format(self.output)?;
+        if self.layers && self.options.glare_only {
+            return Err(refuse(LAYERS_WITH_GLARE_ONLY.into()));
+        }
+        if self.layers && !format.layers {
+            let (names, extensions) = crate::formats::layered_outputs();
+            return Err(refuse(format!(
+                "glare layers are written only into {names}; write to a {extensions} file"
+            )));
+        }
+        if self.options.glare_only && format.kind() == Kind::Linear && !format.signed {
+            return Err(refuse(format!(
+                "{} holds no negative values, which a glare-only result has (light moved away from the sources); write {}",
+                format.name,
+                crate::formats::signed_outputs()
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// Refuses, from its header and before it is decoded, a file whose frame
 /// `session` could not take: one that needs more memory than its limit,
 /// or a kernel beyond the largest allowed (`Error::Content` with the
 /// library's reason); a header that does not say passes, and reading the
-/// file then says what is wrong with it.
-pub fn check_header(path: &Path, choice: &Choice, limits: Limits, session: &Session) -> Result<()> {
-    if let Some(shape) = crate::read::probe(path, limits, choice)? {
+/// file then says what is wrong with it. Returns the frame's shape where
+/// the header says it, for a memory budget to be taken before decoding.
+pub fn check_header(
+    path: &Path,
+    choice: &Choice,
+    limits: Limits,
+    session: &Session,
+) -> Result<Option<Shape>> {
+    let shape = crate::read::probe(path, limits, choice)?;
+    if let Some(shape) = shape {
         session.check_shape(shape).map_err(|error| Error::Content {
             path: path.to_path_buf(),
             error,
         })?;
     }
-    Ok(())
+    Ok(shape)
 }
 
 /// A file read for the camera: its frame, the rest of the file (other
@@ -147,15 +206,17 @@ impl Input {
         report: &mut dyn FnMut(Stage, f64),
     ) -> aureole::Result<Applied> {
         let applied = session.apply(&self.frame, options, report)?;
-        self.apply_views(session, options, report)?;
+        self.apply_views(session, options, false, report)?;
         Ok(applied)
     }
 
-    /// The camera applied to each other view, its result replacing it.
+    /// The camera applied to each other view, its result replacing it;
+    /// with `layers`, each view's glare layers kept beside it.
     fn apply_views(
         &mut self,
         session: &mut Session,
         options: &ApplyOptions,
+        layers: bool,
         report: &mut dyn FnMut(Stage, f64),
     ) -> aureole::Result<()> {
         // The views share the frame's scale: they are one exposure.
@@ -163,17 +224,27 @@ impl Input {
             input_scale: Some(self.frame.scale()),
             ..self.options
         };
-        for (_, image) in self.original.views_mut() {
+        let mut glare = Vec::new();
+        for (name, image) in self.original.views_mut() {
             let empty = Image::filled(0, 0, image.layout, 0.0);
             let frame = Frame::new(std::mem::replace(image, empty), &views)?;
-            *image = session.apply(&frame, options, report)?.image;
+            *image = if layers {
+                let (applied, view_layers) = session.apply_layers(&frame, options, report)?;
+                glare.push((name.to_string(), view_layers));
+                applied.image
+            } else {
+                session.apply(&frame, options, report)?.image
+            };
+        }
+        for (name, view_layers) in glare {
+            self.original.add_view_glare_layers(&name, view_layers);
         }
         Ok(())
     }
 
     /// [`Input::apply`], with the light each effect adds kept as layers
     /// ([`aureole::Session::apply_layers`]) that [`Input::write`] puts
-    /// beside the frame's result; the other views get the beauty alone.
+    /// beside each view's result.
     pub fn apply_layers(
         &mut self,
         session: &mut Session,
@@ -181,7 +252,7 @@ impl Input {
         report: &mut dyn FnMut(Stage, f64),
     ) -> aureole::Result<Applied> {
         let (applied, layers) = session.apply_layers(&self.frame, options, report)?;
-        self.apply_views(session, options, report)?;
+        self.apply_views(session, options, true, report)?;
         self.original.add_glare_layers(layers);
         Ok(applied)
     }

@@ -1,13 +1,14 @@
 //! `aureole.Camera`: a composed configuration, its TOML, and the sessions
 //! that keep a plan (kernel and spectra) per image size between calls.
 
+use std::ffi::CString;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
 use aureole::{ApplyOptions, Cancel, Config, ConfigFile, Control, Extent, Frame, FrameOptions};
 use aureole::{Composing, Device, Method, Sending, Session, Stage};
 use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::{PyOSError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 
 use aureole_io::display::{DisplayOptions, Exposure, ToneCurve};
@@ -53,8 +54,18 @@ impl Camera {
     fn parse(text: &str, source_name: &str, folder: &std::path::Path) -> PyResult<Camera> {
         let mut file = ConfigFile::parse(text, source_name).map_err(value_error)?;
         aureole_io::measured::resolve(&mut file, folder);
-        aureole_io::measured::load(&mut file.effects, Limits::default_for_machine())
+        let warnings = aureole_io::measured::load(&mut file.effects, Limits::default_for_machine())
             .map_err(file_error)?;
+        Python::attach(|py| {
+            warnings.iter().try_for_each(|warning| {
+                PyErr::warn(
+                    py,
+                    &py.get_type::<PyUserWarning>(),
+                    &CString::new(warning.as_str())?,
+                    1,
+                )
+            })
+        })?;
         Ok(Camera::new(file))
     }
 
@@ -328,7 +339,11 @@ impl Camera {
         layers: bool,
         device: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
-        refuse_layers_with_glare_only(layers, glare_only)?;
+        if layers && glare_only {
+            return Err(PyValueError::new_err(
+                aureole_io::job::LAYERS_WITH_GLARE_ONLY,
+            ));
+        }
         let device = self::device(device)?;
         let options = ApplyOptions {
             threshold,
@@ -404,18 +419,21 @@ impl Camera {
         device: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let device = self::device(device)?;
-        // The guards every front end keeps, before any work.
-        aureole_io::job::check_output(&output, Some(&input)).map_err(file_error)?;
-        refuse_layers_with_glare_only(layers, glare_only)?;
-        if layers {
-            aureole_io::job::check_layers_output(&output).map_err(file_error)?;
-        }
         let options = ApplyOptions {
             threshold,
             knee,
             glare_only,
             method: self::method(method)?,
         };
+        // The guards every front end keeps, before any work.
+        aureole_io::job::Request {
+            output: &output,
+            input: Some(&input),
+            options: &options,
+            layers,
+        }
+        .check()
+        .map_err(file_error)?;
         let compression = crate::files::compression(compression)?;
         let write_options = WriteOptions {
             linear: LinearOptions {
@@ -496,15 +514,4 @@ impl Camera {
             self.config.threshold
         )
     }
-}
-
-/// Glare layers go beside the result; a glare-only result has nothing to
-/// put them beside.
-fn refuse_layers_with_glare_only(layers: bool, glare_only: bool) -> PyResult<()> {
-    if layers && glare_only {
-        return Err(PyValueError::new_err(
-            "layers=True and glare_only=True: choose one (the layers hold the glare beside the result)",
-        ));
-    }
-    Ok(())
 }

@@ -116,9 +116,11 @@ pub fn file_error(error: aureole_io::Error) -> PyErr {
             error: aureole::Error::Cancelled,
             ..
         } => PyKeyboardInterrupt::new_err("aureole: interrupted"),
-        E::OutputFormat { .. } | E::OverwritesInput { .. } | E::Content { .. } => {
-            PyValueError::new_err(message)
-        }
+        E::OutputFormat { .. }
+        | E::OverwritesInput { .. }
+        | E::Content { .. }
+        | E::Refused { .. }
+        | E::Options(_) => PyValueError::new_err(message),
     }
 }
 

@@ -341,3 +341,10 @@ pitch_um = 18.75
         measured.kernel(11, 11, sent_by="area")
     with pytest.raises(OSError, match="nowhere.exr"):
         aureole.Camera.from_toml('[[effect]]\ntype = "image"\nfile = "nowhere.exr"\npitch_um = 4')
+    # The same star as an 8-bit picture, exposed so that its core clips:
+    # the camera is made, with a warning naming the picture.
+    aureole.write(str(tmp_path / "star.png"), star * 1e6, exposure=0.0, tonemap="clip")
+    (tmp_path / "clipped.toml").write_text(
+        '[[effect]]\ntype = "image"\nfile = "star.png"\npitch_um = 18.75')
+    with pytest.warns(UserWarning, match="star.png: .* px are at the picture's ceiling"):
+        aureole.Camera.from_file(str(tmp_path / "clipped.toml"))

@@ -379,7 +379,8 @@ async function exportFull() {
     bar.value = progress.fraction;
     status.textContent = `${progress.stage} ${Math.round(100 * progress.fraction)} %`;
     if (progress.done) {
-      status.textContent = progress.error ? progress.error : `wrote ${progress.output}`;
+      status.textContent = progress.error ? progress.error
+        : [`wrote ${progress.output}`, ...progress.notes].join("; ");
       status.className = progress.error ? "error" : "info";
       break;
     }

@@ -8,7 +8,7 @@
 //! studio's own page (`Origin`). Every answer forbids framing and loading
 //! from elsewhere.
 
-use std::net::SocketAddr;
+use std::net::{IpAddr, SocketAddr};
 
 use axum::extract::{Request, State};
 use axum::http::{header, HeaderMap, HeaderValue, Method, StatusCode};
@@ -53,12 +53,18 @@ impl Access {
             format!("localhost:{port}"),
             format!("[::1]:{port}"),
         ];
-        let own = match bound {
-            SocketAddr::V4(v4) => format!("{}:{port}", v4.ip()),
-            SocketAddr::V6(v6) => format!("[{}]:{port}", v6.ip()),
-        };
-        if !hosts.contains(&own) {
-            hosts.push(own);
+        let listened = std::iter::once(bound.ip());
+        for address in listened.chain(reached_at(bound)) {
+            let own = SocketAddr::new(address, port).to_string();
+            if !hosts.contains(&own) {
+                hosts.push(own);
+            }
+        }
+        if bound.ip().is_unspecified() {
+            // The machine's own name: a rebinding page names its own domain.
+            if let Some(name) = crate::interfaces::host_name() {
+                hosts.push(format!("{name}:{port}"));
+            }
         }
         Access {
             token,
@@ -72,9 +78,32 @@ impl Access {
         &self.token
     }
 
-    /// The address to open: the page, with the token, on `bound`.
+    /// The address to open: the page, with the token, on `bound`; on
+    /// every interface (0.0.0.0, ::), at this machine's first address that
+    /// other machines reach, else the loopback.
     pub fn url(&self, bound: SocketAddr) -> String {
-        format!("http://{bound}/?token={}", self.token)
+        self.urls(bound)
+            .into_iter()
+            .next()
+            .unwrap_or_else(|| format!("http://{bound}/?token={}", self.token))
+    }
+
+    /// Every address the page opens at from `bound`: itself, or on every
+    /// interface each of the machine's addresses, those other machines
+    /// reach first.
+    pub fn urls(&self, bound: SocketAddr) -> Vec<String> {
+        let mut addresses = reached_at(bound);
+        addresses.sort_by_key(IpAddr::is_loopback);
+        addresses
+            .into_iter()
+            .map(|ip| {
+                format!(
+                    "http://{}/?token={}",
+                    SocketAddr::new(ip, bound.port()),
+                    self.token
+                )
+            })
+            .collect()
     }
 
     fn host_allowed(&self, host: &str) -> bool {
@@ -114,6 +143,29 @@ impl Access {
             .iter()
             .any(|t| same(t.as_bytes(), self.token.as_bytes()))
     }
+}
+
+/// The addresses a listener on `bound` is reached at: its own, or on every
+/// interface (0.0.0.0 or ::) the machine's (IPv4 ones alone for 0.0.0.0).
+fn reached_at(bound: SocketAddr) -> Vec<IpAddr> {
+    let ip = bound.ip();
+    if !ip.is_unspecified() {
+        return vec![ip];
+    }
+    let mut found: Vec<IpAddr> = crate::interfaces::addresses()
+        .into_iter()
+        .filter(|a| ip.is_ipv6() || a.is_ipv4())
+        // Link-local IPv6 needs a zone in a URL, which no Host carries.
+        .filter(|a| !matches!(a, IpAddr::V6(v6) if v6.segments()[0] & 0xffc0 == 0xfe80))
+        .collect();
+    if found.is_empty() {
+        found.push(if ip.is_ipv4() {
+            IpAddr::from([127, 0, 0, 1])
+        } else {
+            IpAddr::from(std::net::Ipv6Addr::LOCALHOST)
+        });
+    }
+    found
 }
 
 /// The `token` parameter of a query string.
@@ -282,6 +334,36 @@ mod tests {
         for host in ["evil.test:8000", "127.0.0.1:8001", "localhost", ""] {
             assert!(!access.host_allowed(host), "{host}");
         }
+    }
+
+    #[test]
+    fn on_every_interface_the_machines_own_addresses_are_hosts_and_printed() {
+        let access = Access::with_token("0.0.0.0:8000".parse().unwrap(), "t".into());
+        let own: Vec<IpAddr> = crate::interfaces::addresses()
+            .into_iter()
+            .filter(IpAddr::is_ipv4)
+            .collect();
+        assert!(!own.is_empty());
+        for ip in &own {
+            let host = SocketAddr::new(*ip, 8000).to_string();
+            assert!(access.host_allowed(&host), "{host}");
+        }
+        if let Some(name) = crate::interfaces::host_name() {
+            assert!(access.host_allowed(&format!("{name}:8000")));
+        }
+        for host in ["evil.test:8000", "0.0.0.1:8000", "10.255.255.254:8001"] {
+            assert!(!access.host_allowed(host), "{host}");
+        }
+        // The address printed first is one other machines reach, where
+        // there is one; 0.0.0.0 is never printed.
+        let urls = access.urls("0.0.0.0:8000".parse().unwrap());
+        assert_eq!(urls.len(), own.len());
+        assert!(urls.iter().all(|u| !u.contains("0.0.0.0")), "{urls:?}");
+        if own.iter().any(|ip| !ip.is_loopback()) {
+            assert!(!urls[0].contains("127.0.0.1"), "{urls:?}");
+        }
+        let access = Access::with_token("[::]:8000".parse().unwrap(), "t".into());
+        assert!(access.host_allowed("[::1]:8000") && access.host_allowed("127.0.0.1:8000"));
     }
 
     #[test]

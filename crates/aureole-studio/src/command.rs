@@ -27,6 +27,15 @@ pub struct Commands {
 pub fn for_export(request: &ExportRequest) -> Result<Commands, StudioError> {
     let render = &request.render;
     let display = display_options(render)?;
+    // A command the command line would refuse is not offered.
+    aureole_io::job::Request {
+        output: std::path::Path::new(&request.output),
+        input: None,
+        options: &render.options()?,
+        layers: request.layers,
+    }
+    .check_asked()
+    .map_err(|e| StudioError::BadRequest(e.to_string()))?;
     let mut argv = Vec::new();
     let image = if render.image == DEMO {
         argv.push(words(&[

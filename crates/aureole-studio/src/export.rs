@@ -8,17 +8,19 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
-use aureole::{ApplyOptions, Cancel, FrameOptions, Method, Session};
+use aureole::{Cancel, FrameOptions, Session};
 use aureole_io::display::DisplayOptions;
 use aureole_io::job::Input;
 use aureole_io::limits::Limits;
-use aureole_io::write::{output_format, WriteOptions};
+use aureole_io::write::{output_format, WriteOptions, Written};
 use serde::Serialize;
 
 use crate::budget::Budget;
 use crate::error::StudioError;
 use crate::locked;
-use crate::render::{display_options, max_extent, needs, parse_config, RenderRequest, DEMO};
+use crate::render::{
+    display_options, max_extent, needs, needs_for, parse_config, RenderRequest, DEMO,
+};
 use crate::roots::Roots;
 
 /// `POST /api/export`: a render request's fields (without `width`),
@@ -86,6 +88,9 @@ pub struct Progress {
     pub error: Option<String>,
     /// The file written.
     pub output: String,
+    /// How the file was read and written, a line each, as the command
+    /// line says them (ignored layers, channels a format could not keep).
+    pub notes: Vec<String>,
 }
 
 struct Job {
@@ -126,19 +131,15 @@ impl Exports {
             name => Some(self.roots.resolve(name)?),
         };
         let output = self.output_path(&request.output)?;
-        // What every front end checks before the work: the format, not the
-        // input itself, a plain file in a folder that can be written.
-        aureole_io::job::check_output(&output, input.as_deref())
-            .map_err(|e| StudioError::BadRequest(e.to_string()))?;
-        if request.layers {
-            if request.render.view == crate::render::View::Glare {
-                return Err(StudioError::BadRequest(
-                    "glare layers go beside the result: export the result view with them, or the glare view alone".into(),
-                ));
-            }
-            aureole_io::job::check_layers_output(&output)
-                .map_err(|e| StudioError::BadRequest(e.to_string()))?;
+        // What every front end checks before the work, in the same words.
+        aureole_io::job::Request {
+            output: &output,
+            input: input.as_deref(),
+            options: &request.render.options()?,
+            layers: request.layers,
         }
+        .check()
+        .map_err(|e| StudioError::BadRequest(e.to_string()))?;
         if !request.overwrite && output.symlink_metadata().is_ok() {
             return Err(StudioError::Conflict(exists(&request.output)));
         }
@@ -266,28 +267,45 @@ fn run(
         .with_max_extent(max_extent)
         .with_device(device);
     session.set_cancel_token(job.cancel.clone());
-    let mut input = match input {
-        None => Input::from_image(
-            aureole_io::demo::night_street(1280, 720),
-            &FrameOptions::default(),
-        )?,
+    let lease = |bytes| {
+        budget.lease(bytes, &job.cancel, None, || {
+            locked(&job.progress).stage = "waiting for memory".into();
+        })
+    };
+    let (mut input, _lease) = match input {
+        None => {
+            let input = Input::from_image(
+                aureole_io::demo::night_street(1280, 720),
+                &FrameOptions::default(),
+            )?;
+            let bytes = needs(&config, &input.frame, max_extent, request.layers)?;
+            (input, lease(bytes)?)
+        }
         Some(path) => {
-            // A frame the camera could not take is refused from its header.
+            // A frame the camera could not take is refused from its header,
+            // and its memory is taken before it is decoded where the header
+            // says its size: parallel exports of large files wait rather
+            // than decode beside each other.
             let choice = Default::default();
-            aureole_io::job::check_header(path, &choice, limits, &session)?;
-            aureole_io::job::read(path, &choice, limits, &FrameOptions::default())?
+            let shape = aureole_io::job::check_header(path, &choice, limits, &session)?;
+            let early = match shape {
+                Some(shape) => Some(lease(needs_for(
+                    &config,
+                    shape,
+                    max_extent,
+                    request.layers,
+                )?)?),
+                None => None,
+            };
+            let input = aureole_io::job::read(path, &choice, limits, &FrameOptions::default())?;
+            let held = match early {
+                Some(held) => held,
+                None => lease(needs(&config, &input.frame, max_extent, request.layers)?)?,
+            };
+            (input, held)
         }
     };
-    let bytes = needs(&config, &input.frame, max_extent, request.layers)?;
-    let _lease = budget.lease(bytes, &job.cancel, None, || {
-        locked(&job.progress).stage = "waiting for memory".into();
-    })?;
-    let options = ApplyOptions {
-        threshold: request.render.threshold,
-        knee: request.render.knee,
-        glare_only: request.render.view == crate::render::View::Glare,
-        method: Method::Auto,
-    };
+    let options = request.render.options()?;
     let mut report = |stage: aureole::Stage, fraction| {
         let mut progress = locked(&job.progress);
         progress.stage = stage.describe().to_string();
@@ -310,6 +328,65 @@ fn run(
         display,
         depth: None,
     };
-    input.write(output, &applied.image, &write)?;
+    let mut notes = std::mem::take(&mut input.notes);
+    if let Written::Linear(more) = input.write(output, &applied.image, &write)? {
+        notes.extend(more.iter().map(ToString::to_string));
+    }
+    locked(&job.progress).notes = notes;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An export takes its memory before it decodes: with the budget held
+    /// elsewhere, an export of a file whose header says its size waits for
+    /// memory before reading its pixels. A file whose pixels are cut off
+    /// tells the order: decoded first, it would fail at once.
+    #[test]
+    fn an_export_takes_its_memory_before_decoding() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cut.exr");
+        let image = aureole_io::demo::night_street(640, 360);
+        aureole_io::write::write_linear(&path, &image, Default::default()).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+        let budget = Budget::new(256 << 20);
+        let held = budget
+            .lease(budget.total(), &Cancel::new(), None, || {})
+            .unwrap();
+        let roots = Roots::new(&[dir.path().to_path_buf()]).unwrap();
+        let exports = Exports::new(roots, budget.clone(), Device::Cpu);
+        let request = ExportRequest::from_json(
+            format!(
+                r#"{{"image": "cut.exr", "config": {}, "output": "out.exr"}}"#,
+                serde_json::to_string(aureole::presets::find("paper-fig4-bloom").unwrap().toml)
+                    .unwrap()
+            )
+            .as_bytes(),
+        )
+        .unwrap();
+        let id = exports.start(request).unwrap();
+        let progress = loop {
+            let progress = exports.progress(id).unwrap();
+            if progress.done || progress.stage == "waiting for memory" {
+                break progress;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        };
+        assert_eq!(progress.stage, "waiting for memory", "{progress:?}");
+        // Given the memory, it reads the file and says what is wrong.
+        drop(held);
+        let progress = loop {
+            let progress = exports.progress(id).unwrap();
+            if progress.done {
+                break progress;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        };
+        let error = progress.error.unwrap_or_default();
+        assert!(error.contains("cut.exr"), "{error}");
+        assert!(!dir.path().join("out.exr").exists());
+    }
 }

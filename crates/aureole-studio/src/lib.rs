@@ -35,6 +35,7 @@ pub mod camera;
 pub mod command;
 pub mod error;
 pub mod export;
+pub mod interfaces;
 pub mod render;
 pub mod roots;
 

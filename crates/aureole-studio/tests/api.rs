@@ -1248,3 +1248,50 @@ fn the_preview_has_the_look_of_the_full_frame_for_every_effect() {
         }
     }
 }
+
+/// A threshold or knee the command line refuses is refused by previews,
+/// exports and the command lines the page asks for, in the same words; and
+/// no command line is offered that the command line would refuse.
+#[test]
+fn previews_and_commands_refuse_what_the_command_line_refuses() {
+    let dir = tempfile::tempdir().unwrap();
+    street(dir.path(), "street.exr", (64, 36));
+    let addr = server(dir.path());
+    let camera = preset("paper-fig4-bloom");
+    for (extra, words) in [
+        (
+            r#", "threshold": -1"#,
+            "apply: threshold = -1 is not allowed",
+        ),
+        (r#", "knee": -0.5"#, "apply: knee = -0.5 is not allowed"),
+    ] {
+        for view in ["result", "spread"] {
+            let extra = format!(r#"{extra}, "view": "{view}""#);
+            let reply = http(
+                addr,
+                "POST",
+                "/api/render",
+                &render_body("street.exr", camera, 32, &extra),
+            );
+            assert_eq!(reply.status, 400, "{view}: {}", reply.error());
+            assert!(reply.error().contains(words), "{}", reply.error());
+        }
+        let export = export_body("street.exr", camera, "out.exr", extra);
+        for path in ["/api/export", "/api/command"] {
+            let reply = http(addr, "POST", path, &export);
+            assert_eq!(reply.status, 400, "{path}: {}", reply.error());
+            assert!(reply.error().contains(words), "{}", reply.error());
+        }
+    }
+    let glare = export_body("street.exr", camera, "glare.hdr", r#", "view": "glare""#);
+    for path in ["/api/export", "/api/command"] {
+        let reply = http(addr, "POST", path, &glare);
+        assert_eq!(reply.status, 400, "{path}: {}", reply.error());
+        assert!(
+            reply.error().contains("holds no negative values"),
+            "{}",
+            reply.error()
+        );
+    }
+    assert!(!dir.path().join("out.exr").exists() && !dir.path().join("glare.hdr").exists());
+}

@@ -126,9 +126,18 @@ impl Original {
     /// spread layer (`glare.bloom.R` beside `R`, `ViewLayer.glare.R`
     /// beside `ViewLayer.Combined.R`), replacing channels of the same
     /// names. Only a format whose `layers` is set holds them
-    /// ([`crate::job::check_layers_output`] refuses the others).
+    /// ([`crate::job::Request::check`] refuses the others).
     pub fn add_glare_layers(&mut self, layers: Vec<aureole::GlareLayer>) {
         self.glare = layers;
+    }
+
+    /// [`Original::add_glare_layers`] for the other view `view`
+    /// ([`Original::views_mut`]), beside that view's result: in its own
+    /// part, or named for the view in a single-part multi-view file.
+    pub fn add_view_glare_layers(&mut self, view: &str, layers: Vec<aureole::GlareLayer>) {
+        if let Some(kept) = self.exr.as_mut() {
+            kept.add_view_glare(view, layers);
+        }
     }
 
     /// What a kernel file records of what it was built for

@@ -9,6 +9,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use aureole::config::ConfigFile;
+use aureole::image::Shape;
 use aureole::memory::Workload;
 use aureole::{ApplyOptions, Cancel, Config, Frame, Method, Session};
 use aureole_io::display::{meter, render, DisplayOptions, Exposure, ToneCurve};
@@ -97,6 +98,22 @@ pub struct RenderRequest {
     pub client: Option<String>,
 }
 
+impl RenderRequest {
+    /// How the camera is applied: the glare view is a glare-only result.
+    /// A threshold or knee outside its range is refused in the library's
+    /// words, as the command line and Python refuse it.
+    pub fn options(&self) -> Result<ApplyOptions, StudioError> {
+        let options = ApplyOptions {
+            threshold: self.threshold,
+            knee: self.knee,
+            glare_only: self.view == View::Glare,
+            method: Method::Auto,
+        };
+        options.check()?;
+        Ok(options)
+    }
+}
+
 /// `max_kernel`: `257`, `"257"` or `"511x255"`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(untagged)]
@@ -142,11 +159,24 @@ pub(crate) fn needs(
     max_extent: Option<(usize, usize)>,
     layers: bool,
 ) -> Result<u64, StudioError> {
-    let image = frame.image();
-    let planes = image.planes.len();
-    let alpha = image.alpha.is_some();
-    let workload =
-        Workload::of_config(config, image.width, image.height, planes, alpha, max_extent)?;
+    needs_for(config, Shape::of(frame.image()), max_extent, layers)
+}
+
+/// [`needs`] for a frame of `shape`, known from a file's header before it
+/// is decoded.
+pub(crate) fn needs_for(
+    config: &Config,
+    shape: Shape,
+    max_extent: Option<(usize, usize)>,
+    layers: bool,
+) -> Result<u64, StudioError> {
+    let Shape {
+        width,
+        height,
+        planes,
+        alpha,
+    } = shape;
+    let workload = Workload::of_config(config, width, height, planes, alpha, max_extent)?;
     Ok(if layers {
         workload.estimate_layers(&config.effects)
     } else {
@@ -323,6 +353,7 @@ impl Renderer {
             )));
         }
         let display = display_options(request)?;
+        let options = request.options()?;
         let max_full = max_extent(request)?;
         let (full, summary) = self.load(&request.image)?;
         let preview = self.preview(&full, request.width)?;
@@ -344,7 +375,7 @@ impl Renderer {
                 };
                 let total = image.total_luminance();
                 (
-                    spread_overlay(image, preview.scale(), threshold, request.knee),
+                    spread_overlay(image, preview.scale(), threshold, options.knee),
                     total,
                     total,
                 )
@@ -377,12 +408,6 @@ impl Renderer {
                     return Err(StudioError::Internal("no session".into()));
                 };
                 kept.session.set_cancel_token(cancel.clone());
-                let options = ApplyOptions {
-                    threshold: request.threshold,
-                    knee: request.knee,
-                    glare_only: view == View::Glare,
-                    method: Method::Auto,
-                };
                 let applied = kept.session.apply(&preview, &options, &mut |_, _| {})?;
                 if view == View::Kernel {
                     let plan = kept

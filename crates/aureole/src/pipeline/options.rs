@@ -20,6 +20,37 @@ pub struct ApplyOptions {
     pub method: Method,
 }
 
+impl ApplyOptions {
+    /// Refuses a threshold or knee no front end accepts: the threshold a
+    /// finite luminance of at least 0 (a negative one would spread every
+    /// pixel, NaN none), the knee a finite number of at least 0. Every
+    /// application checks this, so the command line, the studio and Python
+    /// refuse the same values in the same words.
+    pub fn check(&self) -> crate::Result<()> {
+        let refuse = |name, value: f64, allowed| crate::Error::Parameter {
+            effect: "apply".into(),
+            name,
+            value: value.to_string(),
+            allowed,
+        };
+        if let Some(t) = self.threshold.filter(|t| !(t.is_finite() && *t >= 0.0)) {
+            return Err(refuse(
+                "threshold",
+                t,
+                "a finite luminance of at least 0 cd/m² (0 spreads every pixel)",
+            ));
+        }
+        if !(self.knee.is_finite() && self.knee >= 0.0) {
+            return Err(refuse(
+                "knee",
+                self.knee,
+                "a finite number of at least 0 (0 is the hard threshold)",
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// How the light of the bright pixels is spread. Both give the same result
 /// up to f32 round-off.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -94,6 +125,35 @@ pub enum Arithmetic {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn thresholds_and_knees_outside_their_range_are_refused_naming_them() {
+        let fine = ApplyOptions {
+            threshold: Some(0.0),
+            knee: 0.5,
+            ..ApplyOptions::default()
+        };
+        assert!(fine.check().is_ok());
+        assert!(ApplyOptions::default().check().is_ok());
+        for threshold in [-1.0, f64::NAN, f64::INFINITY] {
+            let refused = ApplyOptions {
+                threshold: Some(threshold),
+                ..fine
+            }
+            .check()
+            .unwrap_err()
+            .to_string();
+            assert!(refused.starts_with("apply: threshold = "), "{refused}");
+            assert!(refused.contains("at least 0 cd/m²"), "{refused}");
+        }
+        for knee in [-0.1, f64::NAN, f64::NEG_INFINITY] {
+            let refused = ApplyOptions { knee, ..fine }
+                .check()
+                .unwrap_err()
+                .to_string();
+            assert!(refused.starts_with("apply: knee = "), "{refused}");
+        }
+    }
 
     #[test]
     fn methods_are_read_by_their_names_and_others_refused_listing_them() {

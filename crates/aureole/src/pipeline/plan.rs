@@ -250,6 +250,7 @@ impl Plan {
         recycled: Vec<Vec<f32>>,
         control: &mut Control,
     ) -> Result<Applied> {
+        options.check()?;
         if (image.width, image.height) != (self.width, self.height) {
             return Err(Error::SizeMismatch {
                 expected: (self.width, self.height),

@@ -305,6 +305,7 @@ impl Session {
     /// on two cores (the cost model of docs/physics.md §8), known before
     /// anything is built: for a front end to say so before a long run.
     pub fn costs(&self, frame: &Frame, options: &ApplyOptions) -> Result<Costs> {
+        options.check()?;
         let image = frame.image();
         let size = (image.width, image.height);
         let (workload, _) = self.workload(Shape::of(image))?;
@@ -340,6 +341,7 @@ impl Session {
         options: &ApplyOptions,
         progress: &mut dyn FnMut(Stage, f64),
     ) -> Result<Applied> {
+        options.check()?;
         let image = frame.image();
         self.cancel.check()?;
         let size = (image.width, image.height);

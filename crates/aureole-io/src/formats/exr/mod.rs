@@ -53,6 +53,8 @@ pub(crate) struct Kept {
     taken: Vec<Taken>,
     /// They were luminance and chroma (`Y`, `RY`, `BY`): the result is RGB.
     chroma: bool,
+    /// Where the glare layers go beside it.
+    glare_at: GlareAt,
     /// The same layer in the file's other views, each with its image,
     /// which the front ends replace by the camera's result.
     views: Vec<KeptView>,
@@ -67,6 +69,47 @@ struct KeptView {
     taken: Vec<Taken>,
     chroma: bool,
     image: Image,
+    /// Where this view's glare layers go, and what they hold (none until
+    /// a front end adds them).
+    glare_at: GlareAt,
+    glare: Vec<aureole::GlareLayer>,
+}
+
+/// Where glare layers go beside a spread layer: `{parent}{name}.R`, or in
+/// a single-part multi-view file, for a view other than the default,
+/// `{parent}{name}.{view}.R` (OpenEXR's multi-view convention puts the view
+/// last before the channel, so that each view's glare is a layer of that
+/// view).
+#[derive(Debug, Clone, Default)]
+struct GlareAt {
+    parent: String,
+    view: Option<String>,
+}
+
+impl GlareAt {
+    /// The place beside the layer of `prefix` in `part`.
+    fn of(part: &Part, prefix: &str) -> GlareAt {
+        let named = part.views.get(1..).unwrap_or_default();
+        let trimmed = prefix.trim_end_matches('.');
+        let (base, view) = match trimmed.rsplit_once('.') {
+            Some((base, last)) if named.iter().any(|v| v == last) => {
+                (format!("{base}."), Some(last))
+            }
+            None if named.iter().any(|v| v == trimmed) => (String::new(), Some(trimmed)),
+            _ => (prefix.to_string(), None),
+        };
+        GlareAt {
+            parent: parent(&base).to_string(),
+            view: view.map(str::to_string),
+        }
+    }
+
+    fn name(&self, glare: &str, channel: &str) -> String {
+        match &self.view {
+            Some(view) => format!("{}{glare}.{view}.{channel}", self.parent),
+            None => format!("{}{glare}.{channel}", self.parent),
+        }
+    }
 }
 
 /// A channel taken out of the file, to be put back under its own name.
@@ -84,6 +127,13 @@ impl Kept {
         self.views
             .iter_mut()
             .map(|v| (v.name.as_str(), &mut v.image))
+    }
+
+    /// Glare layers to write beside view `view`'s result.
+    pub(crate) fn add_view_glare(&mut self, view: &str, layers: Vec<aureole::GlareLayer>) {
+        if let Some(kept) = self.views.iter_mut().find(|v| v.name == view) {
+            kept.glare = layers;
+        }
     }
 
     /// What a kernel file records of what it was built for.
@@ -859,6 +909,7 @@ pub(crate) fn decode(
     let (image, taken) = extract(&chosen, &file.headers, &mut channels, primaries, &mut notes)?;
     let mut kept_views = Vec::new();
     for (name, candidate) in views {
+        let glare_at = GlareAt::of(&parts[candidate.part], &candidate.prefix);
         let (image, taken) = extract(
             &candidate,
             &file.headers,
@@ -873,6 +924,8 @@ pub(crate) fn decode(
             taken,
             chroma: candidate.chroma,
             image,
+            glare_at,
+            glare: Vec::new(),
         });
     }
     let subsampled: Vec<String> = channels
@@ -899,6 +952,7 @@ pub(crate) fn decode(
             exr: Some(Box::new(Kept {
                 image: kept,
                 part: chosen.part,
+                glare_at: GlareAt::of(&parts[chosen.part], &chosen.prefix),
                 prefix: chosen.prefix,
                 taken,
                 chroma: chosen.chroma,
@@ -1237,6 +1291,7 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
                 prefix,
                 taken,
                 chroma,
+                glare_at,
                 views,
             } = *kept;
             let result = Layer {
@@ -1255,13 +1310,21 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
             let half = is_half(kind, planes.samples);
             add_glare(
                 &mut image.layer_data[part],
-                parent(&prefix),
+                &glare_at,
                 &glare,
                 half,
                 &spares,
                 &mut clamped,
             );
             for view in &views {
+                add_glare(
+                    &mut image.layer_data[view.part],
+                    &view.glare_at,
+                    &view.glare,
+                    half,
+                    &spares,
+                    &mut clamped,
+                );
                 let colour: Vec<&[f32]> = view.image.planes.iter().map(Vec::as_slice).collect();
                 let result = Layer {
                     part: view.part,
@@ -1287,7 +1350,7 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
             let half = planes.samples == Some(Samples::Half);
             add_glare(
                 &mut image.layer_data[0],
-                "",
+                &GlareAt::default(),
                 &glare,
                 half,
                 &spares,
@@ -1353,10 +1416,11 @@ fn parent(prefix: &str) -> &str {
 }
 
 /// Adds each glare layer's planes to `layer` as `{parent}{name}.R/G/B` (or
-/// `.Y`), in the beauty's sample type, replacing channels of those names.
+/// `.Y`; [`GlareAt`] for a view), in the beauty's sample type, replacing
+/// channels of those names.
 fn add_glare(
     layer: &mut x::Layer<x::AnyChannels<x::FlatSamples>>,
-    parent: &str,
+    at: &GlareAt,
     glare: &[aureole::GlareLayer],
     half: bool,
     spares: &Spares,
@@ -1373,7 +1437,7 @@ fn add_glare(
             &["Y"]
         };
         for (short, plane) in names.iter().zip(&one.image.planes) {
-            let name = format!("{parent}{}.{short}", one.name);
+            let name = at.name(&one.name, short);
             added.push(x::AnyChannel::new(
                 name.as_str(),
                 samples(plane, half, true, spares, clamped),
