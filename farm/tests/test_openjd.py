@@ -146,3 +146,23 @@ def test_a_threshold_and_a_failing_chunk(openjd, cli, sequence, tmp_path):
     batch(cli, frames / sequence.name, expected, "camera-f8-7blade", threshold=1000)
     for path in expected.iterdir():
         assert (out / path.name).read_bytes() == path.read_bytes(), path.name
+
+
+def test_parameters_are_arguments_never_commands(openjd, cli, sequence, tmp_path):
+    """Paths with quotes, `$(...)`, backquotes, backslashes and spaces reach
+    aureole as they are: no parameter is pasted into a shell's text."""
+    odd = tmp_path / "it's \"a\" $(touch PWNED) `touch PWNED2` back\\slash"
+    frames = odd / "frames"
+    shutil.copytree(sequence.parent, frames)
+    out = odd / "out $HOME"
+    out.mkdir()
+    done, kernel = run_job(openjd, cli, frames / sequence.name, out, "camera-f8-7blade", chunk=4,
+                           threshold="1000")
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr
+    assert kernel.is_file()
+    expected = tmp_path / "batch"
+    batch(cli, frames / sequence.name, expected, "camera-f8-7blade", threshold=1000)
+    for path in expected.iterdir():
+        assert (out / path.name).read_bytes() == path.read_bytes(), path.name
+    for root in (tmp_path, pathlib.Path.cwd()):
+        assert not list(root.rglob("PWNED*")), "a parameter ran as a command"
