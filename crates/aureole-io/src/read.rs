@@ -40,6 +40,11 @@ pub struct Loaded {
 /// `None` when the header does not say (reading the file then says why).
 pub fn probe(path: &Path, limits: Limits, choice: &Choice) -> Result<Option<Shape>> {
     use std::io::Read;
+    // A pipe's bytes are read once, by the reader: a look here would take
+    // them from it.
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return Ok(None);
+    }
     let mut head = Vec::with_capacity(256);
     let opened = std::fs::File::open(path).and_then(|f| f.take(256).read_to_end(&mut head));
     let Some(format) = opened.ok().and_then(|_| by_content(&head)) else {
@@ -107,6 +112,9 @@ pub fn probe(path: &Path, limits: Limits, choice: &Choice) -> Result<Option<Shap
 /// headers that cannot be read.
 pub fn exr_structure(path: &Path) -> Option<Vec<String>> {
     use std::io::Read;
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return None;
+    }
     let mut head = Vec::with_capacity(256);
     std::fs::File::open(path)
         .and_then(|f| f.take(256).read_to_end(&mut head))
@@ -137,22 +145,48 @@ pub fn read_image_reusing(
     spares: &Spares,
 ) -> Result<Loaded> {
     let metadata = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    let refuse = |message: String| Error::Decode {
+        path: path.to_path_buf(),
+        message,
+    };
+    // A device (/dev/zero, a disk) never ends, or is no image: refused
+    // before a byte is read.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let kind = metadata.file_type();
+        if kind.is_char_device() || kind.is_block_device() {
+            return Err(refuse(
+                "is a device, not an image file; read a file, or a pipe (a named pipe, /dev/stdin)"
+                    .into(),
+            ));
+        }
+    }
     // Every format we read stores at least a byte per pixel's worth of
     // data for its planes, so a file larger than the bound cannot fit.
     if metadata.len() > limits.max_bytes {
-        return Err(Error::Decode {
-            path: path.to_path_buf(),
-            message: format!(
-                "the file ({}) is larger than the memory limit ({})",
-                format_bytes(metadata.len()),
-                format_bytes(limits.max_bytes)
-            ),
-        });
+        return Err(refuse(format!(
+            "the file ({}) is larger than the memory limit ({})",
+            format_bytes(metadata.len()),
+            format_bytes(limits.max_bytes)
+        )));
     }
     let mut bytes = spares.bytes(usize::try_from(metadata.len()).unwrap_or(0));
+    // A pipe says no length: it is read up to the bound, and refused
+    // beyond it.
     std::fs::File::open(path)
-        .and_then(|mut file| file.read_to_end(&mut bytes))
+        .and_then(|file| {
+            file.take(limits.max_bytes.saturating_add(1))
+                .read_to_end(&mut bytes)
+        })
         .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > limits.max_bytes {
+        spares.give_bytes(bytes);
+        return Err(refuse(format!(
+            "holds more than the memory limit ({}) allows to read",
+            format_bytes(limits.max_bytes)
+        )));
+    }
     let loaded = decode(&bytes, limits, choice, spares);
     spares.give_bytes(bytes);
     loaded.map_err(|message| Error::Decode {
