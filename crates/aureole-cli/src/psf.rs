@@ -11,7 +11,7 @@ use clap::{ArgMatches, ValueEnum};
 use crate::apply::DeviceArg;
 use crate::chain::ChainArgs;
 use crate::progress::Progress;
-use crate::values::{parse_positive, parse_size};
+use crate::values::{parse_memory, parse_positive, parse_size};
 use crate::Failure;
 
 #[derive(clap::Args)]
@@ -67,6 +67,12 @@ pub struct Args {
     /// kernel composed on a GPU differs from the CPU's in the last bits.
     #[arg(long, value_enum, default_value_t = DeviceArg::Auto)]
     device: DeviceArg,
+
+    /// Stop before building when the kernel would need more memory than
+    /// this (e.g. 4G, 512M). Default: three quarters of the memory
+    /// available when the run starts.
+    #[arg(long, value_name = "SIZE", value_parser = parse_memory)]
+    max_memory: Option<u64>,
 
     /// The pixel pitch of --from-image on the sensor, µm.
     #[arg(long, value_name = "UM", requires = "from_image", value_parser = parse_positive)]
@@ -169,6 +175,25 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         extent = extent.with_image_width(n as usize);
     }
 
+    // Refused before anything large is allocated, as apply refuses a frame.
+    let limit = args
+        .max_memory
+        .unwrap_or_else(aureole_io::limits::default_memory_limit);
+    let mut needed =
+        aureole::memory::Workload::of_kernel(&config, &extent).estimate_kernel(&config.effects);
+    if !matches!(args.device, DeviceArg::Cpu) {
+        needed.bytes += aureole::memory::GPU_DRIVERS;
+    }
+    if needed.bytes > limit {
+        return Err(Failure::Run(anyhow::anyhow!(
+            "a {}x{} kernel needs about {} (peak while {}) but --max-memory is {}; ask for a smaller --size, or raise --max-memory",
+            extent.width,
+            extent.height,
+            aureole::memory::format_bytes(needed.bytes),
+            needed.stage,
+            aureole::memory::format_bytes(limit)
+        )));
+    }
     let mut composing = Composing::on(args.device.into())?;
     let start = Instant::now();
     let progress = Progress::new(quiet);

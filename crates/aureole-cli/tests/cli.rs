@@ -67,6 +67,36 @@ fn psf_writes_a_normalised_pfm_centred_at_half_the_size() {
     assert_eq!(plane[24 * 64 + 32], peak);
 }
 
+/// A kernel beyond --max-memory is refused from the estimate, before any
+/// large buffer: one line naming the size, the need and the limit, and no
+/// file. The estimate is the library's (`Workload::estimate_kernel`), which
+/// lies above the measured peaks of the 4K presets (docs/cli.md).
+#[test]
+fn psf_refuses_a_kernel_beyond_max_memory_before_building_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("k.exr");
+    let refused = aureole()
+        .args(["psf", "--preset", "star-filter-6pt", "--size", "16000x9000"])
+        .args(["--image-width", "8000", "--max-memory", "512M", "-o"])
+        .arg(&out)
+        .assert()
+        .code(1)
+        .get_output()
+        .stderr
+        .clone();
+    let line = one_line(&refused);
+    assert!(line.contains("a 16000x9000 kernel needs about"), "{line}");
+    assert!(line.contains("but --max-memory is 512.0 MiB"), "{line}");
+    assert!(!out.exists());
+    // Within it, built.
+    aureole()
+        .args(["psf", "--preset", "paper-fig4-bloom", "--size", "65"])
+        .args(["--max-memory", "512M", "-o"])
+        .arg(&out)
+        .assert()
+        .success();
+}
+
 #[test]
 fn psf_output_matches_the_library_and_is_deterministic() {
     let dir = tempfile::tempdir().unwrap();

@@ -19,6 +19,21 @@ pub struct Estimate {
     pub stage: &'static str,
 }
 
+/// What looking for a GPU holds: Vulkan's loader and the drivers installed
+/// (Mesa's radv links LLVM), 55–60 MB resident more than `--device cpu`
+/// where Debian's mesa-vulkan-drivers are installed (`bench/memory.py`).
+pub const GPU_DRIVERS: u64 = 64 << 20;
+
+/// `bytes` at the peak `stage`, with an eighth and the program's own
+/// baseline added to stay on the safe side.
+fn with_margin(bytes: u64, stage: &'static str) -> Estimate {
+    const BASELINE: u64 = 16 << 20;
+    Estimate {
+        bytes: bytes + bytes / 8 + BASELINE,
+        stage,
+    }
+}
+
 /// What a run works on: the image and the kernel it will build (or load).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Workload {
@@ -61,6 +76,25 @@ impl Workload {
         max_extent: Option<(usize, usize)>,
     ) -> Result<Workload> {
         let extent = Extent::for_image_within(width, height, max_extent)?;
+        Ok(Workload::of_extent(
+            config, &extent, width, height, planes, alpha,
+        ))
+    }
+
+    /// The workload of building `config`'s kernel at `extent` alone (what
+    /// `aureole psf` does): no image.
+    pub fn of_kernel(config: &Config, extent: &Extent) -> Workload {
+        Workload::of_extent(config, extent, 0, 0, 0, false)
+    }
+
+    fn of_extent(
+        config: &Config,
+        extent: &Extent,
+        width: usize,
+        height: usize,
+        planes: usize,
+        alpha: bool,
+    ) -> Workload {
         let pitch_mm = config.camera.pixel_pitch_mm(extent.image_width);
         let mut reaches = [u32::MAX; REACHES];
         let mut fixed = 0;
@@ -82,7 +116,7 @@ impl Workload {
                 *reach = px.ceil().clamp(0.0, f64::from(u32::MAX - 1)) as u32;
             }
         }
-        Ok(Workload {
+        Workload {
             width,
             height,
             planes,
@@ -92,7 +126,7 @@ impl Workload {
             backend: Backend::default(),
             reaches,
             fixed,
-        })
+        }
     }
 
     /// The peak memory of building the kernel of `effects` (empty when the
@@ -103,18 +137,58 @@ impl Workload {
     /// baseline are added to stay on the safe side, and measured peaks of
     /// whole runs lie below it (`bench/memory.py`).
     pub fn estimate(&self, effects: &[Effect]) -> Estimate {
-        const BASELINE: u64 = 16 << 20;
         let pixels = self.width as u64 * self.height as u64;
         let planes = self.planes as u64 + u64::from(self.alpha);
         let image = pixels * planes * 4;
+        let kernel = self.kernel_bytes();
+        let building = self.building(effects);
+
+        // Then the plan (the kernel, and what its engine holds, split for
+        // a night scene's lamps) and the output planes stay until the
+        // result is written.
+        let engine = self.footprint(Precision::Single, true);
+        let plan = kernel + engine.spreading + image;
+        let stages = [
+            ("reading", 2 * image),
+            ("building the kernel", building),
+            ("transforming the kernel", kernel + engine.preparing),
+            ("convolving", plan + image / 3),
+            ("writing", plan + image + image / 2),
+        ];
+        let (stage, peak) = stages
+            .into_iter()
+            .max_by_key(|(_, bytes)| *bytes)
+            .unwrap_or(("convolving", 0));
+        // The input image stays in memory throughout.
+        with_margin(image + peak, stage)
+    }
+
+    /// The peak memory of building the kernel of `effects` and writing it
+    /// (`aureole psf`), with [`Workload::estimate`]'s margin.
+    pub fn estimate_kernel(&self, effects: &[Effect]) -> Estimate {
+        let building = self.building(effects);
+        // The kernel is held while a file of it is encoded beside it.
+        let writing = 2 * self.kernel_bytes();
+        if building >= writing {
+            with_margin(building, "building the kernel")
+        } else {
+            with_margin(writing, "writing the kernel")
+        }
+    }
+
+    /// The kernel's f32 planes.
+    fn kernel_bytes(&self) -> u64 {
+        self.kernel.0 as u64 * self.kernel.1 as u64 * 4 * self.kernel_planes as u64
+    }
+
+    /// The peak of building the kernel of `effects`: the chain so far and
+    /// the next effect's layers; to compose them, the plane that reaches
+    /// less far cut to its reach, what the composition holds for it and
+    /// the result; a diffraction pattern is held in f64 before it becomes
+    /// f32.
+    fn building(&self, effects: &[Effect]) -> u64 {
         let (kw, kh) = (self.kernel.0 as u64, self.kernel.1 as u64);
         let layer = kw * kh * 4;
-        let kernel = layer * self.kernel_planes as u64;
-
-        // Building: the chain so far and the next effect's layers; to
-        // compose them, the plane that reaches less far cut to its reach,
-        // what the composition holds for it and the result; a diffraction
-        // pattern is held in f64 before it becomes f32.
         let reach = |index: usize| self.reaches.get(index).copied().unwrap_or(u32::MAX);
         let mut building = 0u64;
         let mut chain = 0u64;
@@ -138,29 +212,7 @@ impl Workload {
             chain = chain.max(layers);
             chain_reach = chain_reach.max(reach(index));
         }
-
-        // Then the plan (the kernel, and what its engine holds, split for
-        // a night scene's lamps) and the output planes stay until the
-        // result is written.
-        let engine = self.footprint(Precision::Single, true);
-        let plan = kernel + engine.spreading + image;
-        let stages = [
-            ("reading", 2 * image),
-            ("building the kernel", building),
-            ("transforming the kernel", kernel + engine.preparing),
-            ("convolving", plan + image / 3),
-            ("writing", plan + image + image / 2),
-        ];
-        let (stage, peak) = stages
-            .into_iter()
-            .max_by_key(|(_, bytes)| *bytes)
-            .unwrap_or(("convolving", 0));
-        // The input image stays in memory throughout.
-        let bytes = image + peak;
-        Estimate {
-            bytes: bytes + bytes / 8 + BASELINE,
-            stage,
-        }
+        building
     }
 
     /// The peak memory of applying `effects` with each effect's glare in a

@@ -16,10 +16,7 @@ use crate::kernel::Kernel;
 use crate::memory::Workload;
 use crate::optics::Effect;
 
-/// What looking for a GPU holds: Vulkan's loader and the drivers installed
-/// (Mesa's radv links LLVM), 55–60 MB resident more than `--device cpu`
-/// where Debian's mesa-vulkan-drivers are installed (`bench/memory.py`).
-const GPU_DRIVERS: u64 = 64 << 20;
+use crate::memory::GPU_DRIVERS;
 
 /// How to take an image as luminance.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
