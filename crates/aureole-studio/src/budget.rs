@@ -65,6 +65,11 @@ impl Budget {
         self.total
     }
 
+    /// The bytes no job holds now.
+    pub fn available(&self) -> u64 {
+        self.total.saturating_sub(*locked(&self.used))
+    }
+
     /// Takes `bytes` (at most the whole budget: a job larger than it is
     /// refused by its session, with the reason), waiting while other jobs
     /// hold too much, until `cancel` is raised or, with `patience`, that

@@ -1295,3 +1295,52 @@ fn previews_and_commands_refuse_what_the_command_line_refuses() {
     }
     assert!(!dir.path().join("out.exr").exists() && !dir.path().join("glare.hdr").exists());
 }
+
+/// Going back to a camera tried a moment ago reuses its kernel: the last
+/// few cameras' sessions are kept, each holding its memory in the budget,
+/// the least recent given up when the budget lacks room or beyond four.
+#[test]
+fn a_recent_camera_is_kept_within_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    street(dir.path(), "street.exr", (64, 36));
+    let cameras = ["paper-fig4-bloom", "paper-fig5-corona", "camera-f8-7blade"];
+    let render = |addr, camera: &str| {
+        let body = render_body("street.exr", preset(camera), 48, "");
+        let reply = http(addr, "POST", "/api/render", &body);
+        assert_eq!(reply.status, 200, "{}", reply.error());
+    };
+    let reused = |addr| {
+        http(addr, "GET", "/api/status", "").json()["reused"]
+            .as_u64()
+            .unwrap()
+    };
+    let addr = server(dir.path());
+    for camera in cameras {
+        render(addr, camera);
+    }
+    assert_eq!(reused(addr), 0);
+    // Back to each: all three kept.
+    for camera in cameras.iter().rev() {
+        render(addr, camera);
+    }
+    assert_eq!(reused(addr), 3);
+    // A budget with room for one of these sessions at a time: each new
+    // camera gives up the one before rather than wait for it, and the last
+    // is reused.
+    let needs = |camera: &str| {
+        let config =
+            aureole::Config::compose([aureole::presets::find(camera).unwrap().config().unwrap()]);
+        aureole::memory::Workload::of_config(&config, 48, 27, 3, false, None)
+            .unwrap()
+            .estimate(&config.effects)
+            .bytes
+    };
+    let largest = needs("paper-fig4-bloom").max(needs("camera-f8-7blade"));
+    let addr = server_within(dir.path(), largest * 3 / 2);
+    for camera in ["paper-fig4-bloom", "camera-f8-7blade", "paper-fig4-bloom"] {
+        render(addr, camera);
+    }
+    assert_eq!(reused(addr), 0);
+    render(addr, "paper-fig4-bloom");
+    assert_eq!(reused(addr), 1);
+}

@@ -4,10 +4,12 @@
 use std::sync::Arc;
 use std::time::SystemTime;
 
-use aureole::{Frame, FrameOptions, Image, Session};
+use std::sync::atomic::Ordering;
+
+use aureole::{Cancel, Frame, FrameOptions, Image, Session};
 use aureole_io::limits::Limits;
 
-use super::{Renderer, Summary, DEMO};
+use super::{needs, parse_config, Renderer, Summary, DEMO, PATIENCE};
 use crate::budget::Lease;
 use crate::error::StudioError;
 use crate::locked;
@@ -27,8 +29,13 @@ pub(super) struct Preview {
     frame: Arc<Frame>,
 }
 
-/// The session of the last config and preview size, kept so that a change
-/// of threshold or exposure reuses its kernel and spectra.
+/// The most sessions kept: going back to a camera tried a moment ago (the
+/// dusty lens and the clean one, say) reuses its kernel.
+pub(super) const KEPT: usize = 4;
+
+/// The session of a recent config and preview size, kept so that a change
+/// of threshold or exposure, or a return to that camera, reuses its kernel
+/// and spectra.
 pub(super) struct KeptSession {
     pub key: SessionKey,
     pub session: Session,
@@ -44,8 +51,51 @@ impl Renderer {
     /// is using it.
     pub fn release_kept(&self) {
         if let Ok(mut kept) = self.kept.try_lock() {
-            *kept = None;
+            kept.clear();
         }
+    }
+
+    /// The kept sessions, the one for `key` first: kept from before, or
+    /// made for `config` (its lengths scaled by `factor` to the preview)
+    /// with its memory leased. The least recent go, their memory back to
+    /// the budget, while the budget lacks room for the new one, and beyond
+    /// [`KEPT`].
+    pub(super) fn kept_session(
+        &self,
+        key: SessionKey,
+        config: &str,
+        preview: &Frame,
+        factor: f64,
+        cancel: &Cancel,
+    ) -> Result<std::sync::MutexGuard<'_, Vec<KeptSession>>, StudioError> {
+        let mut kept = locked(&self.kept);
+        if let Some(index) = kept.iter().position(|c| c.key == key) {
+            let hit = kept.remove(index);
+            kept.insert(0, hit);
+            self.reused.fetch_add(1, Ordering::Relaxed);
+            return Ok(kept);
+        }
+        let max_extent = key.1;
+        let config = parse_config(config)?.with_pixels_scaled(factor);
+        let bytes = needs(&config, preview, max_extent, false)?;
+        kept.truncate(KEPT - 1);
+        while !kept.is_empty() && self.budget.available() < bytes {
+            kept.pop();
+        }
+        let lease = self.budget.lease(bytes, cancel, Some(PATIENCE), || {})?;
+        let session = Session::new(config)
+            .with_memory_limit(self.budget.total())
+            .with_max_extent(max_extent)
+            .with_device(self.device);
+        kept.insert(
+            0,
+            KeptSession {
+                key,
+                session,
+                _lease: lease,
+            },
+        );
+        Ok(kept)
     }
 
     /// The full image `name` names, read once while it does not change.

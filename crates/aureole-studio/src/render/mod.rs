@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use aureole::config::ConfigFile;
 use aureole::image::Shape;
 use aureole::memory::Workload;
-use aureole::{ApplyOptions, Cancel, Config, Frame, Method, Session};
+use aureole::{ApplyOptions, Cancel, Config, Frame, Method};
 use aureole_io::display::{meter, render, DisplayOptions, Exposure, ToneCurve};
 use aureole_io::kernel::log_picture_window;
 use serde::Deserialize;
@@ -271,12 +271,16 @@ pub struct Renderer {
     device: Device,
     loaded: Mutex<Option<Loaded>>,
     preview: Mutex<Option<Preview>>,
-    kept: Mutex<Option<KeptSession>>,
+    /// The sessions of the last cameras at their preview sizes, the most
+    /// recent first.
+    kept: Mutex<Vec<KeptSession>>,
     /// Each client's running render.
     running: Mutex<HashMap<String, Cancel>>,
     /// Renders under way, and renders that ended cancelled.
     active: std::sync::atomic::AtomicUsize,
     cancelled: std::sync::atomic::AtomicU64,
+    /// Renders through a camera whose session was kept.
+    reused: std::sync::atomic::AtomicU64,
 }
 
 /// What the renderer is doing, for `GET /api/status`.
@@ -286,6 +290,8 @@ pub struct Status {
     pub rendering: usize,
     /// Renders that ended cancelled (replaced, or their page went away).
     pub cancelled: u64,
+    /// Renders through a kept session (its kernel and spectra reused).
+    pub reused: u64,
 }
 
 impl Renderer {
@@ -298,10 +304,11 @@ impl Renderer {
             device,
             loaded: Mutex::new(None),
             preview: Mutex::new(None),
-            kept: Mutex::new(None),
+            kept: Mutex::new(Vec::new()),
             running: Mutex::new(HashMap::new()),
             active: std::sync::atomic::AtomicUsize::new(0),
             cancelled: std::sync::atomic::AtomicU64::new(0),
+            reused: std::sync::atomic::AtomicU64::new(0),
         }
     }
 
@@ -330,6 +337,7 @@ impl Renderer {
         Status {
             rendering: self.active.load(Ordering::SeqCst),
             cancelled: self.cancelled.load(Ordering::SeqCst),
+            reused: self.reused.load(Ordering::SeqCst),
         }
     }
 
@@ -381,30 +389,15 @@ impl Renderer {
                 )
             }
             view => {
-                let mut kept = locked(&self.kept);
-                let key = (request.config.clone(), (width, height));
                 // The cap, like every length in px, shrinks with the preview.
                 let max_extent = max_full.map(|(w, h)| {
                     let scaled = |n: usize| ((n as f64 * factor).round() as usize).max(1);
                     (scaled(w), scaled(h))
                 });
-                let key = (key, max_extent);
-                if kept.as_ref().is_none_or(|c| c.key != key) {
-                    // The last session's memory back before this one's.
-                    *kept = None;
-                    let config = parse_config(&request.config)?.with_pixels_scaled(factor);
-                    let bytes = needs(&config, &preview, max_extent, false)?;
-                    let lease = self.budget.lease(bytes, &cancel, Some(PATIENCE), || {})?;
-                    *kept = Some(KeptSession {
-                        key,
-                        session: Session::new(config)
-                            .with_memory_limit(self.budget.total())
-                            .with_max_extent(max_extent)
-                            .with_device(self.device),
-                        _lease: lease,
-                    });
-                }
-                let Some(kept) = kept.as_mut() else {
+                let key = ((request.config.clone(), (width, height)), max_extent);
+                let mut kept =
+                    self.kept_session(key, &request.config, &preview, factor, &cancel)?;
+                let Some(kept) = kept.first_mut() else {
                     return Err(StudioError::Internal("no session".into()));
                 };
                 kept.session.set_cancel_token(cancel.clone());
