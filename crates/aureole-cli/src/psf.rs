@@ -175,25 +175,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         extent = extent.with_image_width(n as usize);
     }
 
-    // Refused before anything large is allocated, as apply refuses a frame.
-    let limit = args
-        .max_memory
-        .unwrap_or_else(aureole_io::limits::default_memory_limit);
-    let mut needed =
-        aureole::memory::Workload::of_kernel(&config, &extent).estimate_kernel(&config.effects);
-    if !matches!(args.device, DeviceArg::Cpu) {
-        needed.bytes += aureole::memory::GPU_DRIVERS;
-    }
-    if needed.bytes > limit {
-        return Err(Failure::Run(anyhow::anyhow!(
-            "a {}x{} kernel needs about {} (peak while {}) but --max-memory is {}; ask for a smaller --size, or raise --max-memory",
-            extent.width,
-            extent.height,
-            aureole::memory::format_bytes(needed.bytes),
-            needed.stage,
-            aureole::memory::format_bytes(limit)
-        )));
-    }
+    check_memory(args, &config, &extent)?;
     let mut composing = Composing::on(args.device.into())?;
     let start = Instant::now();
     let progress = Progress::new(quiet);
@@ -231,28 +213,63 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     }
     progress.finish();
     if !quiet {
-        let sums: Vec<String> = (0..kernel.planes().len())
-            .map(|c| format!("{:.6}", kernel.sum(c)))
-            .collect();
-        say!(
-            "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, built in {:.2} s{}, {:.2} s in all",
-            args.output.display(),
-            kernel.width(),
-            kernel.height(),
-            kernel.planes().len(),
-            if kernel.is_coloured() { "s" } else { "" },
-            sums.join(" "),
-            kernel.centre().0,
-            kernel.centre().1,
-            built,
-            composing
-                .words()
-                .map(|words| format!(" (composed on {words})"))
-                .unwrap_or_default(),
-            start.elapsed().as_secs_f64()
-        );
+        say!("{}", summary(args, &kernel, &composing, built, start));
     }
     Ok(())
+}
+
+/// Refuses, before anything large is allocated (as apply refuses a
+/// frame), a kernel whose estimated peak is beyond --max-memory.
+fn check_memory(args: &Args, config: &aureole::Config, extent: &Extent) -> Result<(), Failure> {
+    let limit = args
+        .max_memory
+        .unwrap_or_else(aureole_io::limits::default_memory_limit);
+    let mut needed =
+        aureole::memory::Workload::of_kernel(config, extent).estimate_kernel(&config.effects);
+    if !matches!(args.device, DeviceArg::Cpu) {
+        needed.bytes += aureole::memory::GPU_DRIVERS;
+    }
+    if needed.bytes > limit {
+        return Err(Failure::Run(anyhow::anyhow!(
+            "a {}x{} kernel needs about {} (peak while {}) but --max-memory is {}; ask for a smaller --size, or raise --max-memory",
+            extent.width,
+            extent.height,
+            aureole::memory::format_bytes(needed.bytes),
+            needed.stage,
+            aureole::memory::format_bytes(limit)
+        )));
+    }
+    Ok(())
+}
+
+/// The line that says what was written.
+fn summary(
+    args: &Args,
+    kernel: &aureole::Kernel,
+    composing: &Composing,
+    built: f64,
+    start: Instant,
+) -> String {
+    let sums: Vec<String> = (0..kernel.planes().len())
+        .map(|c| format!("{:.6}", kernel.sum(c)))
+        .collect();
+    format!(
+        "wrote {}: {}x{} kernel, {} channel{}, sum {}, centre at column {} row {}, built in {:.2} s{}, {:.2} s in all",
+        args.output.display(),
+        kernel.width(),
+        kernel.height(),
+        kernel.planes().len(),
+        if kernel.is_coloured() { "s" } else { "" },
+        sums.join(" "),
+        kernel.centre().0,
+        kernel.centre().1,
+        built,
+        composing
+            .words()
+            .map(|words| format!(" (composed on {words})"))
+            .unwrap_or_default(),
+        start.elapsed().as_secs_f64()
+    )
 }
 
 /// What `psf --from-image` found in its picture, in a line.

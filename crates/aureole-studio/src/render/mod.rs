@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use aureole::config::ConfigFile;
-use aureole::image::Shape;
+use aureole::image::{Image, Shape};
 use aureole::memory::Workload;
 use aureole::{ApplyOptions, Cancel, Config, Frame, Method};
 use aureole_io::display::{meter, render, DisplayOptions, Exposure, ToneCurve};
@@ -148,6 +148,57 @@ impl MaxKernel {
 /// session takes it.
 pub(crate) fn max_extent(request: &RenderRequest) -> Result<Option<(usize, usize)>, StudioError> {
     request.max_kernel.as_ref().map(MaxKernel::size).transpose()
+}
+
+/// A render's bytes, as [`Rendered`] sends them.
+struct Encoded {
+    bytes: Vec<u8>,
+    content_type: &'static str,
+    auto_white: [f64; 3],
+    white: f64,
+}
+
+/// The picture (or linear samples) of `shown`, `scale` cd/m² per unit, as
+/// `request` asks: its bytes and their content type, the white auto
+/// exposure gives for each tone curve, and the white shown.
+fn encoded(
+    request: &RenderRequest,
+    shown: &Image,
+    scale: f64,
+    display: DisplayOptions,
+) -> Result<Encoded, StudioError> {
+    // Metered once per curve: the page switches curves without asking.
+    let curves = [ToneCurve::Filmic, ToneCurve::Reinhard, ToneCurve::Clip];
+    let metering = meter(shown, scale);
+    let auto_white = curves.map(|curve| metering.white(curve));
+    let white = match display.exposure {
+        Exposure::Auto => curves
+            .iter()
+            .zip(auto_white)
+            .find(|(curve, _)| **curve == display.tone)
+            .map_or(0.0, |(_, white)| white),
+        exposure => exposure.white(shown, scale, display.tone),
+    };
+    let (bytes, content_type) = if request.format == Format::Linear {
+        (linear_bytes(shown, scale), "application/octet-stream")
+    } else {
+        let display = DisplayOptions {
+            exposure: Exposure::White(white),
+            ..display
+        };
+        let picture = render(shown, scale, &display);
+        let codes = picture.eight_bit();
+        match request.format {
+            Format::Rgb8 => (codes, "application/x-rgb8"),
+            _ => (png(&picture)?, "image/png"),
+        }
+    };
+    Ok(Encoded {
+        bytes,
+        content_type,
+        auto_white,
+        white,
+    })
 }
 
 /// The bytes a run of `config` on `frame` takes at its peak, the frame
@@ -414,39 +465,19 @@ impl Renderer {
             }
         };
         cancel.check()?;
-        let (bytes, content_type, auto_white, white) = if let Some(picture) = &kernel_view {
-            (png(picture)?, "image/png", [0.0; 3], 0.0)
-        } else {
-            // Metered once per curve: the page switches curves without asking.
-            let curves = [ToneCurve::Filmic, ToneCurve::Reinhard, ToneCurve::Clip];
-            let metering = meter(&shown, preview.scale());
-            let auto_white = curves.map(|curve| metering.white(curve));
-            let white = match display.exposure {
-                Exposure::Auto => curves
-                    .iter()
-                    .zip(auto_white)
-                    .find(|(curve, _)| **curve == display.tone)
-                    .map_or(0.0, |(_, white)| white),
-                exposure => exposure.white(&shown, preview.scale(), display.tone),
-            };
-            let (bytes, content_type) = if request.format == Format::Linear {
-                (
-                    linear_bytes(&shown, preview.scale()),
-                    "application/octet-stream",
-                )
-            } else {
-                let display = DisplayOptions {
-                    exposure: Exposure::White(white),
-                    ..display
-                };
-                let picture = render(&shown, preview.scale(), &display);
-                let codes = picture.eight_bit();
-                match request.format {
-                    Format::Rgb8 => (codes, "application/x-rgb8"),
-                    _ => (png(&picture)?, "image/png"),
-                }
-            };
-            (bytes, content_type, auto_white, white)
+        let Encoded {
+            bytes,
+            content_type,
+            auto_white,
+            white,
+        } = match &kernel_view {
+            Some(picture) => Encoded {
+                bytes: png(picture)?,
+                content_type: "image/png",
+                auto_white: [0.0; 3],
+                white: 0.0,
+            },
+            None => encoded(request, &shown, preview.scale(), display)?,
         };
         Ok(Rendered {
             bytes,

@@ -6,7 +6,6 @@
 //! and a result written as EXR puts it back in its place, under its own
 //! channel names and sample types, with every other layer, part, window and
 //! attribute as it was.
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use aureole::image::{Image, Layout, Primaries};
@@ -16,20 +15,18 @@ use exr::meta::attribute::{LevelMode, SampleType};
 use exr::meta::header::Header;
 use exr::meta::BlockDescription;
 use exr::prelude::{self as x};
-use half::slice::HalfFloatSliceExt;
-use rayon::prelude::*;
 
 use super::{Decoded, LinearPlanes, Note, Samples, HALF_MAX};
-use crate::atomic::write_atomic;
 use crate::compression::Compression;
-use crate::error::{Error, Result};
 use crate::formats::{explain, Choice, Shape};
 use crate::limits::Limits;
 use crate::spares::Spares;
 
 mod b44;
+mod choose;
 mod chroma;
 mod dwa;
+mod encode;
 mod layout;
 mod piz;
 mod predictor;
@@ -38,6 +35,12 @@ mod read;
 mod rle;
 mod write;
 mod zip;
+
+use choose::{
+    by_prefix, choose, is_vector, other_layers, other_views, parts_of_headers, Candidate,
+};
+pub(crate) use encode::encode;
+use encode::GlareAt;
 
 /// What an EXR file held besides the planes aureole spreads.
 #[derive(Debug, Clone)]
@@ -73,43 +76,6 @@ struct KeptView {
     /// a front end adds them).
     glare_at: GlareAt,
     glare: Vec<aureole::GlareLayer>,
-}
-
-/// Where glare layers go beside a spread layer: `{parent}{name}.R`, or in
-/// a single-part multi-view file, for a view other than the default,
-/// `{parent}{name}.{view}.R` (OpenEXR's multi-view convention puts the view
-/// last before the channel, so that each view's glare is a layer of that
-/// view).
-#[derive(Debug, Clone, Default)]
-struct GlareAt {
-    parent: String,
-    view: Option<String>,
-}
-
-impl GlareAt {
-    /// The place beside the layer of `prefix` in `part`.
-    fn of(part: &Part, prefix: &str) -> GlareAt {
-        let named = part.views.get(1..).unwrap_or_default();
-        let trimmed = prefix.trim_end_matches('.');
-        let (base, view) = match trimmed.rsplit_once('.') {
-            Some((base, last)) if named.iter().any(|v| v == last) => {
-                (format!("{base}."), Some(last))
-            }
-            None if named.iter().any(|v| v == trimmed) => (String::new(), Some(trimmed)),
-            _ => (prefix.to_string(), None),
-        };
-        GlareAt {
-            parent: parent(&base).to_string(),
-            view: view.map(str::to_string),
-        }
-    }
-
-    fn name(&self, glare: &str, channel: &str) -> String {
-        match &self.view {
-            Some(view) => format!("{}{glare}.{view}.{channel}", self.parent),
-            None => format!("{}{glare}.{channel}", self.parent),
-        }
-    }
 }
 
 /// A channel taken out of the file, to be put back under its own name.
@@ -314,421 +280,6 @@ fn type_name(t: SampleType) -> &'static str {
     }
 }
 
-/// Channels grouped by layer: the prefix up to the last `.`, and the rest.
-fn by_prefix<'a, T>(
-    names: impl Iterator<Item = (&'a str, T)>,
-) -> BTreeMap<String, Vec<(&'a str, T)>> {
-    let mut groups: BTreeMap<String, Vec<(&str, T)>> = BTreeMap::new();
-    for (name, t) in names {
-        let split = name.rfind('.').map_or(0, |i| i + 1);
-        groups
-            .entry(name[..split].to_string())
-            .or_default()
-            .push((&name[split..], t));
-    }
-    groups
-}
-
-/// A layer that holds colour: where, and which of its channels.
-#[derive(Clone)]
-struct Candidate {
-    part: usize,
-    part_name: Option<String>,
-    prefix: String,
-    /// `R`, `G`, `B` (or `Y`, or `Y`, `RY`, `BY`) as the file names them.
-    colour: Vec<String>,
-    alpha: Option<String>,
-    chroma: bool,
-    /// Its name says it holds data in colour channels (normals, positions,
-    /// Cryptomatte IDs): chosen only by name, never as the beauty.
-    data: bool,
-}
-
-/// Layer names (the last part of the prefix) that renderers use for data
-/// written into R, G, B: Arnold's and RenderMan's `N` and `P`, Nuke's
-/// `Pref`, motion and UV passes, Cryptomatte's `CryptoObject00`.
-fn holds_data(prefix: &str) -> bool {
-    const DATA: [&str; 14] = [
-        "n",
-        "p",
-        "pref",
-        "normal",
-        "normals",
-        "position",
-        "vector",
-        "vectors",
-        "motion",
-        "motionvector",
-        "uv",
-        "depth",
-        "z",
-        "id",
-    ];
-    let last = prefix
-        .trim_end_matches('.')
-        .rsplit('.')
-        .next()
-        .unwrap_or("");
-    let last = last.to_ascii_lowercase();
-    DATA.contains(&last.as_str()) || last.starts_with("crypto")
-}
-
-/// A layer of vectors (`N.X`, `N.Y`, `N.Z`; Blender's `Normal`, `Vector`,
-/// `Position`): its `Y` is a component, not luminance. `X` tells them
-/// apart; `Z` alone does not, as a luminance image's depth is `Y` and `Z`.
-fn is_vector(short: &[&str]) -> bool {
-    find(short, "X").is_some() && find(short, "Y").is_some()
-}
-
-impl Candidate {
-    fn describe(&self) -> String {
-        let channels: Vec<&str> = self
-            .colour
-            .iter()
-            .chain(&self.alpha)
-            .map(|c| c.strip_prefix(self.prefix.as_str()).unwrap_or(c))
-            .collect();
-        let part = match &self.part_name {
-            Some(name) => format!("part {} {name:?}: ", self.part),
-            None => String::new(),
-        };
-        format!(
-            "{} ({part}{})",
-            layer_name(&self.prefix),
-            channels.join(", ")
-        )
-    }
-
-    fn is_beauty(&self) -> bool {
-        self.prefix.is_empty()
-    }
-
-    fn is_combined(&self) -> bool {
-        self.prefix
-            .trim_end_matches('.')
-            .rsplit('.')
-            .next()
-            .is_some_and(|last| last.eq_ignore_ascii_case("combined"))
-    }
-}
-
-/// The channel among `names` called `wanted`: exactly, else in another
-/// case when only one matches.
-fn find<'a>(names: &[&'a str], wanted: &str) -> Option<&'a str> {
-    if let Some(exact) = names.iter().find(|n| **n == wanted) {
-        return Some(exact);
-    }
-    let mut loose = names.iter().filter(|n| n.eq_ignore_ascii_case(wanted));
-    match (loose.next(), loose.next()) {
-        (Some(one), None) => Some(one),
-        _ => None,
-    }
-}
-
-/// Every colour layer of every part, in file order.
-/// A part's name and channel names: what choosing a layer looks at, from a
-/// decoded file or from its headers alone.
-struct Part {
-    name: Option<String>,
-    channels: Vec<String>,
-    /// The `view` it belongs to, in a multi-part stereo file.
-    view: Option<String>,
-    /// The `multiView` attribute: the views of a single-part stereo file,
-    /// the default (unprefixed) view first.
-    views: Vec<String>,
-}
-
-fn parts_of_headers(headers: &[Header]) -> Vec<Part> {
-    let parts = headers.iter().map(|header| Part {
-        name: header
-            .own_attributes
-            .layer_name
-            .as_ref()
-            .map(|n| n.to_string()),
-        channels: header
-            .channels
-            .list
-            .iter()
-            .map(|c| c.name.to_string())
-            .collect(),
-        view: header
-            .own_attributes
-            .view_name
-            .as_ref()
-            .map(|v| v.to_string()),
-        views: header
-            .own_attributes
-            .multi_view_names
-            .iter()
-            .flatten()
-            .map(|v| v.to_string())
-            .collect(),
-    });
-    parts.collect()
-}
-
-fn candidates(parts: &[Part]) -> Vec<Candidate> {
-    let mut found = Vec::new();
-    for (index, part) in parts.iter().enumerate() {
-        for (prefix, channels) in by_prefix(part.channels.iter().map(|n| (n.as_str(), ()))) {
-            let short: Vec<&str> = channels.iter().map(|(n, _)| *n).collect();
-            let full = |c: &str| format!("{prefix}{c}");
-            let rgb = ["R", "G", "B"].map(|c| find(&short, c));
-            let (colour, chroma) = if let [Some(r), Some(g), Some(b)] = rgb {
-                (vec![full(r), full(g), full(b)], false)
-            } else if is_vector(&short) {
-                continue;
-            } else if let Some(y) = find(&short, "Y") {
-                match (find(&short, "RY"), find(&short, "BY")) {
-                    (Some(ry), Some(by)) => (vec![full(y), full(ry), full(by)], true),
-                    _ => (vec![full(y)], false),
-                }
-            } else {
-                continue;
-            };
-            found.push(Candidate {
-                part: index,
-                part_name: part.name.clone(),
-                prefix: prefix.clone(),
-                colour,
-                alpha: find(&short, "A").map(full),
-                chroma,
-                data: holds_data(&prefix),
-            });
-        }
-    }
-    found
-}
-
-/// Parts of one colour channel (a grey picture stored as `G`): read as
-/// luminance, as a compositor shows them, when no part holds colour.
-fn lone_channels(parts: &[Part]) -> Vec<Candidate> {
-    let mut found = Vec::new();
-    for (index, part) in parts.iter().enumerate() {
-        if let [name] = part.channels.as_slice() {
-            let name = name.clone();
-            let split = name.rfind('.').map_or(0, |i| i + 1);
-            if find(&["R", "G", "B"], &name[split..]).is_none() {
-                continue;
-            }
-            found.push(Candidate {
-                part: index,
-                part_name: part.name.clone(),
-                prefix: name[..split].to_string(),
-                colour: vec![name],
-                alpha: None,
-                chroma: false,
-                data: false,
-            });
-        }
-    }
-    found
-}
-
-/// The layer to spread: the one asked for, else the beauty as compositors
-/// find it (unprefixed channels, else the only colour layer, else
-/// Blender's `Combined`).
-fn choose(parts: &[Part], choice: &Choice) -> std::result::Result<Candidate, String> {
-    let mut all = candidates(parts);
-    if all.is_empty() {
-        all = lone_channels(parts);
-    }
-    if let Some(wanted) = &choice.part {
-        let named = |p: &Part| p.name.as_deref() == Some(wanted.as_str());
-        let index = match wanted.trim().parse::<usize>() {
-            Ok(i) if i < parts.len() => i,
-            _ => parts.iter().position(named).ok_or_else(|| {
-                let names: Vec<String> = parts
-                    .iter()
-                    .enumerate()
-                    .map(|(i, p)| match &p.name {
-                        Some(n) => format!("{i} ({n})"),
-                        None => i.to_string(),
-                    })
-                    .collect();
-                format!(
-                    "there is no part {wanted:?}: the file's parts are {}",
-                    names.join(", ")
-                )
-            })?,
-        };
-        all.retain(|c| c.part == index);
-    }
-    let listing = |all: &[Candidate]| {
-        all.iter()
-            .map(Candidate::describe)
-            .collect::<Vec<_>>()
-            .join("; ")
-    };
-    if let Some(wanted) = &choice.layer {
-        let wanted = wanted.trim().trim_end_matches('.');
-        let matches = |c: &Candidate, exact: bool| {
-            let name = c.prefix.trim_end_matches('.');
-            if exact {
-                name == wanted
-            } else {
-                name.eq_ignore_ascii_case(wanted)
-            }
-        };
-        let at = all
-            .iter()
-            .position(|c| matches(c, true))
-            .or_else(|| all.iter().position(|c| matches(c, false)));
-        return match at {
-            Some(at) => Ok(all.swap_remove(at)),
-            None => Err(match vectors_named(parts, wanted) {
-                Some(channels) => format!(
-                    "layer {wanted:?} holds vectors ({channels}), not light; the layers that can be chosen are {}",
-                    listing(&all)
-                ),
-                None if all.is_empty() => no_colour(parts),
-                None => format!(
-                    "there is no colour layer {wanted:?}; the layers that can be chosen are {}",
-                    listing(&all)
-                ),
-            }),
-        };
-    }
-    let data: Vec<Candidate> = all.iter().filter(|c| c.data).cloned().collect();
-    all.retain(|c| !c.data);
-    let at = all
-        .iter()
-        .position(Candidate::is_beauty)
-        .or_else(|| (all.len() == 1).then_some(0))
-        .or_else(|| all.iter().position(Candidate::is_combined));
-    match at {
-        Some(at) => Ok(all.swap_remove(at)),
-        None if all.is_empty() && data.is_empty() => Err(no_colour(parts)),
-        None if all.is_empty() => Err(format!(
-            "no colour layer: the layers with colour channels hold data ({}); choose one by name (--layer) if it is light",
-            listing(&data)
-        )),
-        None => Err(format!(
-            "several colour layers and none is the beauty (unprefixed R, G, B or Blender's Combined): {}; choose one by name (--layer)",
-            listing(&all)
-        )),
-    }
-}
-
-/// The channels of a vector layer called `wanted`, if there is one.
-fn vectors_named(parts: &[Part], wanted: &str) -> Option<String> {
-    parts.iter().find_map(|part| {
-        by_prefix(part.channels.iter().map(|n| (n.as_str(), ())))
-            .into_iter()
-            .find(|(prefix, channels)| {
-                let short: Vec<&str> = channels.iter().map(|(n, _)| *n).collect();
-                prefix.trim_end_matches('.').eq_ignore_ascii_case(wanted) && is_vector(&short)
-            })
-            .map(|(_, channels)| {
-                let names: Vec<&str> = channels.iter().map(|(n, _)| *n).collect();
-                names.join(", ")
-            })
-    })
-}
-
-fn no_colour(parts: &[Part]) -> String {
-    let names: Vec<&str> = parts
-        .iter()
-        .flat_map(|p| p.channels.iter().map(String::as_str))
-        .collect();
-    format!(
-        "no colour layer: a layer needs R, G, B or Y (channels: {})",
-        names.join(", ")
-    )
-}
-
-/// The same layer in each other view of a stereo or multi-view file, as
-/// OpenEXR's multi-view convention names them: in a multi-part file, the
-/// part of another `view` holding the layer under the same prefix (the one
-/// whose name differs only by the view's, where several do); in a
-/// single-part file with a `multiView` list, the layer whose prefix has the
-/// view's name as its last component (`left.R`, `beauty.left.R`), the
-/// default view's being unprefixed.
-/// Returns the chosen layer's view and the others'.
-fn other_views(parts: &[Part], chosen: &Candidate) -> (Option<String>, Vec<(String, Candidate)>) {
-    let all = candidates(parts);
-    let alike = |c: &Candidate, prefix: &str| {
-        c.prefix == prefix && c.colour.len() == chosen.colour.len() && c.chroma == chosen.chroma
-    };
-    let part = &parts[chosen.part];
-    let mut found: Vec<(String, Candidate)> = Vec::new();
-    if let Some(view) = &part.view {
-        for other_view in parts.iter().filter_map(|p| p.view.as_ref()) {
-            if other_view == view || found.iter().any(|(v, _)| v == other_view) {
-                continue;
-            }
-            let renamed = part
-                .name
-                .as_ref()
-                .map(|n| n.replace(view.as_str(), other_view));
-            let matching: Vec<&Candidate> = all
-                .iter()
-                .filter(|c| alike(c, &chosen.prefix))
-                .filter(|c| parts[c.part].view.as_ref() == Some(other_view))
-                .collect();
-            let best = matching
-                .iter()
-                .find(|c| c.part_name.is_some() && c.part_name == renamed)
-                .or(matching.first());
-            if let Some(best) = best {
-                found.push((other_view.clone(), (*best).clone()));
-            }
-        }
-        (Some(view.clone()), found)
-    } else if let Some((default, named)) = part.views.split_first() {
-        let trimmed = chosen.prefix.trim_end_matches('.');
-        let (base, view) = match trimmed.rsplit_once('.') {
-            Some((base, last)) if named.iter().any(|v| v == last) => (format!("{base}."), last),
-            None if named.iter().any(|v| v == trimmed) => (String::new(), trimmed),
-            _ => (chosen.prefix.clone(), default.as_str()),
-        };
-        for other in part.views.iter().filter(|v| v.as_str() != view) {
-            let prefix = if other == default {
-                base.clone()
-            } else {
-                format!("{base}{other}.")
-            };
-            if let Some(c) = all
-                .iter()
-                .find(|c| c.part == chosen.part && alike(c, &prefix))
-            {
-                found.push((other.clone(), c.clone()));
-            }
-        }
-        (Some(view.to_string()), found)
-    } else {
-        (None, found)
-    }
-}
-
-/// The layers and parts besides `chosen`, for a note: a few names.
-fn other_layers(parts: &[Part], chosen: &[&Candidate]) -> String {
-    let mut names = Vec::new();
-    for (index, part) in parts.iter().enumerate() {
-        let groups = by_prefix(part.channels.iter().map(|n| (n.as_str(), ())));
-        for prefix in groups.keys() {
-            if chosen
-                .iter()
-                .any(|c| index == c.part && *prefix == c.prefix)
-            {
-                continue;
-            }
-            let name = layer_name(prefix);
-            names.push(match &part.name {
-                Some(part_name) if parts.len() > 1 => format!("{part_name}: {name}"),
-                _ => name,
-            });
-        }
-    }
-    const SHOWN: usize = 6;
-    if names.len() > SHOWN {
-        let more = names.len() - SHOWN;
-        names.truncate(SHOWN);
-        names.push(format!("{more} more"));
-    }
-    names.join(", ")
-}
-
 /// Refuses what the `exr` crate would refuse with a less helpful word, or
 /// what would not fit in memory, from the headers alone.
 fn check_headers(headers: &[Header], limits: Limits) -> std::result::Result<bool, String> {
@@ -863,39 +414,7 @@ pub(crate) fn decode(
     let mut channels =
         read::read(bytes, &file, &wanted, spares).map_err(|e| explain("OpenEXR", e))?;
 
-    let mut notes = Vec::new();
-    let mut spread: Vec<&Candidate> = vec![&chosen];
-    spread.extend(views.iter().map(|(_, c)| c));
-    let others = other_layers(&parts, &spread);
-    if !views.is_empty() {
-        let names: Vec<String> = views
-            .iter()
-            .map(|(view, c)| format!("{view}: {}", c.describe()))
-            .collect();
-        notes.push(format!(
-            "a multi-view file: every view goes through the camera ({}{}; {}); a result in another format than EXR holds the first alone",
-            view.map(|v| format!("{v}: ")).unwrap_or_default(),
-            chosen.describe(),
-            names.join("; ")
-        ));
-    }
-    if !others.is_empty() {
-        notes.push(format!(
-            "spreading layer {}; the others ({others}) go back unchanged into an EXR output",
-            chosen.describe()
-        ));
-    }
-    if let [lone] = chosen.colour.as_slice() {
-        if !lone.ends_with('Y') {
-            notes.push(format!("the only channel, {lone}, is read as luminance"));
-        }
-    }
-    if levels {
-        notes.push(
-            "the file has mip or rip levels: the largest is read, and an EXR output holds only it"
-                .into(),
-        );
-    }
+    let mut notes = layer_notes(&parts, &chosen, view, &views, levels);
     let attributes = &file.headers[0].shared_attributes;
     let primaries = attributes.chromaticities.map(|c| Primaries {
         red: [c.red.0, c.red.1],
@@ -961,6 +480,52 @@ pub(crate) fn decode(
             ..Default::default()
         },
     })
+}
+
+/// What the user should know of the layers read: every view spread, the
+/// other layers going back unchanged, a lone channel read as luminance,
+/// mip or rip levels.
+fn layer_notes(
+    parts: &[choose::Part],
+    chosen: &Candidate,
+    view: Option<String>,
+    views: &[(String, Candidate)],
+    levels: bool,
+) -> Vec<String> {
+    let mut notes = Vec::new();
+    let mut spread: Vec<&Candidate> = vec![chosen];
+    spread.extend(views.iter().map(|(_, c)| c));
+    let others = other_layers(parts, &spread);
+    if !views.is_empty() {
+        let names: Vec<String> = views
+            .iter()
+            .map(|(view, c)| format!("{view}: {}", c.describe()))
+            .collect();
+        notes.push(format!(
+            "a multi-view file: every view goes through the camera ({}{}; {}); a result in another format than EXR holds the first alone",
+            view.map(|v| format!("{v}: ")).unwrap_or_default(),
+            chosen.describe(),
+            names.join("; ")
+        ));
+    }
+    if !others.is_empty() {
+        notes.push(format!(
+            "spreading layer {}; the others ({others}) go back unchanged into an EXR output",
+            chosen.describe()
+        ));
+    }
+    if let [lone] = chosen.colour.as_slice() {
+        if !lone.ends_with('Y') {
+            notes.push(format!("the only channel, {lone}, is read as luminance"));
+        }
+    }
+    if levels {
+        notes.push(
+            "the file has mip or rip levels: the largest is read, and an EXR output holds only it"
+                .into(),
+        );
+    }
+    notes
 }
 
 /// The candidate's channels taken out of `channels` as an image (RGB for
@@ -1149,369 +714,6 @@ fn kept_image(headers: &[Header], channels: Vec<Vec<read::Channel>>) -> FlatImag
     }
     FlatImage {
         attributes: headers[0].shared_attributes.clone(),
-        layer_data: layers,
-    }
-}
-
-/// Samples to store, in a buffer `spares` lends: half (clamped to its
-/// range, counted) or float; on every core, half through F16C where the
-/// CPU has it.
-fn samples(
-    plane: &[f32],
-    half: bool,
-    clamp: bool,
-    spares: &Spares,
-    clamped: &mut usize,
-) -> x::FlatSamples {
-    const CHUNK: usize = 1 << 16;
-    if !half {
-        let mut out = spares.floats(plane.len());
-        out.par_chunks_mut(CHUNK)
-            .zip(plane.par_chunks(CHUNK))
-            .for_each(|(o, p)| o.copy_from_slice(p));
-        return x::FlatSamples::F32(out);
-    }
-    let mut out = spares.halves(plane.len());
-    *clamped += out
-        .par_chunks_mut(CHUNK)
-        .zip(plane.par_chunks(CHUNK))
-        .map(|(o, p)| {
-            o.convert_from_f32_slice(p);
-            if !clamp {
-                return 0;
-            }
-            let mut beyond = 0;
-            for (o, &v) in o.iter_mut().zip(p) {
-                if v.is_finite() && v.abs() > HALF_MAX {
-                    *o = x::f16::from_f32(v.clamp(-HALF_MAX, HALF_MAX));
-                    beyond += 1;
-                }
-            }
-            beyond
-        })
-        .sum::<usize>();
-    x::FlatSamples::F16(out)
-}
-
-/// A result to put back where its channels were taken from.
-struct Layer<'a> {
-    part: usize,
-    prefix: &'a str,
-    taken: &'a [Taken],
-    chroma: bool,
-    size: (usize, usize),
-    colour: &'a [&'a [f32]],
-    alpha: Option<&'a [f32]>,
-}
-
-/// Puts `result` into its part of `image` under the channel names and
-/// sample types it was read with (unless `samples` says otherwise, or the
-/// colour changed form from luminance/chroma to RGB).
-fn put_back(
-    image: &mut FlatImage,
-    result: &Layer,
-    samples: Option<Samples>,
-    spares: &Spares,
-    clamped: &mut usize,
-) -> std::result::Result<(), String> {
-    let colours = result.colour.len();
-    let layer = &mut image.layer_data[result.part];
-    if (layer.size.0, layer.size.1) != result.size {
-        return Err(format!(
-            "the result is {}x{} but the layer read was {}x{}",
-            result.size.0, result.size.1, layer.size.0, layer.size.1
-        ));
-    }
-    let taken = result.taken;
-    let like = |name: &str| Taken {
-        name: format!("{}{name}", result.prefix),
-        kind: taken.first().map_or(SampleType::F32, |t| t.kind),
-        linear: false,
-    };
-    let colour_ids: Vec<Taken> = if result.chroma || taken.len() < colours {
-        let names: &[&str] = if colours == 3 {
-            &["R", "G", "B"]
-        } else {
-            &["Y"]
-        };
-        names.iter().map(|n| like(n)).collect()
-    } else {
-        taken[..colours].to_vec()
-    };
-    let alpha_id = taken
-        .get(if result.chroma { 3 } else { colours })
-        .cloned()
-        .unwrap_or_else(|| like("A"));
-    let channel = |id: &Taken, plane: &[f32], clamp: bool, clamped: &mut usize| {
-        let half = is_half(id.kind, samples);
-        x::AnyChannel {
-            name: id.name.as_str().into(),
-            sample_data: self::samples(plane, half, clamp, spares, clamped),
-            quantize_linearly: id.linear,
-            sampling: x::Vec2(1, 1),
-        }
-    };
-    let mut list = std::mem::take(&mut layer.channel_data.list);
-    for (id, plane) in colour_ids.iter().zip(result.colour) {
-        list.push(channel(id, plane, true, clamped));
-    }
-    if let Some(alpha) = result.alpha {
-        list.push(channel(&alpha_id, alpha, false, clamped));
-    }
-    layer.channel_data = x::AnyChannels::sort(list);
-    // A preview shows the picture before the camera: no longer true.
-    layer.attributes.preview = None;
-    Ok(())
-}
-
-/// Writes the planes to `path` atomically: into the file they were read
-/// from when it is given, else as a new file. With half samples, values
-/// beyond the half range are clamped to it (and counted).
-pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>> {
-    let encode_error = |message: String| Error::Encode {
-        path: path.to_path_buf(),
-        format: "EXR",
-        message,
-    };
-    let colours = planes.colour.len();
-    if colours != 1 && colours != 3 {
-        return Err(encode_error(format!(
-            "expected 1 or 3 channels, not {colours}"
-        )));
-    }
-    let mut notes = Vec::new();
-    let mut clamped = 0;
-    let glare = std::mem::take(&mut planes.original.glare);
-    let spares = std::mem::take(&mut planes.original.spares);
-    let image = match planes.original.exr.take() {
-        Some(kept) => {
-            let Kept {
-                mut image,
-                part,
-                prefix,
-                taken,
-                chroma,
-                glare_at,
-                views,
-            } = *kept;
-            let result = Layer {
-                part,
-                prefix: &prefix,
-                taken: &taken,
-                chroma,
-                size: (planes.width, planes.height),
-                colour: &planes.colour,
-                alpha: planes.alpha,
-            };
-            put_back(&mut image, &result, planes.samples, &spares, &mut clamped)
-                .map_err(encode_error)?;
-            // The glare in the spread layer's sample type.
-            let kind = taken.first().map_or(SampleType::F32, |t| t.kind);
-            let half = is_half(kind, planes.samples);
-            add_glare(
-                &mut image.layer_data[part],
-                &glare_at,
-                &glare,
-                half,
-                &spares,
-                &mut clamped,
-            );
-            for view in &views {
-                add_glare(
-                    &mut image.layer_data[view.part],
-                    &view.glare_at,
-                    &view.glare,
-                    half,
-                    &spares,
-                    &mut clamped,
-                );
-                let colour: Vec<&[f32]> = view.image.planes.iter().map(Vec::as_slice).collect();
-                let result = Layer {
-                    part: view.part,
-                    prefix: &view.prefix,
-                    taken: &view.taken,
-                    chroma: view.chroma,
-                    size: (view.image.width, view.image.height),
-                    colour: &colour,
-                    alpha: view.image.alpha.as_deref(),
-                };
-                put_back(&mut image, &result, planes.samples, &spares, &mut clamped)
-                    .map_err(|e| encode_error(format!("view {}: {e}", view.name)))?;
-            }
-            if let Some(compression) = planes.compression {
-                for layer in image.layer_data.iter_mut() {
-                    layer.encoding.compression = compression.to_exr();
-                }
-            }
-            image
-        }
-        None => {
-            let mut image = new_image(&planes, &spares, &mut clamped);
-            let half = planes.samples == Some(Samples::Half);
-            add_glare(
-                &mut image.layer_data[0],
-                &GlareAt::default(),
-                &glare,
-                half,
-                &spares,
-                &mut clamped,
-            );
-            image
-        }
-    };
-    if clamped > 0 {
-        notes.push(Note::ClampedToHalf { count: clamped });
-    }
-    let mut lowered = None;
-    write_atomic(path, |out| {
-        lowered = Some(write::write(&image, out).map_err(|e| encode_error(e.to_string()))?);
-        Ok(())
-    })?;
-    if let Some(lowered) = lowered.filter(|l| l.count > 0) {
-        let dwa = image
-            .layer_data
-            .iter()
-            .map(|l| l.encoding.compression)
-            .find(|&c| dwa::is_dwa(c))
-            .and_then(Compression::from_exr)
-            .unwrap_or(Compression::Dwaa);
-        notes.push(Note::ClampedForCompression {
-            count: lowered.count,
-            compression: dwa,
-            ceiling: lowered.ceiling as u32,
-        });
-    }
-    give_back(image, &spares);
-    Ok(notes)
-}
-
-/// The samples of a written image, kept for the next frame's.
-fn give_back(image: FlatImage, spares: &Spares) {
-    for layer in image.layer_data {
-        for channel in layer.channel_data.list {
-            match channel.sample_data {
-                x::FlatSamples::F16(values) => spares.give_halves(values),
-                x::FlatSamples::F32(values) => spares.give_floats(values),
-                x::FlatSamples::U32(_) => {}
-            }
-        }
-    }
-}
-
-/// Whether a channel read as `kind` is written as half floats: as read,
-/// unless `samples` says.
-fn is_half(kind: SampleType, samples: Option<Samples>) -> bool {
-    match samples {
-        Some(Samples::Half) => true,
-        Some(Samples::Float) => false,
-        None => kind == SampleType::F16,
-    }
-}
-
-/// The prefix of the layer that holds a channel prefix's layer
-/// (`ViewLayer.` of `ViewLayer.Combined.`), where glare layers go beside it.
-fn parent(prefix: &str) -> &str {
-    let trimmed = prefix.strip_suffix('.').unwrap_or(prefix);
-    trimmed.rfind('.').map_or("", |at| &prefix[..=at])
-}
-
-/// Adds each glare layer's planes to `layer` as `{parent}{name}.R/G/B` (or
-/// `.Y`; [`GlareAt`] for a view), in the beauty's sample type, replacing
-/// channels of those names.
-fn add_glare(
-    layer: &mut x::Layer<x::AnyChannels<x::FlatSamples>>,
-    at: &GlareAt,
-    glare: &[aureole::GlareLayer],
-    half: bool,
-    spares: &Spares,
-    clamped: &mut usize,
-) {
-    if glare.is_empty() {
-        return;
-    }
-    let mut added = Vec::new();
-    for one in glare {
-        let names: &[&str] = if one.image.planes.len() == 3 {
-            &["R", "G", "B"]
-        } else {
-            &["Y"]
-        };
-        for (short, plane) in names.iter().zip(&one.image.planes) {
-            let name = at.name(&one.name, short);
-            added.push(x::AnyChannel::new(
-                name.as_str(),
-                samples(plane, half, true, spares, clamped),
-            ));
-        }
-    }
-    let mut list = std::mem::take(&mut layer.channel_data.list);
-    list.retain(|c| !added.iter().any(|a| a.name == c.name));
-    list.extend(added);
-    layer.channel_data = x::AnyChannels::sort(list);
-}
-
-/// A single-part file of the planes: `Y` or `R`, `G`, `B`, and `A`.
-fn new_image(planes: &LinearPlanes, spares: &Spares, clamped: &mut usize) -> FlatImage {
-    let names: &[&str] = if planes.colour.len() == 1 {
-        &["Y"]
-    } else {
-        &["R", "G", "B"]
-    };
-    let half = planes.samples == Some(Samples::Half);
-    let mut list: Vec<x::AnyChannel<x::FlatSamples>> = names
-        .iter()
-        .zip(&planes.colour)
-        .map(|(name, plane)| x::AnyChannel::new(*name, samples(plane, half, true, spares, clamped)))
-        .collect();
-    if let Some(alpha) = planes.alpha {
-        list.push(x::AnyChannel::new(
-            "A",
-            samples(alpha, half, false, spares, clamped),
-        ));
-    }
-    let attributes = x::LayerAttributes {
-        white_luminance: planes.white_luminance,
-        ..x::LayerAttributes::default()
-    };
-    let layer = x::Layer::new(
-        (planes.width, planes.height),
-        attributes,
-        x::Encoding {
-            compression: planes.compression.unwrap_or(Compression::Zip).to_exr(),
-            ..x::Encoding::SMALL_LOSSLESS
-        },
-        x::AnyChannels::sort(list.into_iter().collect()),
-    );
-    let mut image = x::Image::from_layer(layer);
-    image.attributes.chromaticities =
-        planes
-            .primaries
-            .map(|p| exr::meta::attribute::Chromaticities {
-                red: x::Vec2(p.red[0], p.red[1]),
-                green: x::Vec2(p.green[0], p.green[1]),
-                blue: x::Vec2(p.blue[0], p.blue[1]),
-                white: x::Vec2(p.white[0], p.white[1]),
-            });
-    if let Some(width) = planes
-        .kernel
-        .image_width
-        .and_then(|w| i32::try_from(w).ok())
-    {
-        image.attributes.other.insert(
-            crate::formats::IMAGE_WIDTH_ATTRIBUTE.into(),
-            exr::meta::attribute::AttributeValue::I32(width),
-        );
-    }
-    if let Some(threshold) = planes.kernel.threshold {
-        image.attributes.other.insert(
-            crate::formats::THRESHOLD_ATTRIBUTE.into(),
-            exr::meta::attribute::AttributeValue::F64(threshold),
-        );
-    }
-    let mut layers = Layers::new();
-    layers.push(image.layer_data);
-    FlatImage {
-        attributes: image.attributes,
         layer_data: layers,
     }
 }

@@ -520,19 +520,7 @@ impl GpuConvolver {
         let n = self.width * self.height;
         let outputs: Vec<&Spread> = std::iter::once(a).chain(b).collect();
         let planes: Vec<&[f32]> = outputs.iter().map(|output| output.plane).collect();
-        let halves = {
-            let mut host = work.halves.lock().unwrap_or_else(PoisonError::into_inner);
-            let halves = self.halves_up && as_halves(&planes, &mut host);
-            if halves {
-                self.up(&work.frame, 0, bytemuck::cast_slice(&host));
-            }
-            halves
-        };
-        if !halves {
-            for (p, plane) in planes.iter().enumerate() {
-                self.up(&work.frame, p * n * 4, bytemuck::cast_slice(plane));
-            }
-        }
+        let halves = self.upload(work, &planes);
         let fractions = a.fractions;
         let split = split.filter(|_| !a.lamps.is_empty());
         let base = Uniform {
@@ -578,40 +566,7 @@ impl GpuConvolver {
             let lit = [&split.lit, &split.free][split.lamp_columns.end];
             bands.push((lit, split.far.as_slice()));
         }
-        let mut centre = [0.0f32; 2];
-        let terms = a.terms.len().max(b.map_or(0, |b| b.terms.len()));
-        for (band, (frames, kernels)) in bands.iter().enumerate() {
-            for t in 0..terms {
-                let term_a = a.terms.get(t);
-                let term_b = b.and_then(|b| b.terms.get(t));
-                let plane_a = term_a.map_or(0, |term| term.kernel_plane);
-                let plane_b = term_b.map_or(plane_a, |term| term.kernel_plane);
-                let (half_a, half_b) = (Self::half(plane_a), Self::half(plane_b));
-                let weight_a = term_a.map_or(0.0, |term| term.weight);
-                let weight_b = term_b.map_or(0.0, |term| term.weight);
-                if band == 0 {
-                    centre[0] += weight_a * self.centres[plane_a];
-                    centre[1] += weight_b * self.centres[plane_b];
-                }
-                let uniform = self.uniform(&Uniform {
-                    accumulate: band > 0 || t > 0,
-                    halves: [half_a.half, half_b.half],
-                    weights: [weight_a, weight_b],
-                    ..base
-                });
-                let group = self.bind(
-                    &self.gpu.multiply,
-                    &[
-                        (0, &uniform),
-                        (1, frames),
-                        (2, &kernels[half_a.pair]),
-                        (3, &kernels[half_b.pair]),
-                        (4, products),
-                    ],
-                );
-                self.over_grid(&mut encoder, &self.gpu.multiply, &group, (self.px, self.py));
-            }
-        }
+        let centre = self.multiply(&mut encoder, &bands, (a, b), &base, products);
         let result = match split {
             Some(split) => {
                 split.columns_inverse.encode(&self.gpu, &mut encoder);
@@ -656,6 +611,70 @@ impl GpuConvolver {
         }
         control.check()?;
         Ok(planes)
+    }
+
+    /// The frame's uploaded planes: as halves where the planes allow it and
+    /// the device takes them (returns whether it did), else as f32.
+    fn upload(&self, work: &Work, planes: &[&[f32]]) -> bool {
+        let n = self.width * self.height;
+        let mut host = work.halves.lock().unwrap_or_else(PoisonError::into_inner);
+        let halves = self.halves_up && as_halves(planes, &mut host);
+        if halves {
+            self.up(&work.frame, 0, bytemuck::cast_slice(&host));
+        } else {
+            for (p, plane) in planes.iter().enumerate() {
+                self.up(&work.frame, p * n * 4, bytemuck::cast_slice(plane));
+            }
+        }
+        halves
+    }
+
+    /// Records the products of each band's frame spectra (`bands`: the
+    /// frames, the kernel spectra they multiply) with every term of `a`
+    /// and `b`, accumulated into `products`; returns their centre weights.
+    fn multiply(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bands: &[(&wgpu::Buffer, &[Arc<wgpu::Buffer>])],
+        (a, b): (&Spread, Option<&Spread>),
+        base: &Uniform,
+        products: &wgpu::Buffer,
+    ) -> [f32; 2] {
+        let mut centre = [0.0f32; 2];
+        let terms = a.terms.len().max(b.map_or(0, |b| b.terms.len()));
+        for (band, (frames, kernels)) in bands.iter().enumerate() {
+            for t in 0..terms {
+                let term_a = a.terms.get(t);
+                let term_b = b.and_then(|b| b.terms.get(t));
+                let plane_a = term_a.map_or(0, |term| term.kernel_plane);
+                let plane_b = term_b.map_or(plane_a, |term| term.kernel_plane);
+                let (half_a, half_b) = (Self::half(plane_a), Self::half(plane_b));
+                let weight_a = term_a.map_or(0.0, |term| term.weight);
+                let weight_b = term_b.map_or(0.0, |term| term.weight);
+                if band == 0 {
+                    centre[0] += weight_a * self.centres[plane_a];
+                    centre[1] += weight_b * self.centres[plane_b];
+                }
+                let uniform = self.uniform(&Uniform {
+                    accumulate: band > 0 || t > 0,
+                    halves: [half_a.half, half_b.half],
+                    weights: [weight_a, weight_b],
+                    ..*base
+                });
+                let group = self.bind(
+                    &self.gpu.multiply,
+                    &[
+                        (0, &uniform),
+                        (1, frames),
+                        (2, &kernels[half_a.pair]),
+                        (3, &kernels[half_b.pair]),
+                        (4, products),
+                    ],
+                );
+                self.over_grid(encoder, &self.gpu.multiply, &group, (self.px, self.py));
+            }
+        }
+        centre
     }
 
     /// Records moving the lamps (`lamps`, frame indices) from the loaded

@@ -81,63 +81,22 @@ fn pattern_with(
     let filtered = optics.orders.len() > 1;
 
     let far2 = far_from * far_from;
-    // The pixels of row j in `columns` (the planes' rows in `row`): a run
-    // of near pixels about the centre (a circle's chord), far ones on
-    // either side, computed with the planes side by side and then dealt
-    // out.
-    // Light sent by a pixel: the near pixels are summed from unit squares
-    // after the rows are filled (`near_tents`).
     let tents = extent.sending == Sending::Pixel;
     let chord = Chord {
         centre: (cx, cy),
         pitch_mm,
         far2,
     };
-    let fill = |j: usize, row: &mut [&mut [f64]], columns: Range<usize>| {
-        let y = (cy as f64 - j as f64) * pitch_mm;
-        let x = |i: usize| (i as f64 - cx as f64) * pitch_mm;
-        let chord = chord.of_row(j, columns.clone());
-        let first = columns.start;
-        let mut values = vec![0.0; columns.len() * planes];
-        let mut scratch = far::Row::default();
-        for side in [columns.start..chord.start, chord.end..columns.end] {
-            if !side.is_empty() {
-                let out = &mut values[(side.start - first) * planes..(side.end - first) * planes];
-                far.row(
-                    x(side.start),
-                    y,
-                    pitch_mm,
-                    &weights_total,
-                    &mut scratch,
-                    out,
-                );
-            }
-        }
-        // The near pixels lie together, in runs of a few dozen sharing
-        // their sample offsets (the core's, denser, apart).
-        let core = |i: usize| i.abs_diff(cx) <= 1 && j.abs_diff(cy) <= 1;
-        let pixels: Vec<usize> = if tents { Vec::new() } else { chord.collect() };
-        for run in pixels.chunk_by(|&a, &b| core(a) == core(b)) {
-            for part in run.chunks(NEAR_RUN) {
-                let xs: Vec<f64> = part.iter().map(|&i| x(i)).collect();
-                let at = (part[0] - first) * planes;
-                near.add_many(
-                    &xs,
-                    y,
-                    core(part[0]),
-                    &mut values[at..at + xs.len() * planes],
-                );
-            }
-        }
-        for (c, plane_row) in row.iter_mut().enumerate() {
-            for (value, pixel) in plane_row[columns.clone()]
-                .iter_mut()
-                .zip(values.chunks_exact(planes))
-            {
-                *value = pixel[c];
-            }
-        }
+    let rows = Rows {
+        near: &near,
+        far: &far,
+        chord: &chord,
+        weights_total: &weights_total,
+        centre: (cx, cy),
+        pitch_mm,
+        tents,
     };
+    let fill = |j: usize, row: &mut [&mut [f64]], columns: Range<usize>| rows.fill(j, row, columns);
     let mut result: Vec<Vec<f64>> = (0..planes).map(|_| vec![0.0; width * height]).collect();
     // A real pupil's pattern is centrosymmetric, PSF(−x) = PSF(x), and so
     // are the near field's quadrature and the far field's terms: the rows
@@ -169,20 +128,7 @@ fn pattern_with(
             &mut summing,
         )?;
     }
-    for plane in &mut result {
-        let (top, bottom) = plane.split_at_mut(computed * width);
-        bottom
-            .par_chunks_mut(width)
-            .enumerate()
-            .for_each(|(k, row)| {
-                let mirror = &top[(2 * cy - computed - k) * width..][..width];
-                for (i, value) in row.iter_mut().enumerate() {
-                    if let Some(m) = (2 * cx).checked_sub(i).filter(|&m| m < width) {
-                        *value = mirror[m];
-                    }
-                }
-            });
-    }
+    mirror_below(&mut result, width, (cx, cy), computed);
     // An even width leaves the first column below the centre unmirrored.
     let alone = (2 * cx + 1).saturating_sub(width).min(width);
     if alone > 0 && computed < height {
@@ -219,7 +165,33 @@ fn pattern_with(
             &mut control.part(0.8, 1.0),
         )?;
     }
-    for plane in &mut result {
+    normalise(&mut result);
+    Ok(result)
+}
+
+/// The rows below the first `computed` of each plane (`width` wide) as the
+/// mirror images, through `centre`, of those above: a centrosymmetric
+/// pattern's.
+fn mirror_below(planes: &mut [Vec<f64>], width: usize, (cx, cy): (usize, usize), computed: usize) {
+    for plane in planes {
+        let (top, bottom) = plane.split_at_mut(computed * width);
+        bottom
+            .par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(k, row)| {
+                let mirror = &top[(2 * cy - computed - k) * width..][..width];
+                for (i, value) in row.iter_mut().enumerate() {
+                    if let Some(m) = (2 * cx).checked_sub(i).filter(|&m| m < width) {
+                        *value = mirror[m];
+                    }
+                }
+            });
+    }
+}
+
+/// Each plane divided by its sum, where it has light.
+fn normalise(planes: &mut [Vec<f64>]) {
+    for plane in planes {
         // Summed in fixed chunks, so that the total is the same on any
         // number of threads.
         let total: f64 = plane
@@ -232,7 +204,79 @@ fn pattern_with(
             plane.par_iter_mut().for_each(|v| *v /= total);
         }
     }
-    Ok(result)
+}
+
+/// What fills a pattern's rows: the near and far fields, where the near
+/// field lies, and the grid.
+struct Rows<'a> {
+    near: &'a NearField<'a>,
+    far: &'a FarField,
+    chord: &'a Chord,
+    /// Per plane, the total weight of the spectrum's wavelengths.
+    weights_total: &'a [f64],
+    centre: (usize, usize),
+    pitch_mm: f64,
+    /// Light sent by a pixel: the near pixels are summed from unit squares
+    /// after the rows are filled ([`near_tents`]).
+    tents: bool,
+}
+
+impl Rows<'_> {
+    /// The pixels of row `j` in `columns` (the planes' rows in `row`): a
+    /// run of near pixels about the centre (a circle's chord), far ones on
+    /// either side, computed with the planes side by side and then dealt
+    /// out.
+    fn fill(&self, j: usize, row: &mut [&mut [f64]], columns: Range<usize>) {
+        let (cx, cy) = self.centre;
+        let (pitch_mm, planes) = (self.pitch_mm, self.weights_total.len());
+        let y = (cy as f64 - j as f64) * pitch_mm;
+        let x = |i: usize| (i as f64 - cx as f64) * pitch_mm;
+        let chord = self.chord.of_row(j, columns.clone());
+        let first = columns.start;
+        let mut values = vec![0.0; columns.len() * planes];
+        let mut scratch = far::Row::default();
+        for side in [columns.start..chord.start, chord.end..columns.end] {
+            if !side.is_empty() {
+                let out = &mut values[(side.start - first) * planes..(side.end - first) * planes];
+                self.far.row(
+                    x(side.start),
+                    y,
+                    pitch_mm,
+                    self.weights_total,
+                    &mut scratch,
+                    out,
+                );
+            }
+        }
+        // The near pixels lie together, in runs of a few dozen sharing
+        // their sample offsets (the core's, denser, apart).
+        let core = |i: usize| i.abs_diff(cx) <= 1 && j.abs_diff(cy) <= 1;
+        let pixels: Vec<usize> = if self.tents {
+            Vec::new()
+        } else {
+            chord.collect()
+        };
+        for run in pixels.chunk_by(|&a, &b| core(a) == core(b)) {
+            for part in run.chunks(NEAR_RUN) {
+                let xs: Vec<f64> = part.iter().map(|&i| x(i)).collect();
+                let at = (part[0] - first) * planes;
+                self.near.add_many(
+                    &xs,
+                    y,
+                    core(part[0]),
+                    &mut values[at..at + xs.len() * planes],
+                );
+            }
+        }
+        for (c, plane_row) in row.iter_mut().enumerate() {
+            for (value, pixel) in plane_row[columns.clone()]
+                .iter_mut()
+                .zip(values.chunks_exact(planes))
+            {
+                *value = pixel[c];
+            }
+        }
+    }
 }
 
 /// Where the near field lies: the pixels closer than √`far2` mm to the
