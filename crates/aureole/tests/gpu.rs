@@ -3,6 +3,8 @@
 //! the machine has (Mesa's lavapipe in CI). Skipped, with a word, where
 //! there is none.
 
+#![cfg(feature = "gpu")]
+
 mod noise;
 
 use aureole::control::{Cancel, Control};

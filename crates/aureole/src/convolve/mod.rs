@@ -11,6 +11,10 @@
 //! [`choose`] finds where a user's [`Device`] runs.
 
 mod double;
+#[cfg(feature = "gpu")]
+mod gpu;
+#[cfg(not(feature = "gpu"))]
+#[path = "no_gpu.rs"]
 mod gpu;
 mod grid;
 mod lamps;
@@ -200,6 +204,11 @@ pub fn engine(
         (_, Precision::Double) => Box::new(double::Convolver::new(
             planes, size, width, height, centre, control,
         )?),
+        #[cfg(not(feature = "gpu"))]
+        (Backend::Gpu, Precision::Single) => {
+            return Err(Error::NoGpu(gpu::gpu().err().unwrap_or_default()));
+        }
+        #[cfg(feature = "gpu")]
         (Backend::Gpu, Precision::Single) => {
             let found = gpu::gpu().map_err(Error::NoGpu)?;
             Box::new(gpu::GpuConvolver::new(
