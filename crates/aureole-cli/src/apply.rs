@@ -16,6 +16,7 @@ use aureole_io::write::LinearOptions;
 use clap::ArgMatches;
 
 use crate::chain::ChainArgs;
+use crate::device::DeviceArg;
 use crate::display_args::DisplayArgs;
 use crate::input::SourceArgs;
 use crate::progress::Progress;
@@ -526,24 +527,6 @@ impl Run<'_> {
             ));
         }
         Ok(applied.image.planes)
-    }
-}
-
-/// `--device`.
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub(crate) enum DeviceArg {
-    Auto,
-    Cpu,
-    Gpu,
-}
-
-impl From<DeviceArg> for aureole::Device {
-    fn from(device: DeviceArg) -> aureole::Device {
-        match device {
-            DeviceArg::Auto => aureole::Device::Auto,
-            DeviceArg::Cpu => aureole::Device::Cpu,
-            DeviceArg::Gpu => aureole::Device::Gpu,
-        }
     }
 }
 

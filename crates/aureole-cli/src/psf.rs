@@ -8,8 +8,8 @@ use aureole_io::formats::{by_extension, extension, kernel_outputs, KernelStorage
 use aureole_io::kernel::{write_kernel_for, KernelRecord};
 use clap::{ArgMatches, ValueEnum};
 
-use crate::apply::DeviceArg;
 use crate::chain::ChainArgs;
+use crate::device::DeviceArg;
 use crate::progress::Progress;
 use crate::values::{parse_memory, parse_positive, parse_size};
 use crate::Failure;

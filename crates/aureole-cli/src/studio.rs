@@ -7,7 +7,7 @@ use anyhow::anyhow;
 use aureole_io::limits::default_memory_limit;
 use aureole_studio::{Access, Roots, Studio};
 
-use crate::apply::DeviceArg;
+use crate::device::DeviceArg;
 use crate::Failure;
 
 #[derive(clap::Args)]
