@@ -56,7 +56,7 @@ impl ChainArgs {
         sources.sort_by_key(|(index, _)| *index);
         let mut config = Config::default();
         for (_, file) in sources {
-            config.apply(file);
+            config.merge(file);
         }
         if let Some(seed) = self.seed {
             config.seed = seed;
@@ -80,7 +80,7 @@ impl ChainArgs {
         let mut config = self.compose(matches, quiet)?;
         let defaulted = self.is_empty();
         if defaulted {
-            config.apply(presets::find(presets::DEFAULT_PRESET)?.config()?);
+            config.merge(presets::find(presets::DEFAULT_PRESET)?.config()?);
         }
         if config.effects.is_empty() {
             return Err(aureole::Error::NoEffect.into());

@@ -20,7 +20,7 @@ fn library_kernel(sources: &[&str], size: usize) -> aureole::Kernel {
             Ok(p) => p.config().unwrap(),
             Err(_) => aureole::ConfigFile::parse(text, "inline").unwrap(),
         };
-        config.apply(file);
+        config.merge(file);
     }
     config.kernel(&Extent::new(size, size).unwrap()).unwrap()
 }

@@ -30,7 +30,7 @@ fn scene(dir: &Path, name: &str) -> (PathBuf, Image) {
 
 fn library_result(image: &Image, preset: &str, threshold: f64) -> Image {
     let mut config = Config::default();
-    config.apply(aureole::presets::find(preset).unwrap().config().unwrap());
+    config.merge(aureole::presets::find(preset).unwrap().config().unwrap());
     let plan = Plan::for_image(&config, image.width, image.height, None).unwrap();
     let options = ApplyOptions {
         threshold: Some(threshold),

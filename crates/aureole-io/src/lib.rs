@@ -22,7 +22,7 @@
 //! let frame = Frame::new(image, &FrameOptions::default())?;
 //!
 //! let mut config = Config::default();
-//! config.apply(presets::find("paper-fig5-both")?.config()?);
+//! config.merge(presets::find("paper-fig5-both")?.config()?);
 //! let mut session = Session::new(config);
 //! let applied = session.apply(&frame, &Default::default(), &mut |_, _| {})?;
 //!

@@ -378,7 +378,7 @@ fn the_preview_draws_what_a_resampled_full_render_draws() {
     );
     let full_image = aureole_io::demo::night_street(640, 360);
     let mut config = Config::default();
-    config.apply(aureole::config::ConfigFile::parse(&config_text, "test").unwrap());
+    config.merge(aureole::config::ConfigFile::parse(&config_text, "test").unwrap());
     let full = Session::new(config.clone())
         .apply(
             &Frame::new(full_image.clone(), &FrameOptions::default()).unwrap(),
@@ -1216,7 +1216,7 @@ fn the_preview_has_the_look_of_the_full_frame_for_every_effect() {
             .map(|p| 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2]))
             .collect();
         let mut config = aureole::Config::default();
-        config.apply(aureole::ConfigFile::parse(&config_text, "test").unwrap());
+        config.merge(aureole::ConfigFile::parse(&config_text, "test").unwrap());
         let plan = aureole::Plan::for_image(&config, w, h, None).unwrap();
         let options = aureole::ApplyOptions {
             glare_only: true,

@@ -362,17 +362,17 @@ impl Config {
         scaled
     }
 
-    /// The files composed in order on the defaults ([`Config::apply`]).
+    /// The files composed in order on the defaults ([`Config::merge`]).
     pub fn compose(files: impl IntoIterator<Item = ConfigFile>) -> Config {
         let mut config = Config::default();
         for file in files {
-            config.apply(file);
+            config.merge(file);
         }
         config
     }
 
     /// Adds a file on top: its settings replace ours, its effects follow ours.
-    pub fn apply(&mut self, file: ConfigFile) {
+    pub fn merge(&mut self, file: ConfigFile) {
         self.seed = file.seed.unwrap_or(self.seed);
         self.threshold = file.threshold.unwrap_or(self.threshold);
         if let Some(camera) = &file.camera {
@@ -527,8 +527,8 @@ exponent = 2.0
     #[test]
     fn later_files_override_settings_and_append_effects() {
         let mut config = Config::default();
-        config.apply(ConfigFile::parse(SCHEMA, "a").unwrap());
-        config.apply(
+        config.merge(ConfigFile::parse(SCHEMA, "a").unwrap());
+        config.merge(
             ConfigFile::parse(
                 "seed = 9\n[camera]\nf_number = 2.8\n[[effect]]\ntype = \"vos\"\nepsilon = 0.1\n",
                 "b",

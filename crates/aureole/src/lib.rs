@@ -31,7 +31,7 @@
 //!
 //! // The camera: presets and config files compose like on the command line.
 //! let mut config = Config::default();
-//! config.apply(presets::find("paper-fig5-both")?.config()?);
+//! config.merge(presets::find("paper-fig5-both")?.config()?);
 //!
 //! // A session builds the kernel once per image size and reuses it.
 //! let mut session = Session::new(config).with_memory_limit(2 << 30);
@@ -58,7 +58,7 @@
 //! use aureole::{presets, Config, Extent};
 //!
 //! let mut config = Config::default();
-//! config.apply(presets::find("paper-fig5-both")?.config()?);
+//! config.merge(presets::find("paper-fig5-both")?.config()?);
 //! let kernel = config.kernel(&Extent::new(129, 129)?)?;
 //! assert!((kernel.sum(0) - 1.0).abs() < 1e-5);
 //! # Ok::<(), aureole::Error>(())

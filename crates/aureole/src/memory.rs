@@ -315,7 +315,7 @@ mod tests {
     #[test]
     fn a_coronas_reach_cuts_the_composition_it_takes_part_in() {
         let mut config = Config::default();
-        config.apply(
+        config.merge(
             crate::presets::find("paper-fig5-both")
                 .unwrap()
                 .config()
@@ -346,7 +346,7 @@ mod tests {
     fn a_star_filters_orders_are_counted_whatever_the_images_size() {
         for preset in ["star-filter-4pt", "star-filter-6pt", "star-filter-8pt"] {
             let mut config = Config::default();
-            config.apply(crate::presets::find(preset).unwrap().config().unwrap());
+            config.merge(crate::presets::find(preset).unwrap().config().unwrap());
             let Some(Effect::Aperture(aperture)) = config.effects.first() else {
                 panic!("{preset} starts with an aperture");
             };

@@ -203,7 +203,7 @@ fn bloom_config(epsilon: f64, beta: f64, radius: f64) -> Config {
 
 fn preset_config(name: &str) -> Config {
     let mut config = Config::default();
-    config.apply(aureole::presets::find(name).unwrap().config().unwrap());
+    config.merge(aureole::presets::find(name).unwrap().config().unwrap());
     config
 }
 

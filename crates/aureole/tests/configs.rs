@@ -32,7 +32,7 @@ fn every_recipe_builds_a_kernel_that_sums_to_one() {
         );
         assert!(!file.effects.is_empty(), "{}: no effect", path.display());
         let mut config = Config::default();
-        config.apply(file);
+        config.merge(file);
         let kernel = config
             .kernel(&Extent::new(65, 65).unwrap().with_image_width(1000))
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));

@@ -118,7 +118,7 @@ fn the_gpu_spreads_as_the_cpu_does() {
 /// The camera of `preset` with its kernel for `w`×`h` frames.
 fn kernel_of(preset: &str, (w, h): (usize, usize)) -> aureole::Kernel {
     let mut config = Config::default();
-    config.apply(aureole::presets::find(preset).unwrap().config().unwrap());
+    config.merge(aureole::presets::find(preset).unwrap().config().unwrap());
     Plan::for_image(&config, w, h, None).unwrap().into_kernel()
 }
 
@@ -349,7 +349,7 @@ fn kernels_compose_on_the_gpu_as_on_the_cpu() {
     let cancel = Cancel::new();
     for (name, file) in chains {
         let mut config = Config::default();
-        config.apply(file);
+        config.merge(file);
         let build = |composing: &mut aureole::Composing| {
             config
                 .kernel_on(&extent, composing, &mut Control::quiet(&cancel))

@@ -37,7 +37,7 @@ fn scene(factor: usize) -> Image {
 fn glare(effect: &str, factor: usize) -> Image {
     let mut config = Config::default();
     let text = format!("{CAMERA}\n[[effect]]\n{effect}\n");
-    config.apply(ConfigFile::parse(&text, "the effect").unwrap());
+    config.merge(ConfigFile::parse(&text, "the effect").unwrap());
     let image = scene(factor);
     let plan = Plan::for_image(&config, image.width, image.height, None).unwrap();
     let options = ApplyOptions {
@@ -139,7 +139,7 @@ fn halation_looks_the_same_at_1080p_and_at_4k() {
 /// The kernel of `effect` for an image `image_width` wide, `side` px square.
 fn kernel(effect: &str, side: usize, image_width: usize, sending: Sending) -> Kernel {
     let mut config = Config::default();
-    config.apply(
+    config.merge(
         ConfigFile::parse(&format!("{CAMERA}\n[[effect]]\n{effect}\n"), "the effect").unwrap(),
     );
     let extent = Extent::new(side, side)

@@ -9,7 +9,7 @@ use aureole::{
 
 fn config(preset: &str) -> Config {
     let mut config = Config::default();
-    config.apply(presets::find(preset).unwrap().config().unwrap());
+    config.merge(presets::find(preset).unwrap().config().unwrap());
     config
 }
 
@@ -232,7 +232,7 @@ fn every_long_loop_stops_when_cancelled() {
     // The kernel build: rasterising (a rounded 8-blade stop in colour), the
     // composition with a bloom and the spectrum.
     let mut night = config("camera-f8-7blade");
-    night.apply(presets::find("paper-fig4-bloom").unwrap().config().unwrap());
+    night.merge(presets::find("paper-fig4-bloom").unwrap().config().unwrap());
     let mut session = Session::new(night);
     let result = cancelled_at(
         &mut session,
@@ -375,7 +375,7 @@ beta = 2.0
 radius = "6px"
 "#;
     let mut config = Config::default();
-    config.apply(aureole::ConfigFile::parse(text, "the chain").unwrap());
+    config.merge(aureole::ConfigFile::parse(text, "the chain").unwrap());
     config
 }
 

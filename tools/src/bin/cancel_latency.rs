@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let lens = ConfigFile::load(std::path::Path::new("configs/night-street.toml"))
         .or_else(|_| presets::find("camera-f8-7blade")?.config())?;
     let mut rounded = Config::default();
-    rounded.apply(lens);
+    rounded.merge(lens);
     let corona = config("paper-fig6a")?;
     println!("| loop | cancelled after | latency median | latency max |");
     println!("|---|---|---|---|");
@@ -76,7 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
 fn config(preset: &str) -> Result<Config, aureole::Error> {
     let mut config = Config::default();
-    config.apply(presets::find(preset)?.config()?);
+    config.merge(presets::find(preset)?.config()?);
     Ok(config)
 }
 

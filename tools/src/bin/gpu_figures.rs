@@ -41,7 +41,7 @@ fn main() {
             _ => (1920, 1080),
         };
         let mut lens = Config::default();
-        lens.apply(
+        lens.merge(
             presets::find("camera-f8-7blade")
                 .and_then(|p| p.config())
                 .expect("preset"),

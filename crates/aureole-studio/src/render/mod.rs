@@ -499,7 +499,7 @@ impl Renderer {
 pub fn parse_config(text: &str) -> Result<Config, StudioError> {
     let file = ConfigFile::parse(text, "config")?;
     let mut config = Config::default();
-    config.apply(file);
+    config.merge(file);
     if config.effects.is_empty() {
         return Err(aureole::Error::NoEffect.into());
     }

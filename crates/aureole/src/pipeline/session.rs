@@ -178,7 +178,7 @@ enum Lens {
 /// use aureole::{presets, ApplyOptions, Config, Frame, FrameOptions, Image, Layout, Session};
 ///
 /// let mut config = Config::default();
-/// config.apply(presets::find("paper-fig5-both")?.config()?);
+/// config.merge(presets::find("paper-fig5-both")?.config()?);
 /// let mut session = Session::new(config).with_memory_limit(1 << 30);
 /// for frame in 0..3 {
 ///     // A lamp of 5·10⁴ cd/m² moving along a dim street.
