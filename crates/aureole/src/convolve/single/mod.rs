@@ -17,21 +17,24 @@
 //! buffer per plane, not two); the inverse row transforms read their
 //! block's tiles, which lie together.
 
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
 use realfft::num_complex::Complex;
-use realfft::{RealFftPlanner, RealToComplex};
-use rustfft::{Fft, FftPlanner};
+
+mod footprint;
+mod spectra;
+
+pub(super) use footprint::{compose_bytes, footprint};
+use spectra::{PlaneSpectrum, Spectra};
 
 use super::grid::{ColumnTransform, Grid, Transforms};
-use super::lamps::Near;
 use super::placement::Placement;
 use super::pool::{Lent, Pool, Scratch};
-use super::{Centre, Engine, Footprint, Load, Spread};
+use super::{Centre, Engine, Spread};
 use crate::control::{Cancel, Control};
 use crate::error::Result;
-use crate::image::{grow_zeroed, zeros};
+use crate::image::grow_zeroed;
 
 /// The spectra of one plane, in tiles: its row spectra, then, in the same
 /// tiles, its column results (each strip task owns its tiles).
@@ -48,58 +51,6 @@ const BLOCK: usize = 8;
 
 /// Values in a tile.
 const TILE: usize = BLOCK * STRIP;
-
-/// The kernel's spectra as the engine holds them: each plane on its own,
-/// so that a new set shares the planes it does not change.
-#[derive(Clone)]
-struct Spectra {
-    /// The near windows of the split last asked for.
-    near: Option<Arc<Near>>,
-    /// Per kernel plane.
-    planes: Vec<Arc<PlaneSpectrum>>,
-}
-
-/// One kernel plane's spectrum, stored column by column (`px/2 + 1`
-/// columns of P values; for pruned columns the even frequencies, then the
-/// odd ones).
-enum PlaneSpectrum {
-    /// Not transformed yet: a plan transforms its kernel once it knows
-    /// whether its first image needs it whole or split for lamps.
-    Pending,
-    /// K̂ whole: what every input without lamps needs.
-    Whole(Vec<Complex<f32>>),
-    /// Split for lamps at a radius: the spectrum of the kernel beyond the
-    /// near window, and the window's row spectra, from which each column
-    /// of the window's spectrum is transformed as it is needed. K̂ is
-    /// their sum: holding it too would take another kernel's worth of
-    /// memory (400 MB for a full-frame 4K RGB kernel).
-    Split {
-        radius: usize,
-        far: Vec<Complex<f32>>,
-        /// The 2r + 1 rows of the window (centre left out) as row spectra,
-        /// one after the other.
-        window: Vec<Complex<f32>>,
-    },
-}
-
-impl Spectra {
-    /// Whether every plane is transformed.
-    fn ready(&self) -> bool {
-        !self
-            .planes
-            .iter()
-            .any(|p| matches!(p.as_ref(), PlaneSpectrum::Pending))
-    }
-
-    /// Whether every plane is split at `radius`, and the near windows are
-    /// that radius's: lamps can go through.
-    fn split_at(&self, radius: usize) -> bool {
-        self.near.as_ref().is_some_and(|near| near.radius == radius)
-            && self.planes.iter().all(
-                |p| matches!(p.as_ref(), PlaneSpectrum::Split { radius: r, .. } if *r == radius),
-            )
-    }
-}
 
 /// What column `u` of an input is multiplied by.
 enum KernelColumn<'a> {
@@ -169,42 +120,6 @@ fn lamps_in_row(lamps: &[usize], y: usize, w: usize) -> &[usize] {
     let first = lamps.partition_point(|&i| i < y * w);
     let last = lamps.partition_point(|&i| i < (y + 1) * w);
     &lamps[first..last]
-}
-
-/// Bytes of a complex f32.
-const COMPLEX: u64 = 8;
-
-/// Rows of a near window held as row spectra, at most (a radius of 128).
-const WINDOW_ROWS: u64 = 257;
-
-/// What the engine holds: transforming, the kernel's
-/// spectrum and its rows' spectra; spreading, the spectrum (split for
-/// lamps: the far spectrum and the window's row spectra) and every plane's
-/// row spectra.
-pub(super) fn footprint(load: &Load) -> Footprint {
-    let grid = Grid::new(load.kernel, load.image, true);
-    let (half, py) = (grid.spectrum_width() as u64, grid.padded().1 as u64);
-    let kernel_planes = load.kernel_planes as u64;
-    let spectrum = half * py * COMPLEX * kernel_planes;
-    let window = if load.split {
-        WINDOW_ROWS.min(py) * half * COMPLEX * kernel_planes
-    } else {
-        0
-    };
-    let rows = half * load.image.1 as u64 * COMPLEX * load.planes as u64;
-    Footprint {
-        preparing: spectrum + half * load.kernel.1 as u64 * COMPLEX,
-        spreading: spectrum + window + rows,
-    }
-}
-
-/// What [`super::compose`] holds beside its plane and result: the
-/// spectrum of the kernel (`size`) at the plane's size, and the plane's
-/// row spectra.
-pub(super) fn compose_bytes(size: (usize, usize), plane: (usize, usize)) -> u64 {
-    let grid = Grid::new(size, plane, true);
-    let (half, py) = (grid.spectrum_width() as u64, grid.padded().1 as u64);
-    half * (py + 2 * size.1 as u64) * COMPLEX
 }
 
 /// Convolves `width`×`height` planes with one kernel, plane by plane.
@@ -853,67 +768,11 @@ impl Engine for Convolver {
     }
 
     fn prepare(&self, planes: &[&[f32]], control: &mut Control) -> Result<()> {
-        if self.ready() {
-            return Ok(());
-        }
-        if planes.len() != self.planes {
-            return Err(crate::error::Error::NotTransformed);
-        }
-        let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(self.grid.px);
-        let full_column = FftPlanner::<f32>::new().plan_fft_forward(self.grid.columns.length());
-        let mut held = self.spectra.lock().unwrap_or_else(PoisonError::into_inner);
-        let share = 1.0 / planes.len() as f64;
-        for (k, plane) in planes.iter().enumerate() {
-            if !matches!(held.planes[k].as_ref(), PlaneSpectrum::Pending) {
-                continue;
-            }
-            let placed = Placement {
-                plane,
-                size: self.kernel_size,
-                centre: self.centre,
-            };
-            let mut part = control.part(k as f64 * share, (k + 1) as f64 * share);
-            let whole = kernel_spectrum(&*row_fft, &*full_column, &self.grid, &placed, &mut part)?;
-            // Each plane as it comes: a cancelled run keeps those done.
-            let mut next = Spectra::clone(&held);
-            next.planes[k] = Arc::new(PlaneSpectrum::Whole(whole));
-            *held = Arc::new(next);
-        }
-        Ok(())
+        self.prepare_spectra(planes, control)
     }
 
     fn split_near(&self, planes: &[&[f32]], radius: usize, control: &mut Control) -> Result<bool> {
-        if self.has_split(radius) {
-            return Ok(true);
-        }
-        let Some(near) = Near::fitting(planes, self.kernel_size, radius, self.planes) else {
-            return Ok(false);
-        };
-        let near = Arc::new(near);
-        let row_fft = RealFftPlanner::<f32>::new().plan_fft_forward(self.grid.px);
-        let full_column = FftPlanner::<f32>::new().plan_fft_forward(self.grid.columns.length());
-        // Held while the split is built, so that no application starts on
-        // spectra half replaced. Each plane's new spectrum replaces its old
-        // one as it comes, which then goes unless an application still
-        // running holds it: the engine never holds two whole sets. A plane
-        // split before a cancellation is not split again.
-        let mut held = self.spectra.lock().unwrap_or_else(PoisonError::into_inner);
-        let share = 1.0 / planes.len() as f64;
-        for (k, plane) in planes.iter().enumerate() {
-            let done = matches!(held.planes[k].as_ref(), PlaneSpectrum::Split { radius: r, .. } if *r == radius);
-            if done {
-                continue;
-            }
-            let mut part = control.part(k as f64 * share, (k + 1) as f64 * share);
-            let split = self.split_plane(plane, k, &near, (&*row_fft, &*full_column), &mut part)?;
-            let mut next = Spectra::clone(&held);
-            next.planes[k] = Arc::new(split);
-            *held = Arc::new(next);
-        }
-        let mut next = Spectra::clone(&held);
-        next.near = Some(near);
-        *held = Arc::new(next);
-        Ok(true)
+        self.split_spectra(planes, radius, control)
     }
 
     /// Each output as one pass over its plane where it takes one kernel
@@ -967,63 +826,6 @@ impl Engine for Convolver {
 }
 
 impl Convolver {
-    /// The spectra as they are now.
-    fn spectra(&self) -> Arc<Spectra> {
-        self.spectra
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .clone()
-    }
-
-    /// Kernel plane `k` (`plane`) split at `near`'s radius: the spectrum of
-    /// the rest, and the window's row spectra.
-    fn split_plane(
-        &self,
-        plane: &[f32],
-        k: usize,
-        near: &Near,
-        (row_fft, full_column): (&dyn RealToComplex<f32>, &dyn Fft<f32>),
-        control: &mut Control,
-    ) -> Result<PlaneSpectrum> {
-        let rest = near.far_plane(plane, self.kernel_size);
-        let placed = Placement {
-            plane: &rest,
-            size: self.kernel_size,
-            centre: Centre::Include,
-        };
-        let far = kernel_spectrum(row_fft, full_column, &self.grid, &placed, control)?;
-        let window = self.window_rows(near.window(k), near.radius, row_fft);
-        Ok(PlaneSpectrum::Split {
-            radius: near.radius,
-            far,
-            window,
-        })
-    }
-
-    /// The 2r + 1 rows of a near window (row-major, centre left out) as row
-    /// spectra, each row placed in the period as the kernel's rows are.
-    fn window_rows(
-        &self,
-        window: &[f32],
-        radius: usize,
-        row_fft: &dyn RealToComplex<f32>,
-    ) -> Vec<Complex<f32>> {
-        let side = 2 * radius + 1;
-        let px = self.grid.px;
-        let count = self.grid.spectrum_width();
-        let mut spectra = zeros(side * count);
-        let mut input = row_fft.make_input_vec();
-        let mut scratch = row_fft.make_scratch_vec();
-        for (row, out) in window.chunks(side).zip(spectra.chunks_mut(count)) {
-            input.iter_mut().for_each(|v| *v = 0.0);
-            for (x, &v) in row.iter().enumerate() {
-                input[(x + px - radius) % px] = v;
-            }
-            let _ = row_fft.process_with_scratch(&mut input, out, &mut scratch);
-        }
-        spectra
-    }
-
     /// One output of several weighted terms: the bright part goes through
     /// each kernel plane, and what stays is added once.
     fn weighted(
@@ -1069,81 +871,4 @@ impl Convolver {
         }
         Ok(sum)
     }
-}
-
-/// The 2-D spectrum of a placed kernel plane over the grid, column by
-/// column (pruned columns: even frequencies, then odd). Only the kernel's
-/// own rows are transformed and stored: the other rows of the period are
-/// zeros.
-fn kernel_spectrum(
-    row_fft: &dyn RealToComplex<f32>,
-    column_fft: &dyn Fft<f32>,
-    grid: &Grid,
-    placed: &Placement,
-    control: &mut Control,
-) -> Result<Vec<Complex<f32>>> {
-    let py = grid.columns.length();
-    let kh = placed.size.1;
-    let count = grid.spectrum_width();
-    let zero = Complex::new(0.0, 0.0);
-    let cancel = control.cancel();
-    let mut rows = zeros(kh * count);
-    rows.par_chunks_mut(count).enumerate().for_each_init(
-        || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
-        |(input, scratch), (j, out)| {
-            if cancel.is_cancelled() {
-                return;
-            }
-            placed.row(j, input);
-            let _ = row_fft.process_with_scratch(input, out, scratch);
-        },
-    );
-    control.check()?;
-    control.report(0.5);
-    // Column transforms, a strip of columns per task, gathered a cache line
-    // or two per row rather than one value per row.
-    let mut spectrum = zeros(count * py);
-    spectrum
-        .par_chunks_mut(STRIP * py)
-        .enumerate()
-        .for_each_init(
-            || {
-                (
-                    vec![zero; py * STRIP],
-                    vec![zero; py],
-                    vec![zero; column_fft.get_inplace_scratch_len()],
-                )
-            },
-            |(strip, column, scratch), (s, out)| {
-                if cancel.is_cancelled() {
-                    return;
-                }
-                let first = s * STRIP;
-                let width = out.len() / py;
-                strip.iter_mut().for_each(|v| *v = zero);
-                for (j, row) in rows.chunks(count).enumerate() {
-                    let r = placed.period_row(j, py);
-                    strip[r * STRIP..r * STRIP + width].copy_from_slice(&row[first..first + width]);
-                }
-                for (j, out) in out.chunks_mut(py).enumerate() {
-                    for (v, s) in column.iter_mut().zip(strip.iter().skip(j).step_by(STRIP)) {
-                        *v = *s;
-                    }
-                    column_fft.process_with_scratch(column, scratch);
-                    match grid.columns {
-                        ColumnTransform::Full(_) => out.copy_from_slice(column),
-                        ColumnTransform::Halves(n) => {
-                            let (even, odd) = out.split_at_mut(n);
-                            for ((e, o), pair) in even.iter_mut().zip(odd).zip(column.chunks(2)) {
-                                *e = pair[0];
-                                *o = pair[1];
-                            }
-                        }
-                    }
-                }
-            },
-        );
-    control.check()?;
-    control.report(1.0);
-    Ok(spectrum)
 }
