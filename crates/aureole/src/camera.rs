@@ -1,15 +1,17 @@
-//! The camera: what turns lengths on the sensor and angles in the scene into
-//! pixels.
+//! The camera's geometry, the `[camera]` table: what turns lengths on the
+//! sensor and angles in the scene into pixels. ("Camera" alone is the
+//! whole chain a user picks: a preset, a config, Python's `Camera`.)
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-/// The camera that recorded (or renders) the image. Every field is optional
-/// in a config file; each is needed only by what uses it.
+/// The geometry of the camera that recorded (or renders) the image: its
+/// sensor width, focal length and f-number. Every field is optional in a
+/// config file; each is needed only by what uses it.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub struct Camera {
+pub struct CameraGeometry {
     /// Width of the sensor (or film) in mm; the image width spans it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sensor_width_mm: Option<f64>,
@@ -21,7 +23,7 @@ pub struct Camera {
     pub f_number: Option<f64>,
 }
 
-impl Camera {
+impl CameraGeometry {
     /// Checks every given field: positive and finite, f-number at least 0.5
     /// (the limit of a lens in air).
     pub fn validate(&self) -> Result<()> {
@@ -47,7 +49,7 @@ impl Camera {
     }
 
     /// Fields later set in `other` replace ours; the others stay.
-    pub fn merge(&mut self, other: &Camera) {
+    pub fn merge(&mut self, other: &CameraGeometry) {
         self.sensor_width_mm = other.sensor_width_mm.or(self.sensor_width_mm);
         self.focal_length_mm = other.focal_length_mm.or(self.focal_length_mm);
         self.f_number = other.f_number.or(self.f_number);

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::camera::Camera;
+use crate::camera::CameraGeometry;
 use crate::check;
 use crate::control::{Cancel, Control};
 use crate::convolve::Composing;
@@ -28,7 +28,7 @@ pub struct ConfigFile {
     /// Luminance threshold in cd/m²: pixels at or below it are not spread.
     pub threshold: Option<f64>,
     /// Camera fields, if the file has a `[camera]` table.
-    pub camera: Option<Camera>,
+    pub camera: Option<CameraGeometry>,
     /// The `[[effect]]` tables, in order.
     pub effects: Vec<Effect>,
 }
@@ -39,7 +39,7 @@ struct RawFile {
     description: Option<String>,
     seed: Option<u64>,
     threshold: Option<toml::Spanned<f64>>,
-    camera: Option<toml::Spanned<Camera>>,
+    camera: Option<toml::Spanned<CameraGeometry>>,
     #[serde(default)]
     effect: Vec<toml::Spanned<toml::Table>>,
 }
@@ -333,7 +333,7 @@ pub struct Config {
     /// Luminance threshold in cd/m² (default 0: every pixel is spread).
     pub threshold: f64,
     /// The camera (every field optional).
-    pub camera: Camera,
+    pub camera: CameraGeometry,
     /// The optical chain, in order.
     pub effects: Vec<Effect>,
 }
@@ -343,7 +343,7 @@ impl Default for Config {
         Config {
             seed: 1,
             threshold: 0.0,
-            camera: Camera::default(),
+            camera: CameraGeometry::default(),
             effects: Vec::new(),
         }
     }

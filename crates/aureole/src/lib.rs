@@ -85,7 +85,7 @@ pub mod schema;
 mod sending;
 pub mod units;
 
-pub use camera::Camera;
+pub use camera::CameraGeometry;
 pub use config::{Config, ConfigFile};
 pub use control::{Cancel, Control};
 pub use convolve::{Composing, Device};

@@ -12,7 +12,7 @@ use aureole::kernel::profile::{bilinear, radial_profile};
 use aureole::optics::aperture::pupil::Pupil;
 use aureole::optics::aperture::spectrum::{mean_wavelengths, Light};
 use aureole::optics::aperture::Optics;
-use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel, Sending};
+use aureole::{Aperture, CameraGeometry, Config, Effect, Extent, Kernel, Sending};
 
 const F: f64 = 50.0; // focal length, mm
 const GREEN: f64 = 550.0; // nm
@@ -37,7 +37,7 @@ fn lens(blades: u32, spectral: bool) -> Aperture {
 
 fn camera_config(aperture: Aperture) -> Config {
     Config {
-        camera: Camera {
+        camera: CameraGeometry {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(F),
             f_number: Some(8.0),

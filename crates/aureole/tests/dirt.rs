@@ -11,7 +11,7 @@
 use std::f64::consts::{PI, TAU};
 
 use aureole::optics::aperture::{first_optics, pupil::Pupil};
-use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel};
+use aureole::{Aperture, CameraGeometry, Config, Effect, Extent, Kernel};
 
 const F: f64 = 50.0;
 const GREEN: f64 = 550.0;
@@ -22,7 +22,7 @@ fn first_pupil(config: &Config) -> Option<Pupil> {
 
 fn config(f_number: f64, aperture: Aperture) -> Config {
     Config {
-        camera: Camera {
+        camera: CameraGeometry {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(F),
             f_number: Some(f_number),

@@ -7,7 +7,7 @@
 // (clippy.toml refuses it in the core) is as good as libm here.
 #![allow(clippy::disallowed_methods)]
 
-use aureole::{Camera, Config, Effect, Extent, Halation, Kernel, Length, Sending};
+use aureole::{CameraGeometry, Config, Effect, Extent, Halation, Kernel, Length, Sending};
 use proptest::prelude::*;
 
 fn halation(toml: &str) -> Halation {
@@ -15,7 +15,7 @@ fn halation(toml: &str) -> Halation {
 }
 
 /// The halation kernel of a square `size` for an image `image_width` wide.
-fn kernel(halation: &Halation, camera: Camera, size: usize, image_width: usize) -> Kernel {
+fn kernel(halation: &Halation, camera: CameraGeometry, size: usize, image_width: usize) -> Kernel {
     let config = Config {
         camera,
         effects: vec![Effect::Halation(halation.clone())],
@@ -67,7 +67,7 @@ blue_depth = "1.4px"
 #[test]
 fn each_channel_sums_to_one_and_its_halo_takes_its_share_from_the_core() {
     let h = halation(PIXELS);
-    let k = kernel(&h, Camera::default(), 201, 201);
+    let k = kernel(&h, CameraGeometry::default(), 201, 201);
     assert_eq!(k.planes().len(), 3);
     let shares = h.shares();
     let centre = k.centre_weights();
@@ -114,7 +114,7 @@ fn fresnel(n: f64, theta: f64) -> f64 {
 fn the_halo_is_what_rays_traced_through_the_base_give() {
     let h = halation(PIXELS);
     let size = 161;
-    let k = kernel(&h, Camera::default(), size, size);
+    let k = kernel(&h, CameraGeometry::default(), size, size);
     let (n, path, transmission) = (h.base_index(), 10.0, h.red_transmission);
     // Rays leave the layer diffusely (sin²θ uniform), cross the base and
     // come back L tan θ away with weight R(θ)·T^(1/cos θ); each lands in a
@@ -181,9 +181,9 @@ fn ring_and_mean(k: &Kernel, plane: usize) -> (usize, f64) {
 #[test]
 fn the_halo_grows_with_the_base_and_rings_where_total_reflection_begins() {
     // A 35 mm frame 1200 px wide: 30 µm a pixel.
-    let camera = Camera {
+    let camera = CameraGeometry {
         sensor_width_mm: Some(36.0),
-        ..Camera::default()
+        ..CameraGeometry::default()
     };
     let pitch_um = 36_000.0 / 1200.0;
     let mut measured = Vec::new();
@@ -216,9 +216,9 @@ fn the_halo_grows_with_the_base_and_rings_where_total_reflection_begins() {
 fn the_backing_leaves_a_trace_of_the_halo() {
     let bare = halation("");
     let backed = halation("remjet = true");
-    let camera = Camera {
+    let camera = CameraGeometry {
         sensor_width_mm: Some(36.0),
-        ..Camera::default()
+        ..CameraGeometry::default()
     };
     let k = kernel(&backed, camera, 161, 1920);
     for (c, (without, with)) in bare.shares().iter().zip(backed.shares()).enumerate() {
@@ -239,9 +239,9 @@ fn the_backing_leaves_a_trace_of_the_halo() {
 fn the_halo_is_neutral_at_its_core_and_warms_outward() {
     // A 35 mm frame 1920 px wide (18.75 µm a pixel): total reflection
     // rings red at 2(130 + 4) µm·tan θc = 12.8 px.
-    let camera = Camera {
+    let camera = CameraGeometry {
         sensor_width_mm: Some(36.0),
-        ..Camera::default()
+        ..CameraGeometry::default()
     };
     let h = halation("");
     let k = kernel(&h, camera, 161, 1920);
@@ -288,7 +288,7 @@ proptest! {
             green_transmission: transmissions.1,
             blue_transmission: transmissions.2,
         };
-        let k = kernel(&h, Camera::default(), size, size);
+        let k = kernel(&h, CameraGeometry::default(), size, size);
         let shares = h.shares();
         for (c, (share, centre)) in shares.iter().zip(k.centre_weights()).enumerate() {
             prop_assert!((k.sum(c) - 1.0).abs() < 1e-5, "plane {c}: sum {}", k.sum(c));

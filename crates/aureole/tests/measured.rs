@@ -7,13 +7,13 @@
 #![allow(clippy::disallowed_methods)]
 
 use aureole::optics::measured::Picture;
-use aureole::{Aperture, Camera, Config, Effect, Extent, Kernel, Measured, Sending};
+use aureole::{Aperture, CameraGeometry, Config, Effect, Extent, Kernel, Measured, Sending};
 
 const SENSOR: f64 = 36.0;
 
 fn config(effects: Vec<Effect>) -> Config {
     Config {
-        camera: Camera {
+        camera: CameraGeometry {
             sensor_width_mm: Some(SENSOR),
             focal_length_mm: Some(50.0),
             f_number: Some(8.0),

@@ -9,11 +9,11 @@ use std::f64::consts::PI;
 
 use aureole::kernel::profile::angular_profile;
 use aureole::{
-    Bloom, Camera, Config, ConfigFile, Corona, Effect, Extent, Kernel, Length, Sending, Vos,
+    Bloom, CameraGeometry, Config, ConfigFile, Corona, Effect, Extent, Kernel, Length, Sending, Vos,
 };
 use proptest::prelude::*;
 
-fn kernel(effects: Vec<Effect>, camera: Camera, seed: u64, size: usize) -> Kernel {
+fn kernel(effects: Vec<Effect>, camera: CameraGeometry, seed: u64, size: usize) -> Kernel {
     let config = Config {
         seed,
         camera,
@@ -48,8 +48,8 @@ fn corona(rays: u32, length: f64, width: f64, spread: f64) -> Corona {
     }
 }
 
-fn camera(sensor_mm: f64, focal_mm: f64) -> Camera {
-    Camera {
+fn camera(sensor_mm: f64, focal_mm: f64) -> CameraGeometry {
+    CameraGeometry {
         sensor_width_mm: Some(sensor_mm),
         focal_length_mm: Some(focal_mm),
         f_number: None,
@@ -105,7 +105,12 @@ proptest! {
 
 #[test]
 fn epsilon_zero_is_the_identity() {
-    let k = kernel(vec![bloom(0.0, 2.0, 10.0)], Camera::default(), 1, 33);
+    let k = kernel(
+        vec![bloom(0.0, 2.0, 10.0)],
+        CameraGeometry::default(),
+        1,
+        33,
+    );
     assert_eq!(k.at(0, 0, 0), 1.0);
     assert_eq!(k.sum(0), 1.0);
 }
@@ -113,7 +118,7 @@ fn epsilon_zero_is_the_identity() {
 // ---------------------------------------------------------------- bloom, Eq. 6
 
 /// K(r) = ε(β − 1)/(πR²)·(1 + (r/R)²)^(−β) within 2 % for 3R/10 ≤ r ≤ 10R.
-fn check_moffat(beta: f64, radius_px: f64, effect: Effect, camera: Camera, size: usize) {
+fn check_moffat(beta: f64, radius_px: f64, effect: Effect, camera: CameraGeometry, size: usize) {
     let k = kernel(vec![effect], camera, 1, size);
     let theory = Bloom {
         epsilon: 0.005,
@@ -144,8 +149,20 @@ fn check_moffat(beta: f64, radius_px: f64, effect: Effect, camera: Camera, size:
 
 #[test]
 fn bloom_profile_is_the_moffat_of_eq_6() {
-    check_moffat(2.0, 10.4, bloom(0.005, 2.0, 10.4), Camera::default(), 1025);
-    check_moffat(3.5, 6.0, bloom(0.005, 3.5, 6.0), Camera::default(), 257);
+    check_moffat(
+        2.0,
+        10.4,
+        bloom(0.005, 2.0, 10.4),
+        CameraGeometry::default(),
+        1025,
+    );
+    check_moffat(
+        3.5,
+        6.0,
+        bloom(0.005, 3.5, 6.0),
+        CameraGeometry::default(),
+        257,
+    );
 }
 
 #[test]
@@ -166,7 +183,12 @@ fn bloom_radius_on_the_film_goes_through_the_pixel_pitch() {
         .with_image_width(3600)
         .sent_by(Sending::Point);
     let from_um = config.kernel(&extent).unwrap();
-    let from_px = kernel(vec![bloom(0.005, 3.5, 6.0)], Camera::default(), 1, 257);
+    let from_px = kernel(
+        vec![bloom(0.005, 3.5, 6.0)],
+        CameraGeometry::default(),
+        1,
+        257,
+    );
     for (a, b) in from_um.planes()[0].iter().zip(&from_px.planes()[0]) {
         assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-12), "{a} vs {b}");
     }
@@ -220,7 +242,7 @@ proptest! {
         seed in 0u64..1000,
     ) {
         let c = Corona { rotation_deg: rotation, length_jitter: 0.25, ..corona(rays, 30.0, 4.0, spread) };
-        let k = kernel(vec![Effect::Corona(c)], Camera::default(), seed, 161);
+        let k = kernel(vec![Effect::Corona(c)], CameraGeometry::default(), seed, 161);
         let peaks = ray_peaks(&k, 30.0);
         prop_assert_eq!(peaks.len(), rays as usize);
         for peak in peaks {
@@ -265,7 +287,7 @@ fn fwhm_series(rays: u32, width: f64, spread: f64) -> Vec<(f64, f64)> {
         fadeout: 0.3,
         ..corona(rays, 400.0, width, spread)
     };
-    let k = kernel(vec![Effect::Corona(c)], Camera::default(), 1, 241);
+    let k = kernel(vec![Effect::Corona(c)], CameraGeometry::default(), 1, 241);
     [30, 50, 70, 90, 110]
         .iter()
         .map(|&r| {
@@ -323,7 +345,12 @@ fn intensity_along_each_ray_falls_as_exp_minus_sigma_r_over_its_length() {
     assert!(factors
         .windows(2)
         .any(|f| (f[0].length - f[1].length).abs() > 0.01));
-    let k = kernel(vec![Effect::Corona(c)], Camera::default(), seed, 321);
+    let k = kernel(
+        vec![Effect::Corona(c)],
+        CameraGeometry::default(),
+        seed,
+        321,
+    );
     // Rays 0…3 point along +x, +y, −x, −y.
     let axes = [(1, 0), (0, 1), (-1, 0), (0, -1)];
     for (m, (ax, ay)) in axes.iter().enumerate() {
@@ -353,7 +380,7 @@ fn thin_rays_keep_their_energy_wherever_they_cross_the_pixel_grid() {
         rotation_deg: 7.3,
         ..corona(rays, 80.0, 3.0, 0.0)
     };
-    let k = kernel(vec![Effect::Corona(c)], Camera::default(), 1, 241);
+    let k = kernel(vec![Effect::Corona(c)], CameraGeometry::default(), 1, 241);
     let mut energy = vec![0.0; rays as usize];
     for dy in -120i64..=120 {
         for dx in -120i64..=120 {
@@ -379,9 +406,24 @@ fn the_same_seed_gives_the_same_kernel_and_another_seed_other_rays() {
         length_jitter: 0.25,
         ..corona(14, 20.0, 3.0, 1.0)
     };
-    let a = kernel(vec![Effect::Corona(c.clone())], Camera::default(), 5, 101);
-    let b = kernel(vec![Effect::Corona(c.clone())], Camera::default(), 5, 101);
-    let other = kernel(vec![Effect::Corona(c.clone())], Camera::default(), 6, 101);
+    let a = kernel(
+        vec![Effect::Corona(c.clone())],
+        CameraGeometry::default(),
+        5,
+        101,
+    );
+    let b = kernel(
+        vec![Effect::Corona(c.clone())],
+        CameraGeometry::default(),
+        5,
+        101,
+    );
+    let other = kernel(
+        vec![Effect::Corona(c.clone())],
+        CameraGeometry::default(),
+        6,
+        101,
+    );
     assert_eq!(a, b);
     assert_ne!(a, other);
     assert_ne!(c.ray_factors(5, 0), c.ray_factors(6, 0));
@@ -434,9 +476,9 @@ fn second_moment(k: &Kernel) -> f64 {
 fn chained_effects_convolve_so_their_second_moments_add() {
     // β = 4 has a finite variance, R²/(β − 2) per unit of spread light.
     let (a, b) = (bloom(0.3, 4.0, 3.0), bloom(0.5, 4.0, 5.0));
-    let ka = kernel(vec![a.clone()], Camera::default(), 1, 201);
-    let kb = kernel(vec![b.clone()], Camera::default(), 1, 201);
-    let both = kernel(vec![a, b], Camera::default(), 1, 201);
+    let ka = kernel(vec![a.clone()], CameraGeometry::default(), 1, 201);
+    let kb = kernel(vec![b.clone()], CameraGeometry::default(), 1, 201);
+    let both = kernel(vec![a, b], CameraGeometry::default(), 1, 201);
     let sum = second_moment(&ka) + second_moment(&kb);
     assert!((second_moment(&both) / sum - 1.0).abs() < 2e-3);
     assert!((both.sum(0) - 1.0).abs() < 1e-5);
@@ -448,14 +490,19 @@ fn chained_effects_convolve_so_their_second_moments_add() {
 #[test]
 fn an_effect_with_epsilon_zero_leaves_the_chain_unchanged() {
     let c = Effect::Corona(corona(6, 20.0, 3.0, 0.5));
-    let alone = kernel(vec![c.clone()], Camera::default(), 1, 65);
-    let chained = kernel(vec![c, bloom(0.0, 2.0, 5.0)], Camera::default(), 1, 65);
+    let alone = kernel(vec![c.clone()], CameraGeometry::default(), 1, 65);
+    let chained = kernel(
+        vec![c, bloom(0.0, 2.0, 5.0)],
+        CameraGeometry::default(),
+        1,
+        65,
+    );
     assert_eq!(alone, chained);
 }
 
 #[test]
 fn even_sizes_put_the_centre_at_half_the_size() {
-    let k = kernel(vec![bloom(0.2, 2.0, 3.0)], Camera::default(), 1, 64);
+    let k = kernel(vec![bloom(0.2, 2.0, 3.0)], CameraGeometry::default(), 1, 64);
     assert_eq!(k.centre(), (32, 32));
     let peak = k.planes()[0].iter().cloned().fold(0f32, f32::max);
     assert_eq!(k.at(0, 0, 0), peak);
@@ -557,13 +604,13 @@ fn physical_lengths_and_angles_without_a_camera_say_what_is_missing() {
     })];
     let extent = Extent::new(9, 9).unwrap();
     for (effects, cam, field) in [
-        (um, Camera::default(), "sensor_width_mm"),
-        (vos.clone(), Camera::default(), "focal_length_mm"),
+        (um, CameraGeometry::default(), "sensor_width_mm"),
+        (vos.clone(), CameraGeometry::default(), "focal_length_mm"),
         (
             vos,
-            Camera {
+            CameraGeometry {
                 focal_length_mm: Some(50.0),
-                ..Camera::default()
+                ..CameraGeometry::default()
             },
             "sensor_width_mm",
         ),

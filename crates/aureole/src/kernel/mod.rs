@@ -12,7 +12,7 @@ mod radial;
 mod raster;
 mod split;
 
-use crate::camera::Camera;
+use crate::camera::CameraGeometry;
 use rayon::prelude::*;
 
 use crate::control::{Cancel, Control};
@@ -273,7 +273,7 @@ impl Kernel {
 /// one another where `composing` says. `control` hears the fraction built
 /// and may cancel.
 pub fn build(
-    camera: &Camera,
+    camera: &CameraGeometry,
     effects: &[Effect],
     seed: u64,
     extent: &Extent,

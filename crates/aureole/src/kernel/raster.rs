@@ -501,7 +501,7 @@ fn grid_points(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::Camera;
+    use crate::camera::CameraGeometry;
     use crate::config::ConfigFile;
     use crate::control::Cancel;
     use crate::optics::{Context, Source};
@@ -584,7 +584,7 @@ mod tests {
             remjet = true
         "#;
         let file = ConfigFile::parse(effects, "test").unwrap();
-        let camera: Camera = file.camera.unwrap();
+        let camera: CameraGeometry = file.camera.unwrap();
         let cancel = Cancel::new();
         let mut quiet = Control::quiet(&cancel);
         // Shapes whose tables hold more than 90 % of a quarter's pixels.

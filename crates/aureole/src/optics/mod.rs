@@ -30,7 +30,7 @@ pub use vos::Vos;
 use serde::de::Error as _;
 use serde::Deserialize;
 
-use crate::camera::Camera;
+use crate::camera::CameraGeometry;
 use crate::error::Result;
 use crate::sending::Sending;
 use aperture::{spectrum::Light, Optics};
@@ -39,7 +39,7 @@ use shape::SpreadShape;
 /// What the kernel builder knows when it asks a model for its PSF.
 pub(crate) struct Context<'a> {
     /// The camera of the configuration.
-    pub camera: &'a Camera,
+    pub camera: &'a CameraGeometry,
     /// The pixel pitch in mm of the image the kernel is for (sensor width /
     /// image width), when the camera has a sensor width.
     pub pitch_mm: Option<f64>,

@@ -11,7 +11,7 @@ use crate::schema::{Default, Kind, Parameter, EPSILON};
 
 use super::shape::{one_point_beyond, SpreadShape, Supersampling};
 use super::{Context, Model, Source};
-use crate::camera::Camera;
+use crate::camera::CameraGeometry;
 use crate::error::{Error, Result};
 use crate::math;
 
@@ -60,7 +60,7 @@ impl Model for Vos {
 }
 
 impl Vos {
-    fn shape(&self, camera: &Camera, pitch_mm: Option<f64>) -> Result<VosShape> {
+    fn shape(&self, camera: &CameraGeometry, pitch_mm: Option<f64>) -> Result<VosShape> {
         self.validate()?;
         let focal = camera.require_focal_length("vos glare")?;
         let pitch = pitch_mm.ok_or_else(|| Error::needs_sensor_width("vos glare".into()))?;
@@ -121,7 +121,7 @@ mod tests {
 
     #[test]
     fn one_sample_where_the_grid_is_one_point_and_f_is_the_density() {
-        let camera = Camera {
+        let camera = CameraGeometry {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: None,
@@ -142,7 +142,7 @@ mod tests {
     #[test]
     fn the_density_is_the_angles_power_law_with_its_cosines() {
         // θ⁻ⁿ cos³θ with θ = atan(r·pitch/f), against libm's functions.
-        let camera = Camera {
+        let camera = CameraGeometry {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: None,

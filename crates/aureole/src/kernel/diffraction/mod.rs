@@ -456,7 +456,7 @@ mod tests {
 
     /// `aperture` in a 50 mm lens at `f_number` on full frame.
     fn lens(aperture: Aperture, f_number: f64) -> Optics {
-        let camera = crate::Camera {
+        let camera = crate::CameraGeometry {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: Some(f_number),

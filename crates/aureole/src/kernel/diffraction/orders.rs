@@ -752,7 +752,7 @@ mod tests {
             filters: vec![family(0.0), family(45.0), family(90.0)],
             ..crate::optics::Aperture::new(7)
         };
-        let camera = crate::Camera {
+        let camera = crate::CameraGeometry {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: Some(8.0),
@@ -858,7 +858,7 @@ mod tests {
         // pattern about an order, evaluated, against the block of the
         // place it is taken from, turned.
         let (round, _, _) = star();
-        let camera = crate::Camera {
+        let camera = crate::CameraGeometry {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: Some(8.0),

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::schema::{Default, Kind, Parameter};
 
 use super::{Context, Model, Source};
-use crate::camera::Camera;
+use crate::camera::CameraGeometry;
 use crate::check;
 use crate::error::{Error, Result};
 use pupil::Pupil;
@@ -615,7 +615,7 @@ impl Aperture {
     /// The pupil and orders for `camera`, with the orders that land within
     /// `reach_mm` of the centre at 380 nm or longer, and the dirt drawn
     /// from `seed`.
-    pub fn optics(&self, camera: &Camera, reach_mm: f64, seed: u64) -> Result<Optics> {
+    pub fn optics(&self, camera: &CameraGeometry, reach_mm: f64, seed: u64) -> Result<Optics> {
         self.validate()?;
         let need = |field, why| Error::NeedsCamera {
             what: "aperture diffraction".into(),

@@ -688,7 +688,7 @@ mod tests {
             vane_width: 0.02,
             ..Aperture::new(7)
         };
-        let camera = crate::Camera {
+        let camera = crate::CameraGeometry {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: Some(8.0),
