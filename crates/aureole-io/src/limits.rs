@@ -28,7 +28,29 @@ pub fn available_memory() -> Option<u64> {
     let machine = kib * 1024;
     let membership = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
     let group = group_room(&membership, std::path::Path::new("/sys/fs/cgroup"));
-    Some(group.map_or(machine, |room| room.min(machine)))
+    let read = |path| std::fs::read_to_string(path).unwrap_or_default();
+    let space = address_room(&read("/proc/self/limits"), &read("/proc/self/status"));
+    Some([group, space].into_iter().flatten().fold(machine, u64::min))
+}
+
+/// The room below the process's address-space limit (`ulimit -v`, which
+/// some farms set): its soft limit in /proc/self/limits less the
+/// `VmSize` of /proc/self/status. Beyond it an allocation fails, which
+/// aborts the run. `None` where unlimited.
+fn address_room(limits: &str, status: &str) -> Option<u64> {
+    let limit: u64 = limits
+        .lines()
+        .find_map(|l| l.strip_prefix("Max address space"))?
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()?;
+    let size_kib: u64 = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmSize:"))
+        .and_then(|v| v.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0);
+    Some(limit.saturating_sub(size_kib * 1024))
 }
 
 /// A limit this large means none (cgroup v1 writes 2⁶³ rounded to pages).
@@ -119,6 +141,18 @@ mod tests {
         let path = root.join(file);
         std::fs::create_dir_all(path.parent().unwrap()).unwrap();
         std::fs::write(path, text).unwrap();
+    }
+
+    #[test]
+    fn an_address_space_limit_bounds_the_room_less_what_is_mapped() {
+        let limits = "Limit                     Soft Limit           Hard Limit           Units\n\
+                      Max address space         8589934592           unlimited            bytes\n";
+        let status = "Name:\taureole\nVmSize:\t  1048576 kB\n";
+        assert_eq!(address_room(limits, status), Some(7 << 30));
+        let unlimited =
+            "Max address space         unlimited            unlimited            bytes\n";
+        assert_eq!(address_room(unlimited, status), None);
+        assert_eq!(address_room("", status), None);
     }
 
     #[test]
