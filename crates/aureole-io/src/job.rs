@@ -224,20 +224,16 @@ impl Input {
             input_scale: Some(self.frame.scale()),
             ..self.options
         };
-        let mut glare = Vec::new();
-        for (name, image) in self.original.views_mut() {
+        for (image, glare) in self.original.views_mut() {
             let empty = Image::filled(0, 0, image.layout, 0.0);
             let frame = Frame::new(std::mem::replace(image, empty), &views)?;
             *image = if layers {
                 let (applied, view_layers) = session.apply_layers(&frame, options, report)?;
-                glare.push((name.to_string(), view_layers));
+                *glare = view_layers;
                 applied.image
             } else {
                 session.apply(&frame, options, report)?.image
             };
-        }
-        for (name, view_layers) in glare {
-            self.original.add_view_glare_layers(&name, view_layers);
         }
         Ok(())
     }

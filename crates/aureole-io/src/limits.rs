@@ -75,6 +75,14 @@ fn group_room(membership: &str, root: &std::path::Path) -> Option<u64> {
         })
         .unwrap_or(0)
     };
+    // Per version: the limit, the usage and memory.stat's key of the
+    // inactive file pages, each in the group's folder.
+    const V2: [&str; 3] = ["memory.max", "memory.current", "inactive_file "];
+    const V1: [&str; 3] = [
+        "memory.limit_in_bytes",
+        "memory.usage_in_bytes",
+        "total_inactive_file ",
+    ];
     let mut folders = Vec::new();
     for line in membership.lines() {
         let mut fields = line.splitn(3, ':');
@@ -83,35 +91,21 @@ fn group_room(membership: &str, root: &std::path::Path) -> Option<u64> {
             continue;
         };
         match controllers {
-            Some("") => folders.push((root.join(path), false)),
+            Some("") => folders.push((root.join(path), V2)),
             Some(list) if list.split(',').any(|c| c == "memory") => {
-                folders.push((root.join("memory").join(path), true));
+                folders.push((root.join("memory").join(path), V1));
             }
             _ => {}
         }
     }
-    folders.push((root.to_path_buf(), false));
-    folders.push((root.join("memory"), true));
+    folders.push((root.to_path_buf(), V2));
+    folders.push((root.join("memory"), V1));
     folders
         .into_iter()
-        .filter_map(|(folder, v1)| {
-            let (limit, usage, stat, key) = if v1 {
-                (
-                    number(read(folder.join("memory.limit_in_bytes"))),
-                    number(read(folder.join("memory.usage_in_bytes"))),
-                    read(folder.join("memory.stat")),
-                    "total_inactive_file ",
-                )
-            } else {
-                (
-                    number(read(folder.join("memory.max"))),
-                    number(read(folder.join("memory.current"))),
-                    read(folder.join("memory.stat")),
-                    "inactive_file ",
-                )
-            };
-            let limit = limit.filter(|&l| l < UNLIMITED)?;
-            let used = usage?.saturating_sub(inactive(stat, key));
+        .filter_map(|(folder, [limit, usage, key])| {
+            let limit = number(read(folder.join(limit))).filter(|&l| l < UNLIMITED)?;
+            let busy = inactive(read(folder.join("memory.stat")), key);
+            let used = number(read(folder.join(usage)))?.saturating_sub(busy);
             Some(limit.saturating_sub(used))
         })
         .min()

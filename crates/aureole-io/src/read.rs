@@ -39,15 +39,10 @@ pub struct Loaded {
 /// is decoded: refused when decoding it would need more than `limits`;
 /// `None` when the header does not say (reading the file then says why).
 pub fn probe(path: &Path, limits: Limits, choice: &Choice) -> Result<Option<Shape>> {
-    use std::io::Read;
-    // A pipe's bytes are read once, by the reader: a look here would take
-    // them from it.
-    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+    let Some(head) = head_of_file(path) else {
         return Ok(None);
-    }
-    let mut head = Vec::with_capacity(256);
-    let opened = std::fs::File::open(path).and_then(|f| f.take(256).read_to_end(&mut head));
-    let Some(format) = opened.ok().and_then(|_| by_content(&head)) else {
+    };
+    let Some(format) = by_content(&head) else {
         return Ok(None);
     };
     let shape = match format.name {
@@ -111,7 +106,16 @@ pub fn probe(path: &Path, limits: Limits, choice: &Choice) -> Result<Option<Shap
 /// (deep data, no single colour layer). `None` for another format or
 /// headers that cannot be read.
 pub fn exr_structure(path: &Path) -> Option<Vec<String>> {
-    use std::io::Read;
+    match by_content(&head_of_file(path)?) {
+        Some(format) if format.name == "OpenEXR" => crate::formats::exr::structure(path),
+        _ => None,
+    }
+}
+
+/// The first 256 bytes of the regular file at `path`, where it is one and
+/// can be read. A pipe's bytes are read once, by the reader: a look ahead
+/// would take them from it.
+fn head_of_file(path: &Path) -> Option<Vec<u8>> {
     if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
         return None;
     }
@@ -119,10 +123,7 @@ pub fn exr_structure(path: &Path) -> Option<Vec<String>> {
     std::fs::File::open(path)
         .and_then(|f| f.take(256).read_to_end(&mut head))
         .ok()?;
-    match by_content(&head) {
-        Some(format) if format.name == "OpenEXR" => crate::formats::exr::structure(path),
-        _ => None,
-    }
+    Some(head)
 }
 
 /// Reads the image at `path`, recognising the format by its content, and
@@ -189,10 +190,7 @@ pub fn read_image_reusing(
     }
     let loaded = decode(&bytes, limits, choice, spares);
     spares.give_bytes(bytes);
-    loaded.map_err(|message| Error::Decode {
-        path: path.to_path_buf(),
-        message,
-    })
+    loaded.map_err(refuse)
 }
 
 /// Decodes an image file held in memory, recognising the format by its

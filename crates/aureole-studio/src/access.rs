@@ -156,7 +156,7 @@ fn reached_at(bound: SocketAddr) -> Vec<IpAddr> {
         .into_iter()
         .filter(|a| ip.is_ipv6() || a.is_ipv4())
         // Link-local IPv6 needs a zone in a URL, which no Host carries.
-        .filter(|a| !matches!(a, IpAddr::V6(v6) if v6.segments()[0] & 0xffc0 == 0xfe80))
+        .filter(|a| !matches!(a, IpAddr::V6(v6) if v6.is_unicast_link_local()))
         .collect();
     if found.is_empty() {
         found.push(if ip.is_ipv4() {

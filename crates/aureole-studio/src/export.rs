@@ -288,15 +288,9 @@ fn run(
             // than decode beside each other.
             let choice = Default::default();
             let shape = aureole_io::job::check_header(path, &choice, limits, &session)?;
-            let early = match shape {
-                Some(shape) => Some(lease(needs_for(
-                    &config,
-                    shape,
-                    max_extent,
-                    request.layers,
-                )?)?),
-                None => None,
-            };
+            let early = shape
+                .map(|shape| lease(needs_for(&config, shape, max_extent, request.layers)?))
+                .transpose()?;
             let input = aureole_io::job::read(path, &choice, limits, &FrameOptions::default())?;
             let held = match early {
                 Some(held) => held,

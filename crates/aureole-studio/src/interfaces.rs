@@ -24,7 +24,8 @@ pub fn addresses() -> Vec<IpAddr> {
                 match i32::from(address.sa_family) {
                     libc::AF_INET => {
                         let v4 = &*interface.ifa_addr.cast::<libc::sockaddr_in>();
-                        found.push(IpAddr::from(u32::from_be(v4.sin_addr.s_addr).to_be_bytes()));
+                        // Stored in network order: its bytes in memory are the address's.
+                        found.push(IpAddr::from(v4.sin_addr.s_addr.to_ne_bytes()));
                     }
                     libc::AF_INET6 => {
                         let v6 = &*interface.ifa_addr.cast::<libc::sockaddr_in6>();

@@ -116,9 +116,13 @@ impl Original {
     }
 
     /// The images of a multi-view file's other views (an EXR's second eye),
-    /// by view name: each front end puts every one through the camera, and
-    /// an EXR result holds whatever they hold when written.
-    pub fn views_mut(&mut self) -> impl Iterator<Item = (&str, &mut Image)> {
+    /// each with its glare layers: each front end puts every one through
+    /// the camera, and an EXR result holds whatever they hold when written,
+    /// the layers beside their view's result, in its own part or named for
+    /// the view in a single-part multi-view file.
+    pub fn views_mut(
+        &mut self,
+    ) -> impl Iterator<Item = (&mut Image, &mut Vec<aureole::GlareLayer>)> {
         self.exr.iter_mut().flat_map(|k| k.views_mut())
     }
 
@@ -129,15 +133,6 @@ impl Original {
     /// ([`crate::job::Request::check`] refuses the others).
     pub fn add_glare_layers(&mut self, layers: Vec<aureole::GlareLayer>) {
         self.glare = layers;
-    }
-
-    /// [`Original::add_glare_layers`] for the other view `view`
-    /// ([`Original::views_mut`]), beside that view's result: in its own
-    /// part, or named for the view in a single-part multi-view file.
-    pub fn add_view_glare_layers(&mut self, view: &str, layers: Vec<aureole::GlareLayer>) {
-        if let Some(kept) = self.exr.as_mut() {
-            kept.add_view_glare(view, layers);
-        }
     }
 
     /// What a kernel file records of what it was built for

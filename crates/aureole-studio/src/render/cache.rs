@@ -70,8 +70,7 @@ impl Renderer {
     ) -> Result<std::sync::MutexGuard<'_, Vec<KeptSession>>, StudioError> {
         let mut kept = locked(&self.kept);
         if let Some(index) = kept.iter().position(|c| c.key == key) {
-            let hit = kept.remove(index);
-            kept.insert(0, hit);
+            kept[..=index].rotate_right(1);
             self.reused.fetch_add(1, Ordering::Relaxed);
             return Ok(kept);
         }

@@ -331,6 +331,20 @@ pub(super) fn no_colour(parts: &[Part]) -> String {
     )
 }
 
+/// A layer's prefix in a single-part multi-view file split into the
+/// layer's own (`beauty.`) and the view it names, where its last component
+/// is one of `named`, the views but the default (whose layers carry no
+/// view's name): `beauty.left.` is (`beauty.`, `left`), `left.` is (``,
+/// `left`), `beauty.` is (`beauty.`, none).
+pub(super) fn split_view<'a>(prefix: &'a str, named: &[String]) -> (String, Option<&'a str>) {
+    let trimmed = prefix.trim_end_matches('.');
+    match trimmed.rsplit_once('.') {
+        Some((base, last)) if named.iter().any(|v| v == last) => (format!("{base}."), Some(last)),
+        None if named.iter().any(|v| v == trimmed) => (String::new(), Some(trimmed)),
+        _ => (prefix.to_string(), None),
+    }
+}
+
 /// The same layer in each other view of a stereo or multi-view file, as
 /// OpenEXR's multi-view convention names them: in a multi-part file, the
 /// part of another `view` holding the layer under the same prefix (the one
@@ -373,12 +387,8 @@ pub(super) fn other_views(
         }
         (Some(view.clone()), found)
     } else if let Some((default, named)) = part.views.split_first() {
-        let trimmed = chosen.prefix.trim_end_matches('.');
-        let (base, view) = match trimmed.rsplit_once('.') {
-            Some((base, last)) if named.iter().any(|v| v == last) => (format!("{base}."), last),
-            None if named.iter().any(|v| v == trimmed) => (String::new(), trimmed),
-            _ => (chosen.prefix.clone(), default.as_str()),
-        };
+        let (base, view) = split_view(&chosen.prefix, named);
+        let view = view.unwrap_or(default);
         for other in part.views.iter().filter(|v| v.as_str() != view) {
             let prefix = if other == default {
                 base.clone()

@@ -2,15 +2,15 @@
 //! file they came from (every view, part, layer and attribute kept), the
 //! glare layers beside them, or a new file of the planes alone.
 
+use std::path::Path;
+
 use exr::image::{FlatImage, Layers};
 use exr::meta::attribute::SampleType;
 use exr::prelude::{self as x};
 use half::slice::HalfFloatSliceExt;
 use rayon::prelude::*;
 
-use std::path::Path;
-
-use super::choose::Part;
+use super::choose::{split_view, Part};
 use super::{dwa, write, Kept, LinearPlanes, Note, Samples, Taken, HALF_MAX};
 use crate::atomic::write_atomic;
 use crate::compression::Compression;
@@ -32,14 +32,7 @@ impl GlareAt {
     /// The place beside the layer of `prefix` in `part`.
     pub(super) fn of(part: &Part, prefix: &str) -> GlareAt {
         let named = part.views.get(1..).unwrap_or_default();
-        let trimmed = prefix.trim_end_matches('.');
-        let (base, view) = match trimmed.rsplit_once('.') {
-            Some((base, last)) if named.iter().any(|v| v == last) => {
-                (format!("{base}."), Some(last))
-            }
-            None if named.iter().any(|v| v == trimmed) => (String::new(), Some(trimmed)),
-            _ => (prefix.to_string(), None),
-        };
+        let (base, view) = split_view(prefix, named);
         GlareAt {
             parent: parent(&base).to_string(),
             view: view.map(str::to_string),

@@ -88,18 +88,12 @@ struct Taken {
 }
 
 impl Kept {
-    /// The other views' names and images, to be replaced by results.
-    pub(crate) fn views_mut(&mut self) -> impl Iterator<Item = (&str, &mut Image)> {
-        self.views
-            .iter_mut()
-            .map(|v| (v.name.as_str(), &mut v.image))
-    }
-
-    /// Glare layers to write beside view `view`'s result.
-    pub(crate) fn add_view_glare(&mut self, view: &str, layers: Vec<aureole::GlareLayer>) {
-        if let Some(kept) = self.views.iter_mut().find(|v| v.name == view) {
-            kept.glare = layers;
-        }
+    /// The other views' images, to be replaced by results, each with the
+    /// glare layers to write beside it.
+    pub(crate) fn views_mut(
+        &mut self,
+    ) -> impl Iterator<Item = (&mut Image, &mut Vec<aureole::GlareLayer>)> {
+        self.views.iter_mut().map(|v| (&mut v.image, &mut v.glare))
     }
 
     /// What a kernel file records of what it was built for.

@@ -96,7 +96,6 @@ fn pattern_with(
         pitch_mm,
         tents,
     };
-    let fill = |j: usize, row: &mut [&mut [f64]], columns: Range<usize>| rows.fill(j, row, columns);
     let mut result: Vec<Vec<f64>> = (0..planes).map(|_| vec![0.0; width * height]).collect();
     // A real pupil's pattern is centrosymmetric, PSF(−x) = PSF(x), and so
     // are the near field's quadrature and the far field's terms: the rows
@@ -114,7 +113,7 @@ fn pattern_with(
     for_each_interleaved(
         &mut plane_rows(&mut result, width, 0..computed),
         &mut filling,
-        |j, row| fill(j, row, 0..width),
+        |j, row| rows.fill(j, row, 0..width),
     )?;
     if tents {
         let mut summing = rasterising.part(0.3, 1.0);
@@ -135,7 +134,7 @@ fn pattern_with(
         plane_rows(&mut result, width, computed..height)
             .par_iter_mut()
             .enumerate()
-            .for_each(|(k, row)| fill(computed + k, row, 0..alone));
+            .for_each(|(k, row)| rows.fill(computed + k, row, 0..alone));
         if tents {
             let cancel = control.cancel();
             let mut quiet = Control::quiet(&cancel);
