@@ -37,7 +37,7 @@ fn one_line(stderr: &[u8]) -> String {
 }
 
 #[test]
-fn psf_writes_a_normalised_pfm_centred_at_half_the_size() {
+fn psf_writes_a_pfm_of_its_light_centred_at_half_the_size() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("k.pfm");
     aureole()
@@ -61,8 +61,9 @@ fn psf_writes_a_normalised_pfm_centred_at_half_the_size() {
         (64, 48, 1)
     );
     let plane = &kernel.planes[0];
+    // The share of the light within it; the rest leaves a 64×48 frame.
     let sum: f64 = plane.iter().map(|&v| f64::from(v)).sum();
-    assert!((sum - 1.0).abs() < 1e-5, "sum {sum}");
+    assert!(sum > 0.99 && sum <= 1.0, "sum {sum}");
     let peak = plane.iter().cloned().fold(0f32, f32::max);
     assert_eq!(plane[24 * 64 + 32], peak);
 }
@@ -141,7 +142,7 @@ fn psf_writes_exr_and_png_pictures_with_a_profile_plot() {
         .values_as_f32()
         .map(f64::from)
         .sum();
-    assert!((sum - 1.0).abs() < 1e-5);
+    assert!(sum > 0.95 && sum <= 1.0, "sum {sum}");
 
     let (png, plot) = (dir.path().join("k.png"), dir.path().join("plot.png"));
     aureole()
@@ -704,7 +705,7 @@ fn aperture_presets_write_coloured_kernels() {
     let kernel = read_pfm(&pfm_path);
     for plane in &kernel.planes {
         let sum: f64 = plane.iter().map(|&v| f64::from(v)).sum();
-        assert!((sum - 1.0).abs() < 1e-5);
+        assert!(sum > 0.95 && sum <= 1.0, "sum {sum}");
     }
     let image = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
     let names: Vec<String> = image.layer_data[0]

@@ -604,11 +604,13 @@ fn every_view_of_a_stereo_plate_goes_through_the_camera() {
             if eye {
                 assert_ne!(a, b, "{name}: {part} {channel} went through the camera");
                 // Light is moved, not made: the sums agree within half's
-                // steps and B44's (Adjuster.exr is lossy, B44A).
+                // steps and B44's (Adjuster.exr is lossy, B44A), less the
+                // glare that leaves the frame (0.6 % of Adjuster's).
                 let sum = |v: &[f32]| v.iter().map(|&v| f64::from(v)).sum::<f64>();
                 let (sa, sb) = (sum(a), sum(b));
+                let slack = 5e-3 * sa.abs().max(1.0);
                 assert!(
-                    (sa - sb).abs() <= 5e-3 * sa.abs().max(1.0),
+                    sb <= sa + slack && sb >= 0.98 * sa - slack,
                     "{name} {part} {channel}: {sa} {sb}"
                 );
             } else {

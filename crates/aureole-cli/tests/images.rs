@@ -332,6 +332,20 @@ fn apply_reuses_a_kernel_written_by_psf() {
         .arg(&kernel)
         .assert()
         .success();
+    // The light a 48×32 frame cannot hold leaves it: the EXR keeps the
+    // share the kernel holds, and reads back with it; a PFM has no room
+    // to say so and reads back whole.
+    let read = aureole_io::kernel::read_kernel(&kernel, Limits::NONE).unwrap();
+    assert!(read.sum(0) < 0.999, "ΣK = {}", read.sum(0));
+    let pfm = dir.path().join("k.pfm");
+    aureole()
+        .args(["psf", "--preset", "paper-fig5-both", "--size", "95x63"])
+        .args(["--image-width", "48", "-q", "-o"])
+        .arg(&pfm)
+        .assert()
+        .success();
+    let whole = aureole_io::kernel::read_kernel(&pfm, Limits::NONE).unwrap();
+    assert!((whole.sum(0) - 1.0).abs() < 1e-6, "ΣK = {}", whole.sum(0));
     let out = dir.path().join("out.exr");
     aureole()
         .arg("apply")

@@ -16,7 +16,9 @@ use crate::read::read_image;
 /// Decades of weight the picture spans, from its brightest spread pixel down.
 pub const PICTURE_DECADES: f64 = 6.0;
 
-pub use crate::formats::{KernelRecord, IMAGE_WIDTH_ATTRIBUTE, THRESHOLD_ATTRIBUTE};
+pub use crate::formats::{
+    KernelRecord, IMAGE_WIDTH_ATTRIBUTE, LIGHT_ATTRIBUTE, THRESHOLD_ATTRIBUTE,
+};
 
 /// Writes `kernel` to `path` in the format its extension names: its planes
 /// as float32 (`.pfm`: `Pf` or `PF`; `.exr`: `Y` or `R`, `G`, `B`,
@@ -28,9 +30,15 @@ pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
 
 /// [`write_kernel`], recording in an EXR what the kernel was built for: the
 /// width of its images ([`IMAGE_WIDTH_ATTRIBUTE`]), so that applying it to
-/// another width can be refused, and its camera's threshold
-/// ([`THRESHOLD_ATTRIBUTE`]). PFM has no room for them.
+/// another width can be refused, its camera's threshold
+/// ([`THRESHOLD_ATTRIBUTE`]), and that its planes hold the shares of light
+/// that fall within them ([`LIGHT_ATTRIBUTE`]). PFM has no room for them:
+/// a PFM kernel is read as holding all its light.
 pub fn write_kernel_for(path: &Path, kernel: &Kernel, record: KernelRecord) -> Result<()> {
+    let record = KernelRecord {
+        shares: true,
+        ..record
+    };
     let refuse = || Error::OutputFormat {
         path: path.to_path_buf(),
         extension: extension(path),
@@ -69,7 +77,8 @@ pub fn write_kernel_for(path: &Path, kernel: &Kernel, record: KernelRecord) -> R
 
 /// Reads a kernel written by [`write_kernel`] (or any image of 1 or 3
 /// planes of non-negative weights, centre in its middle) and normalises
-/// each plane to ΣK = 1.
+/// each plane to ΣK = 1, unless the file records that its planes hold
+/// shares of their light ([`LIGHT_ATTRIBUTE`]), which are kept.
 pub fn read_kernel(path: &Path, limits: Limits) -> Result<Kernel> {
     read_kernel_file(path, limits).map(|(kernel, _)| kernel)
 }
@@ -80,11 +89,14 @@ pub fn read_kernel_file(path: &Path, limits: Limits) -> Result<(Kernel, KernelRe
     let loaded = read_image(path, limits)?;
     let record = loaded.original.recorded_kernel();
     let image = loaded.image;
-    let kernel = Kernel::from_planes(image.width, image.height, image.planes).map_err(|error| {
-        Error::Content {
-            path: path.to_path_buf(),
-            error,
-        }
+    let kernel = if record.shares {
+        Kernel::from_shares(image.width, image.height, image.planes)
+    } else {
+        Kernel::from_planes(image.width, image.height, image.planes)
+    }
+    .map_err(|error| Error::Content {
+        path: path.to_path_buf(),
+        error,
     })?;
     Ok((kernel, record))
 }

@@ -380,6 +380,45 @@ pub fn power(base: f64, exponent: f64) -> f64 {
     }
 }
 
+/// The `n` Gauss–Legendre nodes on [−1, 1] and their weights (Σ = 2):
+/// Newton's method on P_n from the Chebyshev guesses, P_n by its
+/// recurrence.
+pub(crate) fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let (mut nodes, mut weights) = (vec![0.0; n], vec![0.0; n]);
+    for i in 0..n.div_ceil(2) {
+        let mut x = libm::cos(std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5));
+        let mut derivative = 1.0;
+        for _ in 0..100 {
+            let (p, dp) = legendre(n, x);
+            derivative = dp;
+            let step = p / dp;
+            x -= step;
+            if step.abs() < 1e-15 {
+                break;
+            }
+        }
+        let w = 2.0 / ((1.0 - x * x) * derivative * derivative);
+        nodes[i] = -x;
+        nodes[n - 1 - i] = x;
+        weights[i] = w;
+        weights[n - 1 - i] = w;
+    }
+    (nodes, weights)
+}
+
+/// P_n(x) and P_n'(x).
+fn legendre(n: usize, x: f64) -> (f64, f64) {
+    let (mut p0, mut p1) = (1.0, x);
+    for k in 2..=n {
+        let k = k as f64;
+        (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
+    }
+    if n == 0 {
+        return (1.0, 0.0);
+    }
+    (p1, n as f64 * (x * p1 - p0) / (x * x - 1.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -570,6 +609,30 @@ mod tests {
             (1e15 + 0.75, 1e15 as i64 + 1),
         ] {
             assert_eq!(nearest_and_whole(v), (whole as f64, whole), "{v}");
+        }
+    }
+
+    #[test]
+    fn gauss_legendre_integrates_polynomials_of_degree_2n_minus_1_exactly() {
+        for n in [2, 3, 5, 8, 17, 24] {
+            let (x, w) = gauss_legendre(n);
+            assert!((w.iter().sum::<f64>() - 2.0).abs() < 1e-13, "n = {n}");
+            for degree in 0..2 * n {
+                let got: f64 = x
+                    .iter()
+                    .zip(&w)
+                    .map(|(x, w)| w * x.powi(degree as i32))
+                    .sum();
+                let exact = if degree % 2 == 1 {
+                    0.0
+                } else {
+                    2.0 / (degree as f64 + 1.0)
+                };
+                assert!(
+                    (got - exact).abs() < 1e-12,
+                    "n = {n}, x^{degree}: {got} vs {exact}"
+                );
+            }
         }
     }
 }

@@ -240,10 +240,10 @@ fn a_single_bright_pixel_reproduces_the_kernel() {
 
 #[test]
 fn energy_is_conserved_when_the_glare_stays_in_the_frame() {
-    // β = 4, R = 2 px, capped at 21×21: every source 10 px from the edges keeps
-    // all its light in the frame.
+    // β = 6, R = 2 px, capped at 21×21: every source 10 px from the edges
+    // keeps all but 5·10⁻⁸ of its light in the frame, (1 + 5.25²)^−5.
     let (w, h) = (64, 50);
-    let plan = Plan::for_image(&bloom_config(0.4, 4.0, 2.0), w, h, Some((21, 21))).unwrap();
+    let plan = Plan::for_image(&bloom_config(0.4, 6.0, 2.0), w, h, Some((21, 21))).unwrap();
     let mut image = Image::filled(w, h, Layout::Rgb, 0.0);
     let values = pseudo_random(w * h, 11);
     for plane in &mut image.planes {

@@ -253,7 +253,12 @@ fn an_n_blade_stop_gives_n_rays_for_even_n_and_2n_for_odd_n() {
         let expected = if blades % 2 == 0 { blades } else { 2 * blades };
         for rotation in [0.0, 11.0] {
             let kernel = aperture_kernel(blades, rotation);
-            assert!((kernel.sum(0) - 1.0).abs() < 1e-5);
+            // The share of the light within 60 px of the centre.
+            assert!(
+                kernel.sum(0) > 0.99 && kernel.sum(0) <= 1.0,
+                "Σ {}",
+                kernel.sum(0)
+            );
             assert_eq!(
                 ray_count(&kernel, 20.0, 58.0),
                 expected as usize,
@@ -337,7 +342,12 @@ fn red_spreads_wider_than_blue_by_the_ratio_of_their_wavelengths() {
         f64::NAN
     };
     for c in 0..3 {
-        assert!((kernel.sum(c) - 1.0).abs() < 1e-5);
+        // λN is 18 px: 4.5 λN out, the rings beyond still hold 4 %.
+        assert!(
+            kernel.sum(c) > 0.94 && kernel.sum(c) <= 1.0,
+            "Σ {}",
+            kernel.sum(c)
+        );
     }
     let [red, _, blue] = mean_wavelengths();
     let ratio = half_energy_radius(0) / half_energy_radius(2);
@@ -452,6 +462,11 @@ fn star_filters_give_two_rays_per_family_of_lines() {
             "{} families",
             families.len()
         );
-        assert!((kernel.sum(2) - 1.0).abs() < 1e-5);
+        // The filter's rays carry their light on beyond 80 px.
+        assert!(
+            kernel.sum(2) > 0.85 && kernel.sum(2) <= 1.0,
+            "Σ {}",
+            kernel.sum(2)
+        );
     }
 }

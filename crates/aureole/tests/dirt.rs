@@ -182,7 +182,10 @@ fn a_smudge_passes_its_share_of_the_light_and_the_pupil_sums_its_power() {
         let k = kernel(&config(8.0, greasy), 201);
         for plane in k.planes() {
             let sum: f64 = plane.iter().map(|&v| f64::from(v)).sum();
-            assert!((sum - 1.0).abs() < 1e-5 && plane.iter().all(|v| *v >= 0.0));
+            // The fields' light over 201 px, by Parseval against ∫|A|²: all
+            // but the far tail beyond 100 px.
+            assert!(sum > 0.995 && sum <= 1.0, "Σ {sum}");
+            assert!(plane.iter().all(|v| *v >= 0.0));
         }
     }
 }

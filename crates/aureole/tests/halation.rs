@@ -65,14 +65,15 @@ blue_depth = "1.4px"
 "#;
 
 #[test]
-fn each_channel_sums_to_one_and_its_halo_takes_its_share_from_the_core() {
+fn each_channel_keeps_its_light_and_its_halo_takes_its_share_from_the_core() {
     let h = halation(PIXELS);
     let k = kernel(&h, CameraGeometry::default(), 201, 201);
     assert_eq!(k.planes().len(), 3);
     let shares = h.shares();
     let centre = k.centre_weights();
     for c in 0..3 {
-        assert!((k.sum(c) - 1.0).abs() < 1e-6, "plane {c}: {}", k.sum(c));
+        // The halo's path is 10 px: within 100 px it falls to 10⁻⁴ and less.
+        assert!((k.sum(c) - 1.0).abs() < 1e-4, "plane {c}: {}", k.sum(c));
         let halo = 1.0 - f64::from(centre[c]);
         assert!(
             (halo - shares[c]).abs() <= 0.01 * shares[c],
@@ -267,7 +268,7 @@ proptest! {
     })]
 
     #[test]
-    fn every_halation_kernel_sums_to_one_and_takes_its_share_from_the_core(
+    fn every_halation_kernel_holds_its_light_and_takes_its_share_from_the_core(
         base in 0.05..40.0f64,
         depths in (0.01..5.0f64, 0.01..5.0f64, 0.01..5.0f64),
         transmissions in (0.0..=1.0f64, 0.0..=1.0f64, 0.0..=1.0f64),
@@ -289,9 +290,25 @@ proptest! {
             blue_transmission: transmissions.2,
         };
         let k = kernel(&h, CameraGeometry::default(), size, size);
+        // The kernel is the halo's light cut to its window: a larger one
+        // holds the same weights where both reach, and more light.
+        let large = kernel(&h, CameraGeometry::default(), 2 * size + 41, size);
         let shares = h.shares();
         for (c, (share, centre)) in shares.iter().zip(k.centre_weights()).enumerate() {
-            prop_assert!((k.sum(c) - 1.0).abs() < 1e-5, "plane {c}: sum {}", k.sum(c));
+            prop_assert!(k.sum(c) <= large.sum(c) + 1e-6 && large.sum(c) <= 1.0 + 1e-6,
+                "plane {c}: sum {} within {size} px, {} beyond", k.sum(c), large.sum(c));
+            // A halo narrower than a pixel is averaged over the centre pixel
+            // to about 2 % of its light, more than the integral says it
+            // has: the kernel then keeps what its pixels hold, never more.
+            let rounding = if base < 1.0 { 0.02 * share } else { 0.0 };
+            let half = (size / 2) as i64;
+            // y is up: the top row is +half.
+            for dy in -(size as i64 - 1 - half)..=half {
+                for dx in -half..=(size as i64 - 1 - half) {
+                    let (a, b) = (f64::from(k.at(c, dx, dy)), f64::from(large.at(c, dx, dy)));
+                    prop_assert!((a - b).abs() <= 1e-6 * b + rounding + 1e-12, "({dx}, {dy}): {a} vs {b}");
+                }
+            }
             prop_assert!(k.planes()[c].iter().all(|&v| v >= 0.0 && v.is_finite()));
             // At most its share leaves the core (less where the halo's own
             // centre pixel keeps some), and never more than all the light.

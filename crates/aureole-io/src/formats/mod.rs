@@ -185,6 +185,9 @@ pub struct KernelRecord {
     /// The camera's threshold, cd/m², which `apply --kernel` uses unless
     /// told another.
     pub threshold: Option<f64>,
+    /// Whether each plane holds the share of its PSF's light that falls
+    /// within it ([`LIGHT_ATTRIBUTE`]): read as it is, not normalised to 1.
+    pub shares: bool,
 }
 
 /// What a writer could not keep, for the user.
@@ -441,6 +444,12 @@ pub const IMAGE_WIDTH_ATTRIBUTE: &str = "aureoleImageWidth";
 /// The EXR attribute that records the threshold (cd/m²) of the camera a
 /// kernel was built from.
 pub const THRESHOLD_ATTRIBUTE: &str = "aureoleThreshold";
+
+/// The EXR attribute that says a kernel's planes hold the shares of their
+/// PSFs' light that fall within them (the least of them, for a reader):
+/// the light beyond leaves the frame, so a reader keeps the sums as they
+/// are rather than normalising them to 1.
+pub const LIGHT_ATTRIBUTE: &str = "aureoleLightKept";
 
 /// Which of a file's layers and parts to read (OpenEXR); by default the
 /// beauty, as compositors find it.

@@ -1,10 +1,12 @@
 //! Discrete, normalised convolution kernels from PSFs (docs/physics.md §2).
 //!
 //! Each effect's f is averaged over every pixel's area (supersampled where it
-//! changes fast, [`raster`]), normalised in discrete space and weighted by ε,
-//! with the unspread (1 − ε) at the centre: K = (1 − ε)·[centre] + ε·F/ΣF,
-//! so ΣK = 1. Diffraction patterns come whole from [`diffraction`]. The
-//! effects of a chain compose by convolution ([`split`]).
+//! changes fast, [`raster`]), normalised by its light over the whole plane
+//! and weighted by ε, with the unspread (1 − ε) at the centre:
+//! K = (1 − ε)·[centre] + ε·F/∫f, so ΣK is 1 less the light that falls
+//! beyond the kernel, which leaves the frame. Diffraction patterns come
+//! whole from [`diffraction`], in the same shares. The effects of a chain
+//! compose by convolution ([`split`]).
 
 pub mod diffraction;
 pub mod profile;
@@ -124,7 +126,9 @@ impl Extent {
 }
 
 /// A convolution kernel: one plane per channel (one for an achromatic PSF,
-/// three, linear Rec.709 R, G, B, for a coloured one), each summing to 1.
+/// three, linear Rec.709 R, G, B, for a coloured one), each summing to the
+/// share of its PSF's light that falls within it: 1 less the light that
+/// would leave the frame.
 /// Planes are row-major, top row first; the centre is at column `width / 2`,
 /// row `height / 2`.
 #[derive(Debug, Clone, PartialEq)]
@@ -141,18 +145,39 @@ impl Kernel {
     /// kept as it is); planes must be finite and non-negative with a
     /// positive sum.
     pub fn from_planes(width: usize, height: usize, planes: Vec<Vec<f32>>) -> Result<Kernel> {
+        Kernel::checked(width, height, planes, true)
+    }
+
+    /// A kernel whose planes each hold the share of their PSF's light
+    /// that falls within them, at most 1, as [`build`] makes them and a
+    /// kernel file records them: kept as they are, so that the light a
+    /// small frame cannot hold still leaves it. A plane summing to more
+    /// than 1 (beyond f32 rounding) is refused.
+    pub fn from_shares(width: usize, height: usize, planes: Vec<Vec<f32>>) -> Result<Kernel> {
+        Kernel::checked(width, height, planes, false)
+    }
+
+    fn checked(
+        width: usize,
+        height: usize,
+        planes: Vec<Vec<f32>>,
+        normalise: bool,
+    ) -> Result<Kernel> {
         Extent::new(width, height)?;
         let refuse = |message: &str| Error::Parameter {
             effect: "kernel".to_string(),
             name: "planes",
             value: message.to_string(),
-            allowed:
-                "1 or 3 planes of width×height finite, non-negative weights with a positive sum",
+            allowed: if normalise {
+                "1 or 3 planes of width×height finite, non-negative weights with a positive sum"
+            } else {
+                "1 or 3 planes of width×height finite, non-negative weights, each summing to more than 0 and at most 1"
+            },
         };
         if planes.len() != 1 && planes.len() != 3 {
             return Err(refuse(&format!("{} planes", planes.len())));
         }
-        let mut normalised = Vec::with_capacity(planes.len());
+        let mut checked = Vec::with_capacity(planes.len());
         for mut plane in planes {
             if plane.len() != width * height {
                 return Err(refuse(&format!("a plane of {} values", plane.len())));
@@ -177,17 +202,21 @@ impl Kernel {
             // within its own rounding; dividing again would move weights by
             // an ulp, and `apply --kernel` would no longer give the bytes of
             // the camera the kernel was built from.
-            if (sum - 1.0).abs() > f64::from(f32::EPSILON) {
+            let near_one = (sum - 1.0).abs() <= f64::from(f32::EPSILON);
+            if !normalise && sum > 1.0 && !near_one {
+                return Err(refuse(&format!("a plane summing to {sum}")));
+            }
+            if normalise && !near_one {
                 plane
                     .par_iter_mut()
                     .for_each(|v| *v = (f64::from(*v) / sum) as f32);
             }
-            normalised.push(plane);
+            checked.push(plane);
         }
         Ok(Kernel {
             width,
             height,
-            planes: normalised,
+            planes: checked,
         })
     }
 

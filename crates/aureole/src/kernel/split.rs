@@ -48,8 +48,7 @@ impl SplitKernel {
                     spread: f,
                 }
             }
-            // Nothing spread, or nowhere to spread it within the extent: all
-            // light stays.
+            // Nothing spread: all light stays.
             None => Layer {
                 centre: 1.0,
                 spread: zeros(extent.width * extent.height),
@@ -96,8 +95,8 @@ impl SplitKernel {
     }
 
     /// This PSF followed by `next` in the optical chain: their convolution.
-    /// (a δ + S) ⊛ (b δ + T) = ab δ + a T + b S + S ⊛ T, where S ⊛ T keeps the
-    /// mass ΣS·ΣT within the extent, like any spread light. A plane of a
+    /// (a δ + S) ⊛ (b δ + T) = ab δ + a T + b S + S ⊛ T over the extent,
+    /// whose light beyond it leaves, like any spread light. A plane of a
     /// one-plane PSF pairs with every plane of the other.
     pub fn then(
         &self,
@@ -111,25 +110,22 @@ impl SplitKernel {
             let a = &self.planes[c.min(self.planes.len() - 1)];
             let b = &next.planes[c.min(next.planes.len() - 1)];
             let width = self.extent.width;
-            let mass = plane_sum(&a.spread, width) * plane_sum(&b.spread, width);
+            let lit = plane_sum(&a.spread, width) > 0.0 && plane_sum(&b.spread, width) > 0.0;
             let share = 1.0 / count as f64;
             let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
-            let mut twice = if mass > 0.0 {
+            let mut twice = if lit {
                 compose(&a.spread, &b.spread, &self.extent, composing, &mut part)?
             } else {
                 zeros(a.spread.len())
             };
             // FFT round-off leaves tiny negatives where the true value is
             // ~0; light is never negative.
-            twice.par_iter_mut().for_each(|v| *v = v.max(0.0));
-            let kept = plane_sum(&twice, width);
-            let scale = if kept > 0.0 { mass / kept } else { 0.0 };
             twice
                 .par_iter_mut()
                 .zip(&a.spread)
                 .zip(&b.spread)
                 .for_each(|((v, &s), &t)| {
-                    *v = (a.centre * f64::from(t) + b.centre * f64::from(s) + f64::from(*v) * scale)
+                    *v = (a.centre * f64::from(t) + b.centre * f64::from(s) + f64::from(v.max(0.0)))
                         as f32;
                 });
             planes.push(Layer {

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
 use super::shape::{one_point_beyond, SpreadShape, Supersampling};
+use super::whole::{Whole, Window};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -113,6 +114,11 @@ impl SpreadShape for BloomShape {
     fn density(&self, x: f64, y: f64) -> f64 {
         let q2 = (x * x + y * y) / (self.radius * self.radius);
         math::power(1.0 + q2, -self.beta)
+    }
+
+    /// ∫ 2πr (1 + r²/R²)^−β dr = πR²/(β − 1).
+    fn whole(&self, _window: &Window) -> Whole {
+        Whole::Plane(std::f64::consts::PI * self.radius * self.radius / (self.beta - 1.0))
     }
 
     fn one_point_squared(&self) -> f64 {

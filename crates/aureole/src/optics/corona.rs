@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::schema::{length, Default, Kind, Parameter, EPSILON};
 
 use super::shape::{self, Sample, SpreadShape, Supersampling, CHUNK_POINTS};
+use super::whole::{self, Whole, Window};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -521,6 +522,10 @@ impl CoronaShape {
 }
 
 impl SpreadShape for CoronaShape {
+    fn whole(&self, _window: &Window) -> Whole {
+        Whole::Plane(self.plane())
+    }
+
     fn lit_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
         if y.abs() > self.dark_radius {
             return Some(Vec::new());
@@ -715,6 +720,20 @@ impl CoronaShape {
 
 /// n = −1/ln cos ω; 0 where ω ≥ π/2 (or NaN), ∞ where cos ω rounds to 1.
 #[inline(always)]
+/// W(n) = ∫ cosⁿ u du over (−π/2, π/2) = √π Γ((n+1)/2) / Γ(n/2 + 1): π for
+/// the isotropic core (n = 0), √(2π/n)(1 − 1/(4n) + 1/(32n²)) where the
+/// Gammas' logarithms would lose the digits of their difference.
+fn lobe(n: f64) -> f64 {
+    if n.is_infinite() {
+        0.0
+    } else if n > 1e4 {
+        (TAU / n).sqrt() * (1.0 - 0.25 / n + 1.0 / (32.0 * n * n))
+    } else {
+        std::f64::consts::PI.sqrt()
+            * libm::exp(libm::lgamma(0.5 * (n + 1.0)) - libm::lgamma(0.5 * n + 1.0))
+    }
+}
+
 fn exponent_of(omega: f64) -> f64 {
     let g = math::neg_ln_cos(omega);
     let n = if g <= 0.0 { f64::INFINITY } else { 1.0 / g };
@@ -726,6 +745,31 @@ fn exponent_of(omega: f64) -> f64 {
 }
 
 impl CoronaShape {
+    /// ∫∫ f over the plane, ray by ray: a ray's lobe over its directions
+    /// (−π/k, π/k] holds ∫ |cos(kδ/2)|ⁿ dδ = (2/k)·W(n) of each ring, and
+    /// the rings fade as I·e^(−σr/l) r dr.
+    fn plane(&self) -> f64 {
+        // n(r) turns at the core's edge, where ω = (r/w)^(s−1) = π/2.
+        let core = |width: f64| {
+            if self.spread == 1.0 {
+                f64::NAN
+            } else {
+                width * libm::pow(FRAC_PI_2, 1.0 / (self.spread - 1.0))
+            }
+        };
+        self.rays
+            .iter()
+            .map(|ray| {
+                let ring = |r: f64| {
+                    r * math::exp(-ray.fade_per_px * r) * lobe(self.exponent(r, ray.width))
+                };
+                let scale = ray.width.min(1.0 / ray.fade_per_px);
+                ray.intensity * 2.0 / self.k
+                    * whole::radial_integral(ring, 0.0, scale, &[core(ray.width)])
+            })
+            .sum()
+    }
+
     /// f at distance r from the centre and `offset` from the axis of its
     /// nearest ray `ray`.
     fn value(&self, ray: &Ray, r: f64, offset: f64) -> f64 {

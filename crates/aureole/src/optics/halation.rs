@@ -26,6 +26,7 @@ use serde::{Deserialize, Serialize};
 use crate::schema::{fraction, length, Default, Kind, Parameter};
 
 use super::shape::{self, SpreadShape, Supersampling, CHUNK_POINTS};
+use super::whole::{self, Whole, Window};
 use super::{Context, Model, Source};
 use crate::check;
 use crate::error::Result;
@@ -387,6 +388,13 @@ impl SpreadShape for HaloShape {
 
     fn density(&self, x: f64, y: f64) -> f64 {
         self.at((x * x + y * y).sqrt())
+    }
+
+    /// Over the plane by quadrature, on the scale L and split at the ring
+    /// of total reflection, where h steps.
+    fn whole(&self, _window: &Window) -> Whole {
+        let ring: Vec<f64> = self.ring.into_iter().collect();
+        Whole::Plane(whole::radial_plane(|r| self.at(r), self.path, &ring))
     }
 
     /// [`HaloShape::at`] in passes over the points (the angle; the

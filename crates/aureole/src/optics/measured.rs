@@ -202,28 +202,25 @@ impl Model for Measured {
         };
         let (planes, survey) = self.cleaned(picture)?;
         let (width, height) = context.kernel_size;
-        let planes = planes
-            .iter()
-            .map(|plane| {
-                resample(
-                    plane,
-                    (picture.width, picture.height),
-                    survey.centre,
-                    from,
-                    (width, height),
-                    to,
-                    context.sending,
-                )
-            })
-            .collect::<Vec<_>>();
         let mut normalised = Vec::with_capacity(planes.len());
-        for mut plane in planes {
+        for plane in &planes {
+            let mut kernel = resample(
+                plane,
+                (picture.width, picture.height),
+                survey.centre,
+                from,
+                (width, height),
+                to,
+                context.sending,
+            );
+            // The picture's light, not the kernel's: what falls beyond the
+            // kernel leaves the frame.
             let total: f64 = plane.iter().sum();
-            if total <= 0.0 {
+            if total <= 0.0 || !kernel.iter().any(|&v| v > 0.0) {
                 return Err(self.refuse("no light of it falls within the kernel"));
             }
-            plane.iter_mut().for_each(|v| *v /= total);
-            normalised.push(plane);
+            kernel.iter_mut().for_each(|v| *v /= total);
+            normalised.push(kernel);
         }
         Ok(Source::Pattern(normalised))
     }

@@ -19,6 +19,7 @@ pub mod halation;
 pub mod measured;
 pub(crate) mod shape;
 pub mod vos;
+pub(crate) mod whole;
 
 pub use aperture::{Aperture, Filter};
 pub use bloom::Bloom;

@@ -1,10 +1,19 @@
 //! The spread function f of an effect as the kernel rasteriser sees it: a
 //! density in pixel coordinates, and how finely to sample it over a pixel.
 
+use super::whole::{Whole, Window};
+
 /// The spread function f of an effect, in pixel coordinates.
 pub(crate) trait SpreadShape: Sync {
     /// f at (x, y) pixels from the centre, y up, up to a constant factor.
     fn density(&self, x: f64, y: f64) -> f64;
+
+    /// The light of f that a kernel's `window` does not hold, with the
+    /// constant factor of [`SpreadShape::density`]: its integral over the
+    /// whole plane or, for a shape that leaves its centre pixel out
+    /// ([`SpreadShape::spreads_centre`]), over the plane outside the
+    /// window. The kernel is normalised by it (docs/physics.md §2).
+    fn whole(&self, window: &Window) -> Whole;
 
     /// The supersampling grid needed to average f over the pixel centred at
     /// (x, y): finer where f changes fast within the pixel, and in the

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::schema::{Default, Kind, Parameter, EPSILON};
 
 use super::shape::{one_point_beyond, SpreadShape, Supersampling};
+use super::whole::{self, Whole, Window};
 use super::{Context, Model, Source};
 use crate::camera::CameraGeometry;
 use crate::error::{Error, Result};
@@ -91,6 +92,14 @@ impl SpreadShape for VosShape {
         // cos(atan t) = 1/√(1 + t²), without a cosine.
         let c = 1.0 / (1.0 + t * t).sqrt();
         math::power(libm::atan(t), -self.exponent) * c * c * c
+    }
+
+    /// Outside the window, by quadrature on panels that double from the
+    /// nearest edge: f is a power of r there, then falls as r⁻³ where the
+    /// sensor's flatness turns angles into ever longer distances.
+    fn whole(&self, window: &Window) -> Whole {
+        let at = |r: f64| self.density(r, 0.0);
+        Whole::Beyond(whole::radial_beyond(at, window, window.nearest(), &[]))
     }
 
     fn one_point_squared(&self) -> f64 {

@@ -119,6 +119,7 @@ impl Kept {
                 Some(V::F64(t)) if t.is_finite() && t >= 0.0 => Some(t),
                 _ => None,
             },
+            shares: matches!(value(crate::formats::LIGHT_ATTRIBUTE), Some(V::F64(_))),
         }
     }
 

@@ -294,7 +294,7 @@ fn points_per_axis(cycles: f64) -> usize {
 /// Nodes in pixels and weights (Σ = 1) for the mean over a pixel: `n`
 /// Gauss–Legendre points.
 fn square(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let (nodes, weights) = gauss_legendre(n);
+    let (nodes, weights) = crate::math::gauss_legendre(n);
     (
         nodes.iter().map(|t| 0.5 * t).collect(),
         weights.iter().map(|w| 0.5 * w).collect(),
@@ -307,51 +307,12 @@ fn square(n: usize) -> (Vec<f64>, Vec<f64>) {
 /// weights take the tent's linear factor, so that a pixel's worth of the
 /// pattern still meets `n` points.
 fn tent(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let (nodes, weights) = gauss_legendre(n);
+    let (nodes, weights) = crate::math::gauss_legendre(n);
     let half = nodes.iter().zip(&weights).map(|(t, w)| {
         let s = 0.5 * (1.0 + t);
         (s, 0.5 * w * (1.0 - s))
     });
     half.clone().map(|(s, w)| (-s, w)).chain(half).unzip()
-}
-
-/// The `n` Gauss–Legendre nodes on [−1, 1] and their weights (Σ = 2):
-/// Newton's method on P_n from the Chebyshev guesses, P_n by its
-/// recurrence.
-pub(super) fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let (mut nodes, mut weights) = (vec![0.0; n], vec![0.0; n]);
-    for i in 0..n.div_ceil(2) {
-        let mut x = libm::cos(std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5));
-        let mut derivative = 1.0;
-        for _ in 0..100 {
-            let (p, dp) = legendre(n, x);
-            derivative = dp;
-            let step = p / dp;
-            x -= step;
-            if step.abs() < 1e-15 {
-                break;
-            }
-        }
-        let w = 2.0 / ((1.0 - x * x) * derivative * derivative);
-        nodes[i] = -x;
-        nodes[n - 1 - i] = x;
-        weights[i] = w;
-        weights[n - 1 - i] = w;
-    }
-    (nodes, weights)
-}
-
-/// P_n(x) and P_n'(x).
-fn legendre(n: usize, x: f64) -> (f64, f64) {
-    let (mut p0, mut p1) = (1.0, x);
-    for k in 2..=n {
-        let k = k as f64;
-        (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
-    }
-    if n == 0 {
-        return (1.0, 0.0);
-    }
-    (p1, n as f64 * (x * p1 - p0) / (x * x - 1.0))
 }
 
 #[cfg(test)]
@@ -401,30 +362,6 @@ mod tests {
                     "{blades} blades, {sending:?}, λN {lambda_n_px} px: pixel {} off by {:.4}",
                     worst.1,
                     worst.0
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn gauss_legendre_integrates_polynomials_of_degree_2n_minus_1_exactly() {
-        for n in [2, 3, 5, 8, 17, MOST_CORE_POINTS] {
-            let (x, w) = gauss_legendre(n);
-            assert!((w.iter().sum::<f64>() - 2.0).abs() < 1e-13, "n = {n}");
-            for degree in 0..2 * n {
-                let got: f64 = x
-                    .iter()
-                    .zip(&w)
-                    .map(|(x, w)| w * x.powi(degree as i32))
-                    .sum();
-                let exact = if degree % 2 == 1 {
-                    0.0
-                } else {
-                    2.0 / (degree as f64 + 1.0)
-                };
-                assert!(
-                    (got - exact).abs() < 1e-12,
-                    "n = {n}, x^{degree}: {got} vs {exact}"
                 );
             }
         }

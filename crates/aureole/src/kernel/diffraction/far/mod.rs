@@ -541,7 +541,7 @@ fn core_nodes(
     let per_z = k / lambda;
     let turns = PAIR_CORE + pitch * per_z * (a[0].abs() + a[1].abs());
     let (points, weights) =
-        super::near::gauss_legendre(((2.2 * turns + 2.0).ceil() as usize).min(32));
+        crate::math::gauss_legendre(((2.2 * turns + 2.0).ceil() as usize).min(32));
     let (top, foot) = (0.5 * (1.0 - ratio), 0.5 * (1.0 + ratio));
     let trapezoid =
         |z: f64| ((0.5f64).min(z + 0.5 * ratio) - (-0.5f64).max(z - 0.5 * ratio)).max(0.0);
@@ -713,7 +713,7 @@ mod tests {
                 .sum::<f64>()
                 / total
         };
-        let (points, weights) = super::super::near::gauss_legendre(12);
+        let (points, weights) = crate::math::gauss_legendre(12);
         let halves = match sending {
             Sending::Point => vec![beta, gamma],
             Sending::Pixel => vec![beta, gamma, beta, gamma],
