@@ -4,7 +4,7 @@
 //! view of it, the result written into a copy of the input. A guard added
 //! here holds in each of them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use aureole::image::Shape;
 use aureole::{Applied, ApplyOptions, Frame, FrameOptions, Image, Session, Stage};
@@ -14,7 +14,8 @@ use crate::error::{Error, Result};
 use crate::formats::{Kind, Original};
 use crate::limits::Limits;
 use crate::read::{read_image_with, Choice, Loaded};
-use crate::write::{output_format, refuse_overwrite, write_image_into, WriteOptions, Written};
+use crate::write::Written;
+use crate::write::{output_format, refuse_overwrite, write_image_into, WriteOptions};
 
 /// Refuses, before any work, an output whose extension names no format
 /// we write, that would overwrite `input`, that is not a plain file, or
@@ -266,5 +267,135 @@ impl Input {
     /// a linear format as it is, a picture exposed and tone-mapped.
     pub fn write(self, output: &Path, image: &Image, options: &WriteOptions) -> Result<Written> {
         write_image_into(output, image, self.frame.scale(), options, self.original)
+    }
+}
+
+/// One file through the camera, as every front end asks it: the input
+/// (none for an image made in memory), the output, the layer and part
+/// read, how the frame is made, how the camera is applied, whether the
+/// glare layers go beside the result, and how it is written. Checked
+/// before any work ([`Job::check`]), then read ([`Job::read`]), applied
+/// ([`Job::apply`]) and written ([`Job::write`]), or all three by
+/// [`Job::run`]. The command line's batch pipelines the phases; the
+/// studio's export and Python run them with their own memory lease and
+/// progress between.
+#[derive(Debug, Clone)]
+pub struct Job {
+    /// The file read, which the output must not overwrite.
+    pub input: Option<PathBuf>,
+    /// The file written.
+    pub output: PathBuf,
+    /// The layer and part of the input.
+    pub choice: Choice,
+    /// How the input becomes a frame (its cd/m² per unit).
+    pub frame: FrameOptions,
+    /// The threshold, knee, glare-only and method.
+    pub options: ApplyOptions,
+    /// Whether the light each effect adds goes beside the result.
+    pub layers: bool,
+    /// How the result is written.
+    pub write: WriteOptions,
+}
+
+/// What a job made: the camera's result, the frame's cd/m² per unit,
+/// what the writer made, and what the user should know (the reader's and
+/// the writer's notes, a line each).
+#[derive(Debug)]
+pub struct Done {
+    /// The camera's result.
+    pub applied: Applied,
+    /// The frame's luminance scale, cd/m² per unit.
+    pub scale: f64,
+    /// What the writer made.
+    pub written: Written,
+    /// Notes for the user.
+    pub notes: Vec<String>,
+}
+
+impl Job {
+    /// What the job asks, for [`Request::check`] and its words.
+    pub fn request(&self) -> Request<'_> {
+        Request {
+            output: &self.output,
+            input: self.input.as_deref(),
+            options: &self.options,
+            layers: self.layers,
+        }
+    }
+
+    /// Every check before any work ([`Request::check`]).
+    pub fn check(&self) -> Result<()> {
+        self.request().check()
+    }
+
+    /// The input read as a frame: refused from its header where `session`
+    /// could not take it ([`check_header`]), and `before_decoding` called
+    /// with the header's shape (`None` where it does not say) before the
+    /// pixels are decoded, for a memory lease to be taken there; returns
+    /// the frame and what `before_decoding` returned.
+    pub fn read<T, E: From<Error>>(
+        &self,
+        session: &Session,
+        limits: Limits,
+        before_decoding: impl FnOnce(Option<Shape>) -> std::result::Result<T, E>,
+    ) -> std::result::Result<(Input, T), E> {
+        let Some(path) = self.input.as_deref() else {
+            return Err(Error::Refused {
+                path: self.output.clone(),
+                reason: "the job has no input file to read".into(),
+            }
+            .into());
+        };
+        let shape = check_header(path, &self.choice, limits, session)?;
+        let held = before_decoding(shape)?;
+        Ok((read(path, &self.choice, limits, &self.frame)?, held))
+    }
+
+    /// The camera of `session` applied to every view of `input`, with the
+    /// glare layers kept where the job asks for them.
+    pub fn apply(
+        &self,
+        input: &mut Input,
+        session: &mut Session,
+        report: &mut dyn FnMut(Stage, f64),
+    ) -> Result<Applied> {
+        let applied = if self.layers {
+            input.apply_layers(session, &self.options, report)
+        } else {
+            input.apply(session, &self.options, report)
+        };
+        applied.map_err(|error| Error::Content {
+            path: self.input.clone().unwrap_or_else(|| self.output.clone()),
+            error,
+        })
+    }
+
+    /// `applied` written into a copy of `input` ([`Input::write`]).
+    pub fn write(&self, mut input: Input, applied: Applied) -> Result<Done> {
+        let mut notes = std::mem::take(&mut input.notes);
+        let scale = input.frame.scale();
+        let written = input.write(&self.output, &applied.image, &self.write)?;
+        if let Written::Linear(more) = &written {
+            notes.extend(more.iter().map(ToString::to_string));
+        }
+        Ok(Done {
+            applied,
+            scale,
+            written,
+            notes,
+        })
+    }
+
+    /// The whole job: checked, read, applied and written.
+    pub fn run(
+        &self,
+        session: &mut Session,
+        limits: Limits,
+        report: &mut dyn FnMut(Stage, f64),
+    ) -> Result<Done> {
+        self.check()?;
+        let (mut input, ()) = self.read(session, limits, |_| Ok::<(), Error>(()))?;
+        let applied = self.apply(&mut input, session, report)?;
+        self.write(input, applied)
     }
 }

@@ -205,3 +205,84 @@ fn the_checks_without_a_file_system_refuse_what_a_command_line_would() {
     exr.check_asked().unwrap();
     assert!(exr.check().is_err(), "the folder is missing");
 }
+
+/// A job of a small night street written as EXR, to `out` in `dir`.
+fn street_job(dir: &Path, out: &str, layers: bool) -> aureole_io::job::Job {
+    let input = dir.join("street.exr");
+    let image = aureole_io::demo::night_street(96, 54);
+    aureole_io::write::write_linear(&input, &image, Default::default()).unwrap();
+    aureole_io::job::Job {
+        input: Some(input),
+        output: dir.join(out),
+        choice: Default::default(),
+        frame: Default::default(),
+        options: ApplyOptions::default(),
+        layers,
+        write: aureole_io::write::WriteOptions {
+            linear: Default::default(),
+            display: aureole_io::display::DisplayOptions {
+                exposure: aureole_io::display::Exposure::Auto,
+                tone: aureole_io::display::ToneCurve::Filmic,
+            },
+            depth: None,
+        },
+    }
+}
+
+fn session() -> aureole::Session {
+    let mut config = aureole::Config::default();
+    config.merge(
+        aureole::presets::find("paper-fig5-both")
+            .unwrap()
+            .config()
+            .unwrap(),
+    );
+    aureole::Session::new(config)
+}
+
+/// `Job::run` is its phases: the header's shape comes before the pixels,
+/// and the file it writes is the one the phases write, notes and all.
+#[test]
+fn a_job_runs_its_phases_and_says_its_notes() {
+    let dir = tempfile::tempdir().unwrap();
+    let limits = aureole_io::limits::Limits::NONE;
+    let whole = street_job(dir.path(), "whole.exr", true);
+    let done = whole.run(&mut session(), limits, &mut |_, _| {}).unwrap();
+    assert!(done.applied.energy_out <= done.applied.energy_in);
+    let phased = aureole_io::job::Job {
+        output: dir.path().join("phased.exr"),
+        ..whole.clone()
+    };
+    phased.check().unwrap();
+    let mut seen = None;
+    let (mut input, ()) = phased
+        .read(&session(), limits, |shape| {
+            seen = shape;
+            Ok::<(), Error>(())
+        })
+        .unwrap();
+    assert_eq!(seen.map(|s| (s.width, s.height)), Some((96, 54)));
+    let applied = phased
+        .apply(&mut input, &mut session(), &mut |_, _| {})
+        .unwrap();
+    let again = phased.write(input, applied).unwrap();
+    assert_eq!(again.notes, done.notes);
+    assert_eq!(
+        std::fs::read(dir.path().join("whole.exr")).unwrap(),
+        std::fs::read(dir.path().join("phased.exr")).unwrap()
+    );
+    // What a job's check refuses, its run refuses before reading.
+    let refused_job = aureole_io::job::Job {
+        output: dir.path().join("glare.png"),
+        ..street_job(dir.path(), "unused.exr", true)
+    };
+    let line = refused_job
+        .run(&mut session(), limits, &mut |_, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        line.contains("glare layers are written only into"),
+        "{line}"
+    );
+    assert!(!dir.path().join("glare.png").exists());
+}

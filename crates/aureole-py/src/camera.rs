@@ -15,7 +15,7 @@ use aureole_io::display::{DisplayOptions, Exposure, ToneCurve};
 use aureole_io::formats::Samples;
 use aureole_io::limits::{default_memory_limit, Limits};
 use aureole_io::read::Choice;
-use aureole_io::write::{LinearOptions, WriteOptions, Written};
+use aureole_io::write::{LinearOptions, WriteOptions};
 use pyo3::types::{PyDict, PyDictMethods};
 use rayon::prelude::*;
 
@@ -425,66 +425,52 @@ impl Camera {
             glare_only,
             method: self::method(method)?,
         };
-        // The guards every front end keeps, before any work.
-        aureole_io::job::Request {
-            output: &output,
-            input: Some(&input),
-            options: &options,
-            layers,
-        }
-        .check()
-        .map_err(file_error)?;
         let compression = crate::files::compression(compression)?;
-        let write_options = WriteOptions {
-            linear: LinearOptions {
-                samples: half.map(|h| if h { Samples::Half } else { Samples::Float }),
-                compression,
+        let job = aureole_io::job::Job {
+            input: Some(input.clone()),
+            output,
+            choice: Choice { layer, part },
+            frame: FrameOptions {
+                input_scale,
+                sanitize: false,
             },
-            display: DisplayOptions {
-                exposure: Exposure::Auto,
-                tone: ToneCurve::Filmic,
+            options,
+            layers,
+            write: WriteOptions {
+                linear: LinearOptions {
+                    samples: half.map(|h| if h { Samples::Half } else { Samples::Float }),
+                    compression,
+                },
+                display: DisplayOptions {
+                    exposure: Exposure::Auto,
+                    tone: ToneCurve::Filmic,
+                },
+                depth: None,
             },
-            depth: None,
         };
-        let choice = Choice { layer, part };
+        // The guards every front end keeps, before any work.
+        job.check().map_err(file_error)?;
         let limits = Limits::default_for_machine();
-        let frame_options = FrameOptions {
-            input_scale,
-            sanitize: false,
-        };
         // A frame the camera could not take is refused from its header,
         // before it is decoded, as the command line does.
         let checker = Session::new(self.config.clone()).with_memory_limit(limits.max_bytes);
-        let mut file = py
-            .detach(|| {
-                aureole_io::job::check_header(&input, &choice, limits, &checker)?;
-                aureole_io::job::read(&input, &choice, limits, &frame_options)
-            })
+        let (mut file, ()) = py
+            .detach(|| job.read(&checker, limits, |_| Ok::<(), aureole_io::Error>(())))
             .map_err(file_error)?;
-        let mut notes = std::mem::take(&mut file.notes);
-        let scale = file.frame.scale();
         let size = (
             (file.frame.image().width, file.frame.image().height),
             device,
         );
-        let (applied, written) = self.with_session(py, size, progress, |session, report| {
+        let done = self.with_session(py, size, progress, |session, report| {
             // A stereo plate's every view goes through the camera.
-            let applied = if layers {
-                file.apply_layers(session, &options, report)
-            } else {
-                file.apply(session, &options, report)
-            };
-            applied
-                .map_err(|e| value_error_about(&input, e))
-                .and_then(|applied| {
-                    file.write(&output, &applied.image, &write_options)
-                        .map_err(file_error)
-                        .map(|written| (applied, written))
+            job.apply(&mut file, session, report)
+                .map_err(|error| match error {
+                    aureole_io::Error::Content { error, .. } => value_error_about(&input, error),
+                    other => file_error(other),
                 })
+                .and_then(|applied| job.write(file, applied).map_err(file_error))
         })??;
-        if let Written::Linear(more) = written {
-            notes.extend(more.iter().map(ToString::to_string));
-        }
+        let (applied, scale, notes) = (done.applied, done.scale, done.notes);
         let report = PyDict::new(py);
         report.set_item("energy_in", applied.energy_in)?;
         report.set_item("energy_out", applied.energy_out)?;

@@ -9,10 +9,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use aureole::{Cancel, FrameOptions, Session};
-use aureole_io::display::DisplayOptions;
 use aureole_io::job::Input;
 use aureole_io::limits::Limits;
-use aureole_io::write::{output_format, WriteOptions, Written};
+use aureole_io::write::{output_format, WriteOptions};
 use serde::Serialize;
 
 use crate::budget::Budget;
@@ -93,7 +92,7 @@ pub struct Progress {
     pub notes: Vec<String>,
 }
 
-struct Job {
+struct Export {
     progress: Mutex<Progress>,
     cancel: Cancel,
 }
@@ -104,7 +103,7 @@ pub struct Exports {
     budget: Arc<Budget>,
     device: Device,
     next: AtomicU64,
-    jobs: Mutex<HashMap<u64, Arc<Job>>>,
+    jobs: Mutex<HashMap<u64, Arc<Export>>>,
 }
 
 impl Exports {
@@ -131,40 +130,45 @@ impl Exports {
             name => Some(self.roots.resolve(name)?),
         };
         let output = self.output_path(&request.output)?;
-        // What every front end checks before the work, in the same words.
-        aureole_io::job::Request {
-            output: &output,
-            input: input.as_deref(),
-            options: &request.render.options()?,
+        let job = aureole_io::job::Job {
+            input,
+            output,
+            choice: Default::default(),
+            frame: FrameOptions::default(),
+            options: request.render.options()?,
             layers: request.layers,
-        }
-        .check()
-        .map_err(|e| StudioError::BadRequest(e.to_string()))?;
-        if !request.overwrite && output.symlink_metadata().is_ok() {
+            write: WriteOptions {
+                linear: Default::default(),
+                display,
+                depth: None,
+            },
+        };
+        // What every front end checks before the work, in the same words.
+        job.check()
+            .map_err(|e| StudioError::BadRequest(e.to_string()))?;
+        if !request.overwrite && job.output.symlink_metadata().is_ok() {
             return Err(StudioError::Conflict(exists(&request.output)));
         }
         let id = self.next.fetch_add(1, Ordering::Relaxed);
-        let job = Arc::new(Job {
+        let export = Arc::new(Export {
             progress: Mutex::new(Progress {
                 stage: "reading".into(),
-                output: output.display().to_string(),
+                output: job.output.display().to_string(),
                 ..Progress::default()
             }),
             cancel: Cancel::new(),
         });
-        locked(&self.jobs).insert(id, job.clone());
+        locked(&self.jobs).insert(id, export.clone());
         let budget = self.budget.clone();
         let device = self.device;
         std::thread::spawn(move || {
             let target = Target {
-                input: input.as_deref(),
-                output: &output,
                 overwrite: request.overwrite,
                 max_extent,
                 device,
             };
-            let outcome = run(&job, &request, config, display, target, &budget);
-            let mut progress = locked(&job.progress);
+            let outcome = run(&export, &job, config, target, &budget);
+            let mut progress = locked(&export.progress);
             progress.done = true;
             if let Err(error) = outcome {
                 progress.error = Some(error.to_string().replace('\n', " "));
@@ -233,28 +237,22 @@ fn exists(requested: &str) -> String {
     )
 }
 
-/// Where an export reads and writes.
-struct Target<'a> {
-    /// The image, or the demo.
-    input: Option<&'a Path>,
-    output: &'a Path,
+/// How an export runs.
+struct Target {
     overwrite: bool,
     max_extent: Option<(usize, usize)>,
     device: Device,
 }
 
 fn run(
-    job: &Job,
-    request: &ExportRequest,
+    export: &Export,
+    job: &aureole_io::job::Job,
     config: aureole::Config,
-    display: DisplayOptions,
     target: Target,
     budget: &Arc<Budget>,
 ) -> Result<(), StudioError> {
     let memory_limit = budget.total();
     let Target {
-        input,
-        output,
         overwrite,
         max_extent,
         device,
@@ -266,67 +264,57 @@ fn run(
         .with_memory_limit(memory_limit)
         .with_max_extent(max_extent)
         .with_device(device);
-    session.set_cancel_token(job.cancel.clone());
+    session.set_cancel_token(export.cancel.clone());
     let lease = |bytes| {
-        budget.lease(bytes, &job.cancel, None, || {
-            locked(&job.progress).stage = "waiting for memory".into();
+        budget.lease(bytes, &export.cancel, None, || {
+            locked(&export.progress).stage = "waiting for memory".into();
         })
     };
-    let (mut input, _lease) = match input {
+    let (mut input, _lease) = match &job.input {
         None => {
-            let input = Input::from_image(
-                aureole_io::demo::night_street(1280, 720),
-                &FrameOptions::default(),
-            )?;
-            let bytes = needs(&config, &input.frame, max_extent, request.layers)?;
+            let input = Input::from_image(aureole_io::demo::night_street(1280, 720), &job.frame)?;
+            let bytes = needs(&config, &input.frame, max_extent, job.layers)?;
             (input, lease(bytes)?)
         }
-        Some(path) => {
-            // A frame the camera could not take is refused from its header,
-            // and its memory is taken before it is decoded where the header
-            // says its size: parallel exports of large files wait rather
-            // than decode beside each other.
-            let choice = Default::default();
-            let shape = aureole_io::job::check_header(path, &choice, limits, &session)?;
-            let early = shape
-                .map(|shape| lease(needs_for(&config, shape, max_extent, request.layers)?))
-                .transpose()?;
-            let input = aureole_io::job::read(path, &choice, limits, &FrameOptions::default())?;
+        // A frame the camera could not take is refused from its header,
+        // and its memory is taken before it is decoded where the header
+        // says its size: parallel exports of large files wait rather than
+        // decode beside each other.
+        Some(_) => {
+            let (input, early) = job.read(&session, limits, |shape| {
+                shape
+                    .map(|shape| lease(needs_for(&config, shape, max_extent, job.layers)?))
+                    .transpose()
+            })?;
             let held = match early {
                 Some(held) => held,
-                None => lease(needs(&config, &input.frame, max_extent, request.layers)?)?,
+                None => lease(needs(&config, &input.frame, max_extent, job.layers)?)?,
             };
             (input, held)
         }
     };
-    let options = request.render.options()?;
     let mut report = |stage: aureole::Stage, fraction| {
-        let mut progress = locked(&job.progress);
+        let mut progress = locked(&export.progress);
         progress.stage = stage.describe().to_string();
         progress.fraction = fraction;
     };
     // A stereo plate's every view goes through the camera.
-    let applied = if request.layers {
-        input.apply_layers(&mut session, &options, &mut report)?
-    } else {
-        input.apply(&mut session, &options, &mut report)?
-    };
-    job.cancel.check()?;
-    locked(&job.progress).stage = "writing".into();
+    let applied =
+        job.apply(&mut input, &mut session, &mut report)
+            .map_err(|error| match error {
+                aureole_io::Error::Content { error, .. } => StudioError::from(error),
+                other => StudioError::from(other),
+            })?;
+    export.cancel.check()?;
+    locked(&export.progress).stage = "writing".into();
     // Another program may have made the file while the camera ran.
-    if !overwrite && output.symlink_metadata().is_ok() {
-        return Err(StudioError::Conflict(exists(&output.display().to_string())));
+    if !overwrite && job.output.symlink_metadata().is_ok() {
+        return Err(StudioError::Conflict(exists(
+            &job.output.display().to_string(),
+        )));
     }
-    let write = WriteOptions {
-        linear: Default::default(),
-        display,
-        depth: None,
-    };
-    let mut notes = std::mem::take(&mut input.notes);
-    if let Written::Linear(more) = input.write(output, &applied.image, &write)? {
-        notes.extend(more.iter().map(ToString::to_string));
-    }
-    locked(&job.progress).notes = notes;
+    let done = job.write(input, applied)?;
+    locked(&export.progress).notes = done.notes;
     Ok(())
 }
 
