@@ -208,8 +208,9 @@ impl Camera {
         self.config.seed
     }
 
-    /// The kernel (PSF) of the whole chain, width × height pixels,
-    /// normalised to sum 1 per channel, its centre at (height // 2,
+    /// The kernel (PSF) of the whole chain, width × height pixels, each
+    /// channel the share of its light within it (the rest would leave a
+    /// frame that size), its centre at (height // 2,
     /// width // 2): float32 (H, W), or (H, W, 3) where it differs by
     /// colour. `image_width` sets the pixel pitch (sensor width / image
     /// width) that turns µm and mm into pixels; by default the kernel's

@@ -12,7 +12,7 @@
 //!
 //! - [`optics`]: the physical models of the optical chain (bloom, corona,
 //!   Vos, the aperture with its pupil and spectrum), one module each;
-//! - [`kernel`]: their PSFs as discrete kernels, ΣK = 1 (rasterising,
+//! - [`kernel`]: their PSFs as discrete kernels, ΣK ≤ 1 (rasterising,
 //!   composing, diffraction's near field, far field and filter orders);
 //! - [`convolve`]: the engine that spreads planes of light through a
 //!   kernel, behind one trait, in f32 and f64;

@@ -55,7 +55,8 @@ class Camera:
         device: Literal["auto", "cpu", "gpu"] = "auto",
     ) -> npt.NDArray[np.float32]:
         """The kernel (PSF) of the chain, float32 (H, W) or (H, W, 3),
-        each channel summing to 1, its centre at (height // 2, width // 2).
+        each channel holding the share of its PSF's light within it (at
+        most 1), its centre at (height // 2, width // 2).
         `image_width` sets the pixel pitch (sensor width / image width).
         `sent_by`: "pixel", the kernel an image is convolved with (each
         pixel's light leaves its whole square), or "point", the PSF of a

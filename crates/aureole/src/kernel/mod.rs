@@ -198,10 +198,10 @@ impl Kernel {
             if sum <= 0.0 {
                 return Err(refuse("a plane of zeros"));
             }
-            // A plane normalised before (a kernel `psf` wrote) sums to 1 to
-            // within its own rounding; dividing again would move weights by
-            // an ulp, and `apply --kernel` would no longer give the bytes of
-            // the camera the kernel was built from.
+            // A plane normalised before (a PFM kernel `psf` wrote whole)
+            // sums to 1 to within its own rounding; dividing again would
+            // move weights by an ulp, and `apply --kernel` would no longer
+            // give the bytes of the camera the kernel was built from.
             let near_one = (sum - 1.0).abs() <= f64::from(f32::EPSILON);
             if !normalise && sum > 1.0 && !near_one {
                 return Err(refuse(&format!("a plane summing to {sum}")));
@@ -364,7 +364,7 @@ pub fn build(
 
 /// The diffraction kernel of any pupil and filter (`optics`) at `pitch_mm`
 /// per pixel: each plane the pixel-averaged |Â(x/(λf))|², summed over
-/// `light`, normalised to ΣK = 1.
+/// `light`, each plane the share of the light that falls within `extent`.
 pub fn diffraction_kernel(
     optics: &crate::optics::aperture::Optics,
     light: crate::optics::aperture::spectrum::Light,

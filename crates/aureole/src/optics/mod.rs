@@ -3,9 +3,10 @@
 //!
 //! A PSF is P(r, φ) = (1 − ε) δ(r) + ε f(r, φ): a fraction ε of the light is
 //! spread by f, the rest stays where it fell. Each model gives ε and the
-//! shape of f (or, for diffraction, the whole pattern); [`crate::kernel`]
-//! averages it over pixel areas and normalises it in discrete space, so
-//! constant factors of f never matter.
+//! shape of f (or, for diffraction, the whole pattern) and f's light over
+//! the whole plane (`whole`); [`crate::kernel`] averages f over pixel
+//! areas and divides it by that light, so constant factors of f never
+//! matter and the light beyond the kernel leaves.
 //!
 //! A new effect is one module with a type that implements [`Model`], and
 //! one line in the [`effects!`] list below: the config schema, the list of
