@@ -49,6 +49,10 @@ pub fn library(error: &Error) -> String {
                 format_bytes(*limit)
             )
         }
+        Error::Allocation { bytes } => format!(
+            "could not allocate {} for a plane: the machine's memory is taken by other programs; free some, or lower --max-memory or --max-kernel",
+            format_bytes(*bytes)
+        ),
         _ => error.to_string(),
     }
 }

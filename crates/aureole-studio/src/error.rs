@@ -53,7 +53,7 @@ impl From<aureole::Error> for StudioError {
         use aureole::Error as E;
         match error {
             E::Cancelled => StudioError::Superseded,
-            E::Memory { .. } | E::BadSamples { .. } | E::Io { .. } => {
+            E::Memory { .. } | E::Allocation { .. } | E::BadSamples { .. } | E::Io { .. } => {
                 StudioError::Unprocessable(error.to_string())
             }
             _ => StudioError::BadRequest(error.to_string()),

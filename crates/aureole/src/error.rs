@@ -144,6 +144,14 @@ pub enum Error {
         built: bool,
     },
 
+    /// The allocator refused a buffer the run's estimate allowed: the
+    /// machine's memory went to other programs meanwhile.
+    #[error("could not allocate {} for a plane: the machine's memory is taken by other programs; free some, or lower the memory limit or the kernel's size", format_bytes(*bytes))]
+    Allocation {
+        /// The bytes asked for.
+        bytes: u64,
+    },
+
     /// The GPU was asked for and there is none.
     #[error("no GPU to compute on: {0}; compute on the CPU instead (device cpu or auto)")]
     NoGpu(String),

@@ -346,20 +346,35 @@ pub(crate) fn sum_f64(values: &[f32]) -> f64 {
 /// flushes every core's TLB (an interrupt to each, costly in a virtual
 /// machine). A plane that is read whole (summed) before it is written
 /// whole (scaled) is written first, on every core.
-pub(crate) fn zeros<T: Copy + Default + Send + Sync>(n: usize) -> Vec<T> {
-    (0..n).into_par_iter().map(|_| T::default()).collect()
+///
+/// The memory is reserved first and its refusal returned: the estimate
+/// before a run is on the safe side, but the machine's memory may have
+/// gone to other programs since, and an abort would lose the run's words.
+pub(crate) fn zeros<T: Copy + Default + Send + Sync>(n: usize) -> crate::Result<Vec<T>> {
+    let mut v = Vec::new();
+    grow_zeroed(&mut v, n)?;
+    Ok(v)
 }
 
 /// `v` made `n` long, its new values zeros written on every core: a
 /// buffer lent empty grows by hundreds of megabytes at 4K, and `resize`
-/// would take each of its fresh pages' faults on one core.
-pub(crate) fn grow_zeroed<T: Copy + Default + Send + Sync>(v: &mut Vec<T>, n: usize) {
+/// would take each of its fresh pages' faults on one core. The memory is
+/// reserved first ([`zeros`]).
+pub(crate) fn grow_zeroed<T: Copy + Default + Send + Sync>(
+    v: &mut Vec<T>,
+    n: usize,
+) -> crate::Result<()> {
     if v.len() >= n {
         v.truncate(n);
     } else {
         let more = n - v.len();
+        v.try_reserve_exact(more)
+            .map_err(|_| crate::Error::Allocation {
+                bytes: (more as u64).saturating_mul(std::mem::size_of::<T>() as u64),
+            })?;
         v.par_extend((0..more).into_par_iter().map(|_| T::default()));
     }
+    Ok(())
 }
 
 /// For each of `to` cells spanning `from` old ones, the old cells it
@@ -385,6 +400,15 @@ fn area_weights(from: usize, to: usize) -> Vec<Vec<(usize, f64)>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_plane_the_allocator_refuses_is_an_error_not_an_abort() {
+        let refused = zeros::<f32>(1 << 60).unwrap_err();
+        assert!(matches!(refused, crate::Error::Allocation { bytes } if bytes == 1 << 62));
+        let line = refused.to_string();
+        assert!(line.contains("could not allocate 4194304.0 TiB"), "{line}");
+        assert_eq!(zeros::<f32>(5).unwrap(), vec![0.0; 5]);
+    }
 
     #[test]
     fn rec709_primaries_give_the_rec709_weights() {

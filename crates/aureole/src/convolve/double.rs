@@ -91,7 +91,7 @@ impl Convolver {
                 })
                 .collect();
             let mut spectrum = Vec::new();
-            convolver.transform(rows, &mut spectrum, &cancel);
+            convolver.transform(rows, &mut spectrum, &cancel)?;
             control.check()?;
             convolver.spectra.push(spectrum);
             convolver.centres.push(placed.left_out());
@@ -107,7 +107,7 @@ impl Convolver {
         rows: Vec<(usize, Vec<f64>)>,
         columns: &mut Vec<Complex<f64>>,
         cancel: &Cancel,
-    ) {
+    ) -> Result<()> {
         let half = self.px / 2 + 1;
         let py = self.py;
         let spectra: Vec<(usize, Vec<Complex<f64>>)> = rows
@@ -124,7 +124,7 @@ impl Convolver {
         // Each column is cleared and filled where its strip's task works:
         // a strip of columns reads a cache line or two of every row
         // spectrum, where a column alone would read one value of each.
-        grow_zeroed(columns, half * py);
+        grow_zeroed(columns, half * py)?;
         // An image's rows fill each column's first `rows` values: only the
         // padding below them is cleared (a kernel's rows wrap around).
         let rows = spectra.len();
@@ -156,11 +156,12 @@ impl Convolver {
                     self.transforms.column_fft.process(column);
                 }
             });
+        Ok(())
     }
 
     /// `plane` (row-major, `width`×`height`) convolved with kernel plane
     /// `kernel_plane` less what it left out, over the same frame.
-    fn convolve(&self, plane: &[f64], kernel_plane: usize, cancel: &Cancel) -> Vec<f64> {
+    fn convolve(&self, plane: &[f64], kernel_plane: usize, cancel: &Cancel) -> Result<Vec<f64>> {
         let (w, h, px, py) = (self.width, self.height, self.px, self.py);
         let half = px / 2 + 1;
         let rows = (0..h)
@@ -175,7 +176,7 @@ impl Convolver {
         let mut lease = self.buffers.lease();
         lease.resize_with(1, Vec::new);
         let columns = &mut lease[0];
-        self.transform(rows, columns, cancel);
+        self.transform(rows, columns, cancel)?;
         let kernel = &self.spectra[kernel_plane];
         let scale = 1.0 / (px * py) as f64;
         columns
@@ -191,7 +192,7 @@ impl Convolver {
                 self.transforms.column_ifft.process(column);
             });
         let columns = &*columns;
-        let mut out = zeros(w * h);
+        let mut out = zeros(w * h)?;
         // A block of rows at a time: each column gives a run of values
         // for all of them.
         // Each task keeps its block's spectra and real row from block to
@@ -229,7 +230,7 @@ impl Convolver {
                 }
             },
         );
-        out
+        Ok(out)
     }
 
     /// One output in f64 throughout: O = I − B + Σ w (K′ ⊛ B + c·B), with
@@ -251,7 +252,7 @@ impl Convolver {
             .map(|(&v, b)| f64::from(v) - b)
             .collect();
         for (t, term) in spread.terms.iter().enumerate() {
-            let moved = self.convolve(&bright, term.kernel_plane, &control.cancel());
+            let moved = self.convolve(&bright, term.kernel_plane, &control.cancel())?;
             control.check()?;
             let (weight, centre) = (
                 f64::from(term.weight),

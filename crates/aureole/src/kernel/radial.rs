@@ -67,7 +67,7 @@ pub(super) fn quarter(
     control: &mut Control,
 ) -> Result<Vec<f32>> {
     let tables = Tables::new(shape, (span_x, span_y), value);
-    let mut quarter = zeros(span_x * span_y);
+    let mut quarter = zeros(span_x * span_y)?;
     for_each_row(&mut quarter, span_x, control, |dy, row| {
         for (c, chunk) in row.chunks_mut(CHUNK).enumerate() {
             tables.fill(c * CHUNK, dy, chunk, exact);

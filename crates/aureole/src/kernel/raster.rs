@@ -69,7 +69,7 @@ fn point_plane(
 ) -> Result<Vec<f32>> {
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = extent.centre();
-    let mut plane = zeros(width * height);
+    let mut plane = zeros(width * height)?;
     if shape.mirror_symmetric() {
         // Offsets 0..=reach along each axis cover both sides of the centre.
         let (reach_x, reach_y) = (cx.max(width - 1 - cx), cy.max(height - 1 - cy));
@@ -79,7 +79,7 @@ fn point_plane(
             let value = |x: f64, y: f64| pixel_mean(shape, x, y, false);
             radial::quarter(shape, (reach_x + 1, reach_y + 1), &exact, &value, control)?
         } else {
-            let mut quarter = zeros((reach_x + 1) * (reach_y + 1));
+            let mut quarter = zeros((reach_x + 1) * (reach_y + 1))?;
             for_each_row(&mut quarter, reach_x + 1, control, |dy, row| {
                 for (dx, value) in row.iter_mut().enumerate() {
                     *value = exact(dx, dy) as f32;
@@ -170,7 +170,7 @@ const BAND: usize = 32;
 fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -> Result<Vec<f32>> {
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = extent.centre();
-    let mut plane = zeros(width * height);
+    let mut plane = zeros(width * height)?;
     if shape.mirror_symmetric() {
         // Squares at (p + ½, q + ½) for p, q ≥ 0; the one at −½ is the
         // mirror of the one at +½. A pixel at offset d ≥ 0 takes the inner
@@ -207,7 +207,7 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
             };
             radial::quarter(shape, (reach_x + 1, reach_y + 1), &exact, &value, control)?
         } else {
-            let mut quarter = zeros((reach_x + 1) * (reach_y + 1));
+            let mut quarter = zeros((reach_x + 1) * (reach_y + 1))?;
             rasterise_bands(
                 shape,
                 (&mut quarter, reach_x + 1),

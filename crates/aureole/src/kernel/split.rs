@@ -51,7 +51,7 @@ impl SplitKernel {
             // Nothing spread: all light stays.
             None => Layer {
                 centre: 1.0,
-                spread: zeros(extent.width * extent.height),
+                spread: zeros(extent.width * extent.height)?,
             },
         };
         Ok(SplitKernel {
@@ -116,7 +116,7 @@ impl SplitKernel {
             let mut twice = if lit {
                 compose(&a.spread, &b.spread, &self.extent, composing, &mut part)?
             } else {
-                zeros(a.spread.len())
+                zeros(a.spread.len())?
             };
             // FFT round-off leaves tiny negatives where the true value is
             // ~0; light is never negative.

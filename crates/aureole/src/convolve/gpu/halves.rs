@@ -15,7 +15,10 @@ const CHUNK: usize = 1 << 16;
 /// `false` at the first that is not.
 pub(super) fn as_halves(planes: &[&[f32]], halves: &mut Vec<u16>) -> bool {
     let count: usize = planes.iter().map(|plane| plane.len()).sum();
-    crate::image::grow_zeroed(halves, count + count % 2);
+    // Where the memory is not to be had, the planes go up as they are.
+    if crate::image::grow_zeroed(halves, count + count % 2).is_err() {
+        return false;
+    }
     let mut rest = halves.as_mut_slice();
     for plane in planes {
         let (these, after) = rest.split_at_mut(plane.len());

@@ -727,7 +727,7 @@ impl GpuConvolver {
         let n = self.width * self.height;
         let bytes = (planes.len() * n * 4) as u64;
         for plane in planes.iter_mut() {
-            crate::image::grow_zeroed(plane, n);
+            crate::image::grow_zeroed(plane, n)?;
         }
         if bytes == 0 {
             return Ok(());

@@ -271,7 +271,7 @@ impl Convolver {
         let mut buffers = self.buffers.lease();
         buffers.resize_with(inputs.len(), Default::default);
         for tiles in buffers.iter_mut() {
-            grow_zeroed(tiles, h.div_ceil(BLOCK) * strips * TILE);
+            grow_zeroed(tiles, h.div_ceil(BLOCK) * strips * TILE)?;
         }
         for (input, rows) in inputs.iter().zip(buffers.iter_mut()) {
             self.forward_rows(input, rows, strips, &control.cancel());
@@ -303,7 +303,7 @@ impl Convolver {
             .zip(buffers.iter())
             .zip(recycled)
             .map(|((input, results), mut out)| {
-                grow_zeroed(&mut out, self.width * h);
+                grow_zeroed(&mut out, self.width * h)?;
                 self.inverse_rows(input, results, &mut out, strips, &control.cancel());
                 if let (Some(near), false) = (near, input.lamps.is_empty()) {
                     near.add(
@@ -315,9 +315,9 @@ impl Convolver {
                         &control.cancel(),
                     );
                 }
-                out
+                Ok(out)
             })
-            .collect();
+            .collect::<Result<Vec<Vec<f32>>>>()?;
         control.check()?;
         control.report(1.0);
         Ok(outputs)

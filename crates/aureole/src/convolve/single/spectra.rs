@@ -97,7 +97,7 @@ impl Convolver {
             centre: Centre::Include,
         };
         let far = kernel_spectrum(row_fft, full_column, &self.grid, &placed, control)?;
-        let window = self.window_rows(near.window(k), near.radius, row_fft);
+        let window = self.window_rows(near.window(k), near.radius, row_fft)?;
         Ok(PlaneSpectrum::Split {
             radius: near.radius,
             far,
@@ -112,11 +112,11 @@ impl Convolver {
         window: &[f32],
         radius: usize,
         row_fft: &dyn RealToComplex<f32>,
-    ) -> Vec<Complex<f32>> {
+    ) -> Result<Vec<Complex<f32>>> {
         let side = 2 * radius + 1;
         let px = self.grid.px;
         let count = self.grid.spectrum_width();
-        let mut spectra = zeros(side * count);
+        let mut spectra = zeros(side * count)?;
         let mut input = row_fft.make_input_vec();
         let mut scratch = row_fft.make_scratch_vec();
         for (row, out) in window.chunks(side).zip(spectra.chunks_mut(count)) {
@@ -126,7 +126,7 @@ impl Convolver {
             }
             let _ = row_fft.process_with_scratch(&mut input, out, &mut scratch);
         }
-        spectra
+        Ok(spectra)
     }
 
     /// [`Engine::prepare`]: each kernel plane's spectrum, whole.
@@ -218,7 +218,7 @@ pub(super) fn kernel_spectrum(
     let count = grid.spectrum_width();
     let zero = Complex::new(0.0, 0.0);
     let cancel = control.cancel();
-    let mut rows = zeros(kh * count);
+    let mut rows = zeros(kh * count)?;
     rows.par_chunks_mut(count).enumerate().for_each_init(
         || (row_fft.make_input_vec(), row_fft.make_scratch_vec()),
         |(input, scratch), (j, out)| {
@@ -233,7 +233,7 @@ pub(super) fn kernel_spectrum(
     control.report(0.5);
     // Column transforms, a strip of columns per task, gathered a cache line
     // or two per row rather than one value per row.
-    let mut spectrum = zeros(count * py);
+    let mut spectrum = zeros(count * py)?;
     spectrum
         .par_chunks_mut(STRIP * py)
         .enumerate()

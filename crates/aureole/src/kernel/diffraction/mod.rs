@@ -96,7 +96,9 @@ fn pattern_with(
         pitch_mm,
         tents,
     };
-    let mut result: Vec<Vec<f64>> = (0..planes).map(|_| vec![0.0; width * height]).collect();
+    let mut result: Vec<Vec<f64>> = (0..planes)
+        .map(|_| crate::image::zeros(width * height))
+        .collect::<Result<_>>()?;
     // A real pupil's pattern is centrosymmetric, PSF(−x) = PSF(x), and so
     // are the near field's quadrature and the far field's terms: the rows
     // down to the centre are computed, the rest are their mirror images.

@@ -172,7 +172,7 @@ fn scatter(
                 .collect()
         })
         .collect();
-    let mut out = vec![0.0; w * h];
+    let mut out = crate::image::zeros(w * h)?;
     for_each_row(&mut out, w, control, |y, row| {
         // Written before read, as the combs are.
         row.fill(0.0);
@@ -250,7 +250,9 @@ fn combs(
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = ((width / 2) as f64, (height / 2) as f64);
     let planes = lines.0.first().map_or(0, |(_, shares)| shares.len());
-    let mut combs: Vec<Vec<f32>> = (0..planes).map(|_| vec![0.0; width * height]).collect();
+    let mut combs: Vec<Vec<f32>> = (0..planes)
+        .map(|_| crate::image::zeros(width * height))
+        .collect::<Result<_>>()?;
     let mut bands: Vec<Vec<&mut [f32]>> = Vec::new();
     for comb in &mut combs {
         for (b, band) in comb.chunks_mut(COMB_ROWS * width).enumerate() {
