@@ -196,7 +196,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             KernelRecord {
                 image_width: Some(extent.image_width),
                 threshold: Some(config.threshold),
-                shares: true,
+                ..KernelRecord::default()
             },
         )
     })?;

@@ -358,16 +358,12 @@ impl Job {
         input: &mut Input,
         session: &mut Session,
         report: &mut dyn FnMut(Stage, f64),
-    ) -> Result<Applied> {
-        let applied = if self.layers {
+    ) -> aureole::Result<Applied> {
+        if self.layers {
             input.apply_layers(session, &self.options, report)
         } else {
             input.apply(session, &self.options, report)
-        };
-        applied.map_err(|error| Error::Content {
-            path: self.input.clone().unwrap_or_else(|| self.output.clone()),
-            error,
-        })
+        }
     }
 
     /// `applied` written into a copy of `input` ([`Input::write`]).
@@ -395,7 +391,12 @@ impl Job {
     ) -> Result<Done> {
         self.check()?;
         let (mut input, ()) = self.read(session, limits, |_| Ok::<(), Error>(()))?;
-        let applied = self.apply(&mut input, session, report)?;
+        let applied = self
+            .apply(&mut input, session, report)
+            .map_err(|error| Error::Content {
+                path: self.input.clone().unwrap_or_else(|| self.output.clone()),
+                error,
+            })?;
         self.write(input, applied)
     }
 }

@@ -35,8 +35,11 @@ pub fn write_kernel(path: &Path, kernel: &Kernel) -> Result<()> {
 /// that fall within them ([`LIGHT_ATTRIBUTE`]). PFM has no room for them:
 /// a PFM kernel is read as holding all its light.
 pub fn write_kernel_for(path: &Path, kernel: &Kernel, record: KernelRecord) -> Result<()> {
+    let least = (0..kernel.planes().len())
+        .map(|c| kernel.sum(c))
+        .fold(f64::INFINITY, f64::min);
     let record = KernelRecord {
-        shares: true,
+        shares: Some(least),
         ..record
     };
     let refuse = || Error::OutputFormat {
@@ -89,7 +92,7 @@ pub fn read_kernel_file(path: &Path, limits: Limits) -> Result<(Kernel, KernelRe
     let loaded = read_image(path, limits)?;
     let record = loaded.original.recorded_kernel();
     let image = loaded.image;
-    let kernel = if record.shares {
+    let kernel = if record.shares.is_some() {
         Kernel::from_shares(image.width, image.height, image.planes)
     } else {
         Kernel::from_planes(image.width, image.height, image.planes)

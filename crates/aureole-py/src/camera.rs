@@ -465,10 +465,7 @@ impl Camera {
         let done = self.with_session(py, size, progress, |session, report| {
             // A stereo plate's every view goes through the camera.
             job.apply(&mut file, session, report)
-                .map_err(|error| match error {
-                    aureole_io::Error::Content { error, .. } => value_error_about(&input, error),
-                    other => file_error(other),
-                })
+                .map_err(|error| value_error_about(&input, error))
                 .and_then(|applied| job.write(file, applied).map_err(file_error))
         })??;
         let (applied, scale, notes) = (done.applied, done.scale, done.notes);

@@ -299,12 +299,7 @@ fn run(
         progress.fraction = fraction;
     };
     // A stereo plate's every view goes through the camera.
-    let applied =
-        job.apply(&mut input, &mut session, &mut report)
-            .map_err(|error| match error {
-                aureole_io::Error::Content { error, .. } => StudioError::from(error),
-                other => StudioError::from(other),
-            })?;
+    let applied = job.apply(&mut input, &mut session, &mut report)?;
     export.cancel.check()?;
     locked(&export.progress).stage = "writing".into();
     // Another program may have made the file while the camera ran.

@@ -185,9 +185,10 @@ pub struct KernelRecord {
     /// The camera's threshold, cd/m², which `apply --kernel` uses unless
     /// told another.
     pub threshold: Option<f64>,
-    /// Whether each plane holds the share of its PSF's light that falls
-    /// within it ([`LIGHT_ATTRIBUTE`]): read as it is, not normalised to 1.
-    pub shares: bool,
+    /// The least share of its PSF's light any plane holds, where the file
+    /// says its planes hold shares ([`LIGHT_ATTRIBUTE`]): read as they
+    /// are, not normalised to 1.
+    pub shares: Option<f64>,
 }
 
 /// What a writer could not keep, for the user.

@@ -41,7 +41,7 @@ pub(super) fn shape_plane(
     if within == 0.0 {
         return Ok(Some(plane));
     }
-    let window = Window::of(extent.width, extent.height, extent.centre());
+    let window = Window::of(extent.width, extent.height);
     let whole = match shape.whole(&window) {
         Whole::Plane(light) => light,
         Whole::Beyond(light) => within + light,

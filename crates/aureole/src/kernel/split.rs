@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::raster::{plane_sum, shape_plane};
+use super::raster::shape_plane;
 use super::{Extent, Kernel};
 use crate::control::Control;
 use crate::convolve::{self, Composing};
@@ -109,8 +109,8 @@ impl SplitKernel {
         for c in 0..count {
             let a = &self.planes[c.min(self.planes.len() - 1)];
             let b = &next.planes[c.min(next.planes.len() - 1)];
-            let width = self.extent.width;
-            let lit = plane_sum(&a.spread, width) > 0.0 && plane_sum(&b.spread, width) > 0.0;
+            let lit = |plane: &[f32]| plane.par_iter().any(|&v| v > 0.0);
+            let lit = lit(&a.spread) && lit(&b.spread);
             let share = 1.0 / count as f64;
             let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
             let mut twice = if lit {

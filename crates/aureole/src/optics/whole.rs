@@ -18,9 +18,10 @@ pub(crate) struct Window {
 }
 
 impl Window {
-    /// The window of a `width`×`height` kernel whose centre is at column
-    /// `centre.0` and row `centre.1` from the top.
-    pub fn of(width: usize, height: usize, (cx, cy): (usize, usize)) -> Window {
+    /// The window of a `width`×`height` kernel, its centre at column
+    /// ⌊W/2⌋ and row ⌊H/2⌋ from the top.
+    pub fn of(width: usize, height: usize) -> Window {
+        let (cx, cy) = (width / 2, height / 2);
         Window {
             left: cx as f64 + 0.5,
             right: (width - 1 - cx) as f64 + 0.5,
@@ -178,10 +179,10 @@ mod tests {
     #[test]
     fn the_angle_outside_a_window_is_what_a_fine_sweep_of_the_circle_finds() {
         let windows = [
-            Window::of(101, 1, (50, 0)),
-            Window::of(11, 7, (5, 3)),
-            Window::of(10, 6, (5, 3)),
-            Window::of(599, 21, (299, 10)),
+            Window::of(101, 1),
+            Window::of(11, 7),
+            Window::of(10, 6),
+            Window::of(599, 21),
         ];
         for window in windows {
             for r in [0.2, 0.5, 0.7, 3.0, 3.9, 5.2, 6.0, 9.0, 40.0, 300.0, 1e4] {
@@ -228,7 +229,7 @@ mod tests {
         // as √(r − d) from it, which holds the rule to about 10⁻⁵.
         let sigma = 3.0;
         let f = |r: f64| libm::exp(-0.5 * r * r / (sigma * sigma)) / (TAU * sigma * sigma);
-        let window = Window::of(9, 9, (4, 4));
+        let window = Window::of(9, 9);
         let inside = libm::erf(4.5 / (sigma * std::f64::consts::SQRT_2)).powi(2);
         let beyond = radial_beyond(f, &window, sigma, &[]);
         assert!(

@@ -402,12 +402,7 @@ pub(super) fn new_image(planes: &LinearPlanes, spares: &Spares, clamped: &mut us
             exr::meta::attribute::AttributeValue::F64(threshold),
         );
     }
-    if planes.kernel.shares {
-        let least = planes
-            .colour
-            .iter()
-            .map(|plane| plane.iter().map(|&v| f64::from(v)).sum::<f64>())
-            .fold(f64::INFINITY, f64::min);
+    if let Some(least) = planes.kernel.shares {
         image.attributes.other.insert(
             crate::formats::LIGHT_ATTRIBUTE.into(),
             exr::meta::attribute::AttributeValue::F64(least),

@@ -119,7 +119,10 @@ impl Kept {
                 Some(V::F64(t)) if t.is_finite() && t >= 0.0 => Some(t),
                 _ => None,
             },
-            shares: matches!(value(crate::formats::LIGHT_ATTRIBUTE), Some(V::F64(_))),
+            shares: match value(crate::formats::LIGHT_ATTRIBUTE) {
+                Some(V::F64(least)) => Some(least),
+                _ => None,
+            },
         }
     }
 
