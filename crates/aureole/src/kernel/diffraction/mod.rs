@@ -152,20 +152,42 @@ fn pattern_with(
         }
     }
     control.check()?;
+    held_share(
+        optics,
+        spectrum,
+        result,
+        (extent, pitch_mm),
+        &weights_total,
+        composing,
+        control,
+    )
+}
+
+/// The fields of `result` divided into the share of the light the extent
+/// holds, through the filter where there is one.
+fn held_share(
+    optics: &Optics,
+    spectrum: &Spectrum,
+    mut result: Vec<Vec<f64>>,
+    (extent, pitch_mm): (&Extent, f64),
+    weights_total: &[f64],
+    composing: &mut Composing,
+    control: &mut Control,
+) -> Result<Vec<Vec<f64>>> {
     // The fields are the pattern's energy per pixel (Parseval: each
     // wavelength's whole pattern holds its weight), so dividing by the
     // weights leaves each plane the share of the light the extent holds;
     // the rest falls beyond it.
-    for (plane, total) in result.iter_mut().zip(&weights_total) {
+    for (plane, total) in result.iter_mut().zip(weights_total) {
         plane.par_iter_mut().for_each(|v| *v /= total);
     }
-    if filtered {
+    if optics.orders.len() > 1 {
         result = orders::through_filter(
             optics,
             spectrum,
             result,
             (extent, pitch_mm),
-            &weights_total,
+            weights_total,
             composing,
             &mut control.part(0.8, 1.0),
         )?;
