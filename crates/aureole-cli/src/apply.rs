@@ -1,16 +1,15 @@
 //! `aureole apply`: what the camera would have recorded.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Instant;
 
 use aureole::{Applied, ApplyOptions, Arithmetic, FrameOptions, Method, Session};
 use aureole_io::compression::Compression;
 use aureole_io::formats::{self, Samples};
-use aureole_io::job::Input;
+use aureole_io::job::{Input, Job};
 use aureole_io::kernel::read_kernel_file;
 use aureole_io::limits::{default_memory_limit, Limits};
-use aureole_io::read::Choice;
 use aureole_io::spares::Spares;
 use aureole_io::write::LinearOptions;
 use clap::ArgMatches;
@@ -171,24 +170,48 @@ impl Args {
             },
         }
     }
+
+    /// The one job of the input and output `pair`, as asked.
+    fn job(&self, pair: batch::Pair) -> Job {
+        let samples = match (self.half, self.float) {
+            (true, _) => Some(Samples::Half),
+            (_, true) => Some(Samples::Float),
+            _ => None,
+        };
+        let linear = LinearOptions {
+            samples,
+            compression: self.compression,
+        };
+        Job {
+            input: Some(pair.input),
+            output: pair.output,
+            choice: self.source.choice(),
+            frame: FrameOptions {
+                input_scale: self.source.input_scale,
+                sanitize: self.sanitize,
+            },
+            options: self.options(None),
+            layers: self.layers,
+            write: output::options(linear, &self.display),
+        }
+    }
+}
+
+/// The file a job reads (every job of the command line has one).
+fn input_of(job: &Job) -> &Path {
+    job.input.as_deref().unwrap_or(&job.output)
 }
 
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
-    let jobs = batch::jobs(
+    let pairs = batch::pairs(
         &args.inputs,
         &args.output,
         args.frames.as_ref().map(|f| f.0.as_slice()),
     )?;
-    let asked = args.options(None);
+    let mut jobs: Vec<Job> = pairs.into_iter().map(|pair| args.job(pair)).collect();
     for job in &jobs {
-        let request = aureole_io::job::Request {
-            output: &job.output,
-            input: Some(&job.input),
-            options: &asked,
-            layers: args.layers,
-        };
         // The probe file it makes is removed before an interruption exits.
-        crate::interrupt::exclusive(|| request.check())?;
+        crate::interrupt::exclusive(|| job.check())?;
     }
     output::tidy(jobs.iter().map(|j| j.output.as_path()), quiet);
     let limit = args.max_memory.unwrap_or_else(default_memory_limit);
@@ -218,8 +241,13 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             Session::new(config).with_max_extent(args.max_kernel)
         }
     };
-    let done = |job: &batch::Job| args.skip_existing && job.output.is_file();
-    let todo: Vec<&batch::Job> = jobs.iter().filter(|job| !done(job)).collect();
+    // The threshold of the camera a --kernel was built from, unless one
+    // is given.
+    for job in &mut jobs {
+        job.options = args.options(kernel_threshold);
+    }
+    let done = |job: &Job| args.skip_existing && job.output.is_file();
+    let todo: Vec<&Job> = jobs.iter().filter(|job| !done(job)).collect();
     // In a batch the next frame is read and the last written meanwhile.
     let in_flight = if todo.len() > 1 { 2 } else { 0 };
     let session = session
@@ -228,11 +256,9 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
         .with_frames_in_flight(in_flight);
     // A frame too large for the memory or the kernel is refused from its
     // header, before it is decoded.
-    let choice = args.source.choice();
     if let Some(job) = todo.first() {
-        let limits = Limits { max_bytes: limit };
-        aureole_io::job::check_header(&job.input, &choice, limits, &session)
-            .map_err(|e| input::failure(&job.input, e))?;
+        job.check_header(&session, Limits { max_bytes: limit })
+            .map_err(|e| input::failure(input_of(job), e))?;
     }
     let skipped = jobs.len() - todo.len();
     if let [job] = jobs.as_slice() {
@@ -248,9 +274,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     }
     let run = Run {
         args,
-        choice,
         kernel_width,
-        kernel_threshold,
         limit,
         quiet,
         batch: jobs.len() > 1,
@@ -289,12 +313,8 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
 /// What every frame of a batch is read and written with.
 struct Run<'a> {
     args: &'a Args,
-    /// The EXR layer and part each frame is read from.
-    choice: Choice,
     /// The image width the --kernel was built for, to be held to.
     kernel_width: Option<usize>,
-    /// The threshold of the camera the --kernel was built from.
-    kernel_threshold: Option<f64>,
     limit: u64,
     quiet: bool,
     /// Several jobs: a frame's failure is said at once and the rest go on.
@@ -306,7 +326,7 @@ struct Run<'a> {
 
 /// A frame read, waiting for the camera.
 struct Read<'a> {
-    job: &'a batch::Job,
+    job: &'a Job,
     input: Input,
     /// Seconds it took to read.
     reading: f64,
@@ -327,7 +347,7 @@ impl Run<'_> {
     /// hold one frame each at most, handed over when the next is wanted
     /// (the session counts them in its memory estimate). Returns the
     /// failures, in order, each already said.
-    fn all(&self, mut session: Session, jobs: &[&batch::Job]) -> Vec<Failure> {
+    fn all(&self, mut session: Session, jobs: &[&Job]) -> Vec<Failure> {
         let mut failures = Vec::new();
         std::thread::scope(|scope| {
             let (read_tx, reads) = mpsc::sync_channel::<Result<Read, Failure>>(0);
@@ -385,21 +405,12 @@ impl Run<'_> {
         failures.push(failure);
     }
 
-    fn read<'j>(&self, job: &'j batch::Job) -> Result<Read<'j>, Failure> {
+    fn read<'j>(&self, job: &'j Job) -> Result<Read<'j>, Failure> {
         let start = Instant::now();
-        let options = FrameOptions {
-            input_scale: self.args.source.input_scale,
-            sanitize: self.args.sanitize,
-        };
         let limits = Limits {
             max_bytes: self.limit,
         };
-        let input = input::read(
-            &job.input,
-            &options,
-            (limits, &self.choice, &self.spares),
-            self.quiet,
-        )?;
+        let input = input::read(job, limits, &self.spares, self.quiet)?;
         Ok(Read {
             job,
             input,
@@ -419,21 +430,20 @@ impl Run<'_> {
             if built != width {
                 return Err(Failure::Usage(anyhow::anyhow!(
                     "{}: the kernel {} was built for images {built} px wide (aureole psf --image-width), this one is {width} px wide: its µm and mm, which became pixels at that pitch, would be a factor {:.2} off here; build one with --image-width {width}, or pass --kernel-any-width",
-                    job.input.display(),
+                    input_of(job).display(),
                     kernel.display(),
                     built as f64 / width as f64
                 )));
             }
         }
-        let options = args.options(self.kernel_threshold);
-        if options.method == Method::Splat && !self.quiet {
+        if job.options.method == Method::Splat && !self.quiet {
             let costs = session
-                .costs(&read.input.frame, &options)
-                .map_err(|e| input::about(&job.input, e))?;
+                .costs(&read.input.frame, &job.options)
+                .map_err(|e| input::about(input_of(job), e))?;
             if costs.splat > 60.0 {
                 self.progress.println(&format!(
                     "aureole: warning: {}: splatting {} bright pixels will take about {} (the FFT about {:.1} s: --method auto or fft); Ctrl-C stops it",
-                    job.input.display(),
+                    input_of(job).display(),
                     costs.spread_pixels,
                     duration(costs.splat),
                     costs.fft
@@ -444,12 +454,9 @@ impl Run<'_> {
         let start = Instant::now();
         // A stereo plate's every view goes through the camera.
         let mut report = |stage, done| progress.update(stage, done);
-        let applied = if self.args.layers {
-            read.input.apply_layers(session, &options, &mut report)
-        } else {
-            read.input.apply(session, &options, &mut report)
-        }
-        .map_err(|e| input::about(&job.input, e))?;
+        let applied = job
+            .apply(&mut read.input, session, &mut report)
+            .map_err(|e| input::about(input_of(job), e))?;
         read.input.give_back_planes();
         let kernel = session
             .plan()
@@ -464,7 +471,6 @@ impl Run<'_> {
 
     /// Writes a result; hands its planes back for a later frame.
     fn write(&self, result: Convolved) -> Result<Vec<Vec<f32>>, Failure> {
-        let (args, quiet) = (self.args, self.quiet);
         let Convolved {
             read,
             applied,
@@ -473,24 +479,10 @@ impl Run<'_> {
         } = result;
         let start = Instant::now();
         let job = read.job;
-        let image = &applied.image;
-        let samples = match (args.half, args.float) {
-            (true, _) => Some(Samples::Half),
-            (_, true) => Some(Samples::Float),
-            _ => None,
-        };
-        let linear = LinearOptions {
-            samples,
-            compression: args.compression,
-        };
-        let shown = output::write(
-            &job.output,
-            linear,
-            &args.display,
-            &self.progress,
-            |options| read.input.write(&job.output, image, options),
-        )?;
-        if !quiet {
+        let done = crate::interrupt::writing(|| job.write(read.input, applied))?;
+        let shown = output::said(&job.output, &done.written, &self.progress);
+        let (applied, image) = (&done.applied, &done.applied.image);
+        if !self.quiet {
             let ratio = if applied.energy_in != 0.0 {
                 format!("{:.4} %", 100.0 * applied.energy_out / applied.energy_in)
             } else {
@@ -526,7 +518,7 @@ impl Run<'_> {
                 start.elapsed().as_secs_f64()
             ));
         }
-        Ok(applied.image.planes)
+        Ok(done.applied.image.planes)
     }
 }
 

@@ -9,7 +9,7 @@ use crate::Failure;
 
 /// One input and where its result goes.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Job {
+pub struct Pair {
     pub input: PathBuf,
     pub output: PathBuf,
 }
@@ -77,13 +77,13 @@ fn has_placeholder(path: &Path) -> bool {
     path.to_str().and_then(placeholder).is_some()
 }
 
-/// The jobs of a run, or a usage error saying why the names do not fit
+/// The inputs of a run, each with its output, or a usage error saying why the names do not fit
 /// together.
-pub fn jobs(
+pub fn pairs(
     inputs: &[PathBuf],
     output: &Path,
     frames: Option<&[u64]>,
-) -> Result<Vec<Job>, Failure> {
+) -> Result<Vec<Pair>, Failure> {
     let usage = |text: String| Failure::Usage(anyhow!(text));
     let folder = output.is_dir();
     let into_folder = |input: &Path| -> Result<PathBuf, Failure> {
@@ -119,7 +119,7 @@ pub fn jobs(
                         Some(path) => path,
                         None => into_folder(&input)?,
                     };
-                    Ok(Job { input, output })
+                    Ok(Pair { input, output })
                 })
                 .collect()
         }
@@ -133,14 +133,14 @@ pub fn jobs(
                     .display()
             )))
         }
-        None if inputs.len() == 1 && !folder => Ok(vec![Job {
+        None if inputs.len() == 1 && !folder => Ok(vec![Pair {
             input: inputs[0].clone(),
             output: output.to_path_buf(),
         }]),
         None if folder => inputs
             .iter()
             .map(|input| {
-                Ok(Job {
+                Ok(Pair {
                     input: input.clone(),
                     output: into_folder(input)?,
                 })
@@ -184,14 +184,14 @@ mod tests {
         assert_eq!(expand(&path("s.%d.exr"), 12345), Some(path("s.12345.exr")));
         assert_eq!(expand(&path("s.exr"), 7), None);
         assert_eq!(expand(&path("s.%x.exr"), 7), None);
-        let Ok(jobs) = jobs(
+        let Ok(pairs) = pairs(
             &[path("in/s.%03d.exr")],
             &path("out/o.%03d.png"),
             Some(&[1, 2]),
         ) else {
             panic!("a pattern with frames was refused");
         };
-        assert_eq!(jobs[1].input, path("in/s.002.exr"));
-        assert_eq!(jobs[1].output, path("out/o.002.png"));
+        assert_eq!(pairs[1].input, path("in/s.002.exr"));
+        assert_eq!(pairs[1].output, path("out/o.002.png"));
     }
 }

@@ -5,9 +5,9 @@
 use std::path::Path;
 
 use aureole::{FrameOptions, ScaleSource};
-use aureole_io::job::Input;
+use aureole_io::job::{Input, Job};
 use aureole_io::limits::Limits;
-use aureole_io::read::{read_image_reusing, Choice, Loaded};
+use aureole_io::read::{Choice, Loaded};
 use aureole_io::spares::Spares;
 
 use crate::values::parse_positive;
@@ -45,17 +45,14 @@ impl SourceArgs {
     }
 }
 
-/// Reads `path` (the layer `choice` names) as a frame, saying what the
-/// user should know about it and the luminance scale it takes; with the
-/// rest of the file, for writing the result back into it.
-pub fn read(
-    path: &Path,
-    options: &FrameOptions,
-    (limits, choice, spares): (Limits, &Choice, &Spares),
-    quiet: bool,
-) -> Result<Input, Failure> {
-    let loaded = read_image_reusing(path, limits, choice, spares)?;
-    let input = read_loaded(path, loaded, options, quiet)?;
+/// Decodes the input of `job` as a frame ([`Job::decode`], into the
+/// buffers `spares` lends), saying what the user should know about it and
+/// the luminance scale it takes; with the rest of the file, for writing
+/// the result back into it.
+pub fn read(job: &Job, limits: Limits, spares: &Spares, quiet: bool) -> Result<Input, Failure> {
+    let path = job.input.as_deref().unwrap_or(&job.output);
+    let mut input = job.decode(limits, spares).map_err(|e| failure(path, e))?;
+    say_read(path, &mut input, quiet);
     if !quiet {
         say!(
             "aureole: note: {}: luminance scale {} cd/m² per unit ({})",
@@ -67,23 +64,30 @@ pub fn read(
     Ok(input)
 }
 
-/// A file read from `path` as a frame, with its notes and warnings: what
-/// the user should know of it (the reader's notes, a display image's
-/// relative luminance, samples passed or zeroed).
+/// A file read from `path` as a frame, with its notes and warnings said
+/// ([`say_read`]).
 pub fn read_loaded(
     path: &Path,
     loaded: Loaded,
     options: &FrameOptions,
     quiet: bool,
 ) -> Result<Input, Failure> {
-    let input = aureole_io::job::input(path, loaded, options).map_err(|e| failure(path, e))?;
+    let mut input = aureole_io::job::input(path, loaded, options).map_err(|e| failure(path, e))?;
+    say_read(path, &mut input, quiet);
+    Ok(input)
+}
+
+/// Says what the user should know of a file read from `path`: the
+/// reader's notes (taken from `input`, said once), a display image's
+/// relative luminance, samples passed or zeroed.
+fn say_read(path: &Path, input: &mut Input, quiet: bool) {
     let note = |text: &str| {
         if !quiet {
             say!("aureole: note: {}: {text}", path.display());
         }
     };
-    for text in &input.notes {
-        note(text);
+    for text in std::mem::take(&mut input.notes) {
+        note(&text);
     }
     if input.display_referred {
         say!(
@@ -106,7 +110,6 @@ pub fn read_loaded(
             frame.replaced()
         );
     }
-    Ok(input)
 }
 
 /// Where the scale came from, in the command line's words.

@@ -45,6 +45,16 @@ pub fn tidy<'a>(outputs: impl IntoIterator<Item = &'a Path>, quiet: bool) {
     }
 }
 
+/// How a result is written: linear files with `linear`, pictures through
+/// the exposure and tone curve `display` asks.
+pub fn options(linear: LinearOptions, display: &DisplayArgs) -> WriteOptions {
+    WriteOptions {
+        linear,
+        display: display.options(),
+        depth: display.depth(),
+    }
+}
+
 /// Writes a result to `path` through `write` (given the options: an EXR
 /// into a copy of its input, say); returns a description of the display
 /// exposure when it made a picture. Notes go out through `progress`.
@@ -55,14 +65,18 @@ pub fn write(
     progress: &Progress,
     write: impl FnOnce(&WriteOptions) -> aureole_io::Result<Written>,
 ) -> Result<Option<String>, Failure> {
-    let options = WriteOptions {
-        linear,
-        display: display.options(),
-        depth: display.depth(),
-    };
-    match crate::interrupt::writing(|| write(&options))? {
+    let options = options(linear, display);
+    let written = crate::interrupt::writing(|| write(&options))?;
+    Ok(said(path, &written, progress))
+}
+
+/// What writing `path` made, said: the writer's notes through `progress`
+/// (with the flag that keeps what a note says was lost), and a description
+/// of the display exposure when it made a picture.
+pub fn said(path: &Path, written: &Written, progress: &Progress) -> Option<String> {
+    match written {
         Written::Picture { white, ev100 } => {
-            Ok(Some(format!("white {white:.4} cd/m² (EV100 {ev100:.1})")))
+            Some(format!("white {white:.4} cd/m² (EV100 {ev100:.1})"))
         }
         Written::Linear(notes) => {
             for note in notes {
@@ -72,7 +86,7 @@ pub fn write(
                 };
                 progress.note(&format!("aureole: note: {}: {note}{hint}", path.display()));
             }
-            Ok(None)
+            None
         }
     }
 }

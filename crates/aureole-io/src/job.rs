@@ -13,7 +13,8 @@ use crate::atomic::folder_of;
 use crate::error::{Error, Result};
 use crate::formats::{Kind, Original};
 use crate::limits::Limits;
-use crate::read::{read_image_with, Choice, Loaded};
+use crate::read::{read_image_reusing, Choice, Loaded};
+use crate::spares::Spares;
 use crate::write::Written;
 use crate::write::{output_format, refuse_overwrite, write_image_into, WriteOptions};
 
@@ -93,13 +94,20 @@ impl Request<'_> {
 
     /// The checks of [`Request::check`] that read no file system: what a
     /// command line for the request would be refused for, wherever it
-    /// runs.
+    /// runs, and a name no file system takes.
     pub fn check_asked(&self) -> Result<()> {
         self.options.check().map_err(Error::Options)?;
         let refuse = |reason: String| Error::Refused {
             path: self.output.to_path_buf(),
             reason,
         };
+        // No file system takes a NUL in a name; without this a render runs
+        // to its end before the write is refused.
+        if self.output.as_os_str().as_encoded_bytes().contains(&0) {
+            return Err(refuse(
+                "the name holds a NUL character, which no file system takes; name the file without it".into(),
+            ));
+        }
         let format = output_format(self.output)?;
         if self.layers && self.options.glare_only {
             return Err(refuse(LAYERS_WITH_GLARE_ONLY.into()));
@@ -158,12 +166,6 @@ pub struct Input {
     pub display_referred: bool,
     /// How the frame was made, for the other views.
     options: FrameOptions,
-}
-
-/// Reads `path` (the layer and part `choice` names) as a frame.
-pub fn read(path: &Path, choice: &Choice, limits: Limits, options: &FrameOptions) -> Result<Input> {
-    let loaded = read_image_with(path, limits, choice)?;
-    input(path, loaded, options)
 }
 
 /// A file already read, as a frame.
@@ -276,7 +278,8 @@ impl Input {
 /// glare layers go beside the result, and how it is written. Checked
 /// before any work ([`Job::check`]), then read ([`Job::read`]), applied
 /// ([`Job::apply`]) and written ([`Job::write`]), or all three by
-/// [`Job::run`]. The command line's batch pipelines the phases; the
+/// [`Job::run`]. The command line's batch pipelines the phases (each
+/// frame decoded while the one before is convolved, [`Job::decode`]); the
 /// studio's export and Python run them with their own memory lease and
 /// progress between.
 #[derive(Debug, Clone)]
@@ -329,26 +332,45 @@ impl Job {
     }
 
     /// The input read as a frame: refused from its header where `session`
-    /// could not take it ([`check_header`]), and `before_decoding` called
-    /// with the header's shape (`None` where it does not say) before the
-    /// pixels are decoded, for a memory lease to be taken there; returns
-    /// the frame and what `before_decoding` returned.
+    /// could not take it ([`Job::check_header`]), and `before_decoding`
+    /// called with the header's shape (`None` where it does not say)
+    /// before the pixels are decoded ([`Job::decode`]), for a memory lease
+    /// to be taken there; returns the frame and what `before_decoding`
+    /// returned.
     pub fn read<T, E: From<Error>>(
         &self,
         session: &Session,
         limits: Limits,
         before_decoding: impl FnOnce(Option<Shape>) -> std::result::Result<T, E>,
     ) -> std::result::Result<(Input, T), E> {
-        let Some(path) = self.input.as_deref() else {
-            return Err(Error::Refused {
-                path: self.output.clone(),
-                reason: "the job has no input file to read".into(),
-            }
-            .into());
-        };
-        let shape = check_header(path, &self.choice, limits, session)?;
+        let shape = self.check_header(session, limits)?;
         let held = before_decoding(shape)?;
-        Ok((read(path, &self.choice, limits, &self.frame)?, held))
+        Ok((self.decode(limits, &Spares::default())?, held))
+    }
+
+    /// Refuses the input from its header where `session` could not take
+    /// its frame ([`check_header`]); returns the frame's shape where the
+    /// header says it.
+    pub fn check_header(&self, session: &Session, limits: Limits) -> Result<Option<Shape>> {
+        check_header(self.input_path()?, &self.choice, limits, session)
+    }
+
+    /// The input decoded as a frame, into the buffers `spares` lends (the
+    /// frames' before it in a batch), without the header's check: a batch
+    /// checks its first frame's header against the session, then decodes
+    /// each frame on a thread of its own while the session convolves the
+    /// one before.
+    pub fn decode(&self, limits: Limits, spares: &Spares) -> Result<Input> {
+        let path = self.input_path()?;
+        let loaded = read_image_reusing(path, limits, &self.choice, spares)?;
+        input(path, loaded, &self.frame)
+    }
+
+    fn input_path(&self) -> Result<&Path> {
+        self.input.as_deref().ok_or_else(|| Error::Refused {
+            path: self.output.clone(),
+            reason: "the job has no input file to read".into(),
+        })
     }
 
     /// The camera of `session` applied to every view of `input`, with the

@@ -204,6 +204,18 @@ fn the_checks_without_a_file_system_refuse_what_a_command_line_would() {
     };
     exr.check_asked().unwrap();
     assert!(exr.check().is_err(), "the folder is missing");
+    // A name with a NUL (the studio's and Python's strings can hold one) is
+    // refused before any work, not by the write after the render.
+    let line = refused(
+        Request {
+            output: Path::new("g\0.exr"),
+            input: None,
+            options: &ApplyOptions::default(),
+            layers: false,
+        }
+        .check_asked(),
+    );
+    assert!(line.contains("holds a NUL character"), "{line}");
 }
 
 /// A job of a small night street written as EXR, to `out` in `dir`.

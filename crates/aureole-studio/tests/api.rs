@@ -1303,6 +1303,14 @@ fn previews_and_commands_refuse_what_the_command_line_refuses() {
             reply.error()
         );
     }
+    // A name with a NUL is refused at once, not by the write after the
+    // render.
+    let nul = export_body("street.exr", camera, "out\0.exr", "");
+    for path in ["/api/export", "/api/command"] {
+        let reply = http(addr, "POST", path, &nul);
+        assert_eq!(reply.status, 400, "{path}: {}", reply.error());
+        assert!(reply.error().contains("NUL character"), "{}", reply.error());
+    }
     assert!(!dir.path().join("out.exr").exists() && !dir.path().join("glare.hdr").exists());
 }
 
