@@ -172,7 +172,12 @@ pub fn read_image_reusing(
             format_bytes(limits.max_bytes)
         )));
     }
-    let mut bytes = spares.bytes(usize::try_from(metadata.len()).unwrap_or(0));
+    let mut bytes = spares
+        .bytes(usize::try_from(metadata.len()).unwrap_or(0))
+        .map_err(|error| Error::Content {
+            path: path.to_path_buf(),
+            error,
+        })?;
     // A pipe says no length: it is read up to the bound, and refused
     // beyond it.
     std::fs::File::open(path)

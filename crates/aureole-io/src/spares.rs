@@ -69,16 +69,14 @@ impl<T: Clone> Shelf<T> {
         Some(buffer)
     }
 
-    /// `n` values `zero`, in the smallest buffer held that holds them, or a
-    /// fresh one.
-    fn take(&mut self, n: usize, zero: T) -> Vec<T> {
-        match self.find(n) {
-            Some(mut buffer) => {
-                buffer.resize(n, zero);
-                buffer
-            }
-            None => vec![zero; n],
-        }
+    /// `n` zeros, in the smallest buffer held that holds them, or `None`.
+    fn take(&mut self, n: usize) -> Option<Vec<T>>
+    where
+        T: Default + Clone,
+    {
+        let mut buffer = self.find(n)?;
+        buffer.resize(n, T::default());
+        Some(buffer)
     }
 
     fn give(&mut self, buffer: Vec<T>) {
@@ -122,28 +120,37 @@ impl Spares {
         Some(f(&mut shelves))
     }
 
-    /// `n` zeros as f32, in a buffer given back if one holds them.
-    pub fn floats(&self, n: usize) -> Vec<f32> {
-        self.with(|s| s.floats.take(n, 0.0))
-            .unwrap_or_else(|| vec![0.0; n])
+    /// `n` zeros as f32, in a buffer given back if one holds them, else a
+    /// fresh one ([`aureole::image::zeros`]: a refusal by the allocator is
+    /// an error, not an abort).
+    pub fn floats(&self, n: usize) -> aureole::Result<Vec<f32>> {
+        match self.with(|s| s.floats.take(n)).flatten() {
+            Some(buffer) => Ok(buffer),
+            None => aureole::image::zeros(n),
+        }
     }
 
-    /// `n` zeros as half floats, in a buffer given back if one holds them.
-    pub fn halves(&self, n: usize) -> Vec<f16> {
-        self.with(|s| s.halves.take(n, f16::ZERO))
-            .unwrap_or_else(|| vec![f16::ZERO; n])
+    /// `n` zeros as half floats, as [`Spares::floats`].
+    pub fn halves(&self, n: usize) -> aureole::Result<Vec<f16>> {
+        match self.with(|s| s.halves.take(n)).flatten() {
+            Some(buffer) => Ok(buffer),
+            None => aureole::image::zeros(n),
+        }
     }
 
-    /// An empty byte buffer that holds at least `n` bytes without growing.
-    pub fn bytes(&self, n: usize) -> Vec<u8> {
+    /// An empty byte buffer that holds at least `n` bytes without growing;
+    /// a refusal by the allocator is an error.
+    pub fn bytes(&self, n: usize) -> aureole::Result<Vec<u8>> {
         // None holds them: the largest grows, rather than a new one
         // joining it on the shelf.
         let mut bytes = self
             .with(|s| s.bytes.find(n).or_else(|| s.bytes.largest()))
             .flatten()
             .unwrap_or_default();
-        bytes.reserve(n);
         bytes
+            .try_reserve(n)
+            .map_err(|_| aureole::Error::Allocation { bytes: n as u64 })?;
+        Ok(bytes)
     }
 
     /// Keeps `buffer` for a later [`Spares::floats`].
@@ -180,13 +187,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_buffer_the_allocator_refuses_is_an_error_not_an_abort() {
+        let spares = Spares::keeping();
+        let huge = usize::MAX / 4;
+        for refused in [
+            spares.floats(huge).map(drop),
+            spares.halves(huge).map(drop),
+            spares.bytes(huge).map(drop),
+        ] {
+            assert!(
+                matches!(refused, Err(aureole::Error::Allocation { .. })),
+                "{refused:?}"
+            );
+        }
+    }
+
+    #[test]
     fn a_buffer_given_back_is_lent_again_zeroed() {
         let spares = Spares::keeping();
-        let mut plane = spares.floats(1000);
+        let mut plane = spares.floats(1000).unwrap();
         plane.fill(3.0);
         let at = plane.as_ptr();
         spares.give_floats(plane);
-        let again = spares.floats(600);
+        let again = spares.floats(600).unwrap();
         assert_eq!(again.as_ptr(), at, "the same memory");
         assert_eq!(again.len(), 600);
         assert!(again.iter().all(|&v| v == 0.0));
@@ -196,13 +219,13 @@ mod tests {
     #[test]
     fn the_smallest_buffer_that_fits_is_lent() {
         let spares = Spares::keeping();
-        let (big, small) = (spares.halves(5000), spares.halves(2000));
+        let (big, small) = (spares.halves(5000).unwrap(), spares.halves(2000).unwrap());
         let small_at = small.as_ptr();
         spares.give_halves(big);
         spares.give_halves(small);
-        let lent = spares.halves(1500);
+        let lent = spares.halves(1500).unwrap();
         assert_eq!(lent.as_ptr(), small_at);
-        let fresh = spares.halves(9000);
+        let fresh = spares.halves(9000).unwrap();
         assert_eq!(fresh.len(), 9000, "none fits: a fresh one");
         assert_eq!(spares.held(), 5000 * 2);
     }
@@ -210,11 +233,11 @@ mod tests {
     #[test]
     fn byte_buffers_come_back_empty_with_room() {
         let spares = Spares::keeping();
-        let mut bytes = spares.bytes(100);
+        let mut bytes = spares.bytes(100).unwrap();
         bytes.extend_from_slice(&[7; 100]);
         let at = bytes.as_ptr();
         spares.give_bytes(bytes);
-        let again = spares.bytes(80);
+        let again = spares.bytes(80).unwrap();
         assert!(again.is_empty());
         assert!(again.capacity() >= 80);
         assert_eq!(again.as_ptr(), at);
@@ -224,7 +247,7 @@ mod tests {
     fn a_byte_buffer_too_small_grows_instead_of_joining_a_new_one() {
         let spares = Spares::keeping();
         spares.give_bytes(Vec::with_capacity(100));
-        let bigger = spares.bytes(300);
+        let bigger = spares.bytes(300).unwrap();
         assert!(bigger.capacity() >= 300);
         spares.give_bytes(bigger);
         assert!(
@@ -239,7 +262,7 @@ mod tests {
         let spares = Spares::default();
         spares.give_floats(vec![1.0; 100]);
         assert_eq!(spares.held(), 0);
-        assert_eq!(spares.floats(10), vec![0.0; 10]);
+        assert_eq!(spares.floats(10).unwrap(), vec![0.0; 10]);
     }
 
     #[test]

@@ -347,10 +347,11 @@ pub(crate) fn sum_f64(values: &[f32]) -> f64 {
 /// machine). A plane that is read whole (summed) before it is written
 /// whole (scaled) is written first, on every core.
 ///
-/// The memory is reserved first and its refusal returned: the estimate
-/// before a run is on the safe side, but the machine's memory may have
-/// gone to other programs since, and an abort would lose the run's words.
-pub(crate) fn zeros<T: Copy + Default + Send + Sync>(n: usize) -> crate::Result<Vec<T>> {
+/// The memory is reserved first and its refusal returned
+/// ([`crate::Error::Allocation`]): the estimate before a run is on the
+/// safe side, but the machine's memory may have gone to other programs
+/// since, and an abort would lose the run's words.
+pub fn zeros<T: Copy + Default + Send + Sync>(n: usize) -> crate::Result<Vec<T>> {
     let mut v = Vec::new();
     grow_zeroed(&mut v, n)?;
     Ok(v)

@@ -200,7 +200,8 @@ pub fn decode_limited(bytes: &[u8], max_bytes: u64) -> std::result::Result<Pfm, 
     let row_bytes = width * channels * 4;
     let planes = (0..channels)
         .map(|c| {
-            let mut plane = vec![0f32; width * height];
+            let mut plane =
+                aureole::image::zeros::<f32>(width * height).map_err(|e| e.to_string())?;
             plane
                 .par_chunks_mut(width)
                 .enumerate()
@@ -211,9 +212,9 @@ pub fn decode_limited(bytes: &[u8], max_bytes: u64) -> std::result::Result<Pfm, 
                         *value = read(&raw[4 * c..4 * c + 4]);
                     }
                 });
-            plane
+            Ok(plane)
         })
-        .collect();
+        .collect::<std::result::Result<Vec<_>, String>>()?;
     Ok(Pfm {
         width,
         height,

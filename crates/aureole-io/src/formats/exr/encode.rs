@@ -49,23 +49,23 @@ impl GlareAt {
 
 /// Samples to store, in a buffer `spares` lends: half (clamped to its
 /// range, counted) or float; on every core, half through F16C where the
-/// CPU has it.
+/// CPU has it. A buffer the allocator refuses is said in words.
 pub(super) fn samples(
     plane: &[f32],
     half: bool,
     clamp: bool,
     spares: &Spares,
     clamped: &mut usize,
-) -> x::FlatSamples {
+) -> std::result::Result<x::FlatSamples, String> {
     const CHUNK: usize = 1 << 16;
     if !half {
-        let mut out = spares.floats(plane.len());
+        let mut out = spares.floats(plane.len()).map_err(|e| e.to_string())?;
         out.par_chunks_mut(CHUNK)
             .zip(plane.par_chunks(CHUNK))
             .for_each(|(o, p)| o.copy_from_slice(p));
-        return x::FlatSamples::F32(out);
+        return Ok(x::FlatSamples::F32(out));
     }
-    let mut out = spares.halves(plane.len());
+    let mut out = spares.halves(plane.len()).map_err(|e| e.to_string())?;
     *clamped += out
         .par_chunks_mut(CHUNK)
         .zip(plane.par_chunks(CHUNK))
@@ -84,7 +84,7 @@ pub(super) fn samples(
             beyond
         })
         .sum::<usize>();
-    x::FlatSamples::F16(out)
+    Ok(x::FlatSamples::F16(out))
 }
 
 /// A result to put back where its channels were taken from.
@@ -138,19 +138,19 @@ pub(super) fn put_back(
         .unwrap_or_else(|| like("A"));
     let channel = |id: &Taken, plane: &[f32], clamp: bool, clamped: &mut usize| {
         let half = is_half(id.kind, samples);
-        x::AnyChannel {
+        Ok::<_, String>(x::AnyChannel {
             name: id.name.as_str().into(),
-            sample_data: self::samples(plane, half, clamp, spares, clamped),
+            sample_data: self::samples(plane, half, clamp, spares, clamped)?,
             quantize_linearly: id.linear,
             sampling: x::Vec2(1, 1),
-        }
+        })
     };
     let mut list = std::mem::take(&mut layer.channel_data.list);
     for (id, plane) in colour_ids.iter().zip(result.colour) {
-        list.push(channel(id, plane, true, clamped));
+        list.push(channel(id, plane, true, clamped)?);
     }
     if let Some(alpha) = result.alpha {
-        list.push(channel(&alpha_id, alpha, false, clamped));
+        list.push(channel(&alpha_id, alpha, false, clamped)?);
     }
     layer.channel_data = x::AnyChannels::sort(list);
     // A preview shows the picture before the camera: no longer true.
@@ -209,7 +209,8 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
                 half,
                 &spares,
                 &mut clamped,
-            );
+            )
+            .map_err(encode_error)?;
             for view in &views {
                 add_glare(
                     &mut image.layer_data[view.part],
@@ -218,7 +219,8 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
                     half,
                     &spares,
                     &mut clamped,
-                );
+                )
+                .map_err(|e| encode_error(format!("view {}: {e}", view.name)))?;
                 let colour: Vec<&[f32]> = view.image.planes.iter().map(Vec::as_slice).collect();
                 let result = Layer {
                     part: view.part,
@@ -240,7 +242,7 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
             image
         }
         None => {
-            let mut image = new_image(&planes, &spares, &mut clamped);
+            let mut image = new_image(&planes, &spares, &mut clamped).map_err(encode_error)?;
             let half = planes.samples == Some(Samples::Half);
             add_glare(
                 &mut image.layer_data[0],
@@ -249,7 +251,8 @@ pub(crate) fn encode(path: &Path, mut planes: LinearPlanes) -> Result<Vec<Note>>
                 half,
                 &spares,
                 &mut clamped,
-            );
+            )
+            .map_err(encode_error)?;
             image
         }
     };
@@ -319,9 +322,9 @@ pub(super) fn add_glare(
     half: bool,
     spares: &Spares,
     clamped: &mut usize,
-) {
+) -> std::result::Result<(), String> {
     if glare.is_empty() {
-        return;
+        return Ok(());
     }
     let mut added = Vec::new();
     for one in glare {
@@ -334,7 +337,7 @@ pub(super) fn add_glare(
             let name = at.name(&one.name, short);
             added.push(x::AnyChannel::new(
                 name.as_str(),
-                samples(plane, half, true, spares, clamped),
+                samples(plane, half, true, spares, clamped)?,
             ));
         }
     }
@@ -342,10 +345,15 @@ pub(super) fn add_glare(
     list.retain(|c| !added.iter().any(|a| a.name == c.name));
     list.extend(added);
     layer.channel_data = x::AnyChannels::sort(list);
+    Ok(())
 }
 
 /// A single-part file of the planes: `Y` or `R`, `G`, `B`, and `A`.
-pub(super) fn new_image(planes: &LinearPlanes, spares: &Spares, clamped: &mut usize) -> FlatImage {
+pub(super) fn new_image(
+    planes: &LinearPlanes,
+    spares: &Spares,
+    clamped: &mut usize,
+) -> std::result::Result<FlatImage, String> {
     let names: &[&str] = if planes.colour.len() == 1 {
         &["Y"]
     } else {
@@ -355,12 +363,17 @@ pub(super) fn new_image(planes: &LinearPlanes, spares: &Spares, clamped: &mut us
     let mut list: Vec<x::AnyChannel<x::FlatSamples>> = names
         .iter()
         .zip(&planes.colour)
-        .map(|(name, plane)| x::AnyChannel::new(*name, samples(plane, half, true, spares, clamped)))
-        .collect();
+        .map(|(name, plane)| {
+            Ok(x::AnyChannel::new(
+                *name,
+                samples(plane, half, true, spares, clamped)?,
+            ))
+        })
+        .collect::<std::result::Result<_, String>>()?;
     if let Some(alpha) = planes.alpha {
         list.push(x::AnyChannel::new(
             "A",
-            samples(alpha, half, false, spares, clamped),
+            samples(alpha, half, false, spares, clamped)?,
         ));
     }
     let attributes = x::LayerAttributes {
@@ -410,8 +423,8 @@ pub(super) fn new_image(planes: &LinearPlanes, spares: &Spares, clamped: &mut us
     }
     let mut layers = Layers::new();
     layers.push(image.layer_data);
-    FlatImage {
+    Ok(FlatImage {
         attributes: image.attributes,
         layer_data: layers,
-    }
+    })
 }

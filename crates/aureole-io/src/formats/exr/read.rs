@@ -231,7 +231,7 @@ pub(crate) fn read(
         .iter()
         .enumerate()
         .map(|(p, header)| channels(p, header, as_float, spares))
-        .collect();
+        .collect::<Result<_, String>>()?;
     // Each band gets its lines of every channel of its part.
     let mut rows: Vec<Vec<Rows>> = bands.iter().map(|_| Vec::new()).collect();
     for (p, channels) in parts.iter_mut().enumerate() {
@@ -293,7 +293,7 @@ fn channels(
     header: &Header,
     as_float: &[(usize, &str)],
     spares: &Spares,
-) -> Vec<Channel> {
+) -> Result<Vec<Channel>, String> {
     let origin = header.own_attributes.layer_position;
     let (left, top) = (i64::from(origin.0), i64::from(origin.1));
     let (right, bottom) = (
@@ -314,18 +314,19 @@ fn channels(
                 .iter()
                 .any(|&(part, name)| part == p && c.name.eq(name));
             let samples = match (float, c.sample_type) {
-                (true, _) | (false, SampleType::F32) => FlatSamples::F32(spares.floats(n)),
-                (false, SampleType::F16) => FlatSamples::F16(spares.halves(n)),
-                (false, SampleType::U32) => FlatSamples::U32(vec![0; n]),
-            };
-            Channel {
+                (true, _) | (false, SampleType::F32) => spares.floats(n).map(FlatSamples::F32),
+                (false, SampleType::F16) => spares.halves(n).map(FlatSamples::F16),
+                (false, SampleType::U32) => aureole::image::zeros(n).map(FlatSamples::U32),
+            }
+            .map_err(|e| e.to_string())?;
+            Ok(Channel {
                 name: c.name.clone(),
                 kind: c.sample_type,
                 linear: c.quantize_linearly,
                 sampling: (c.sampling.0.max(1), c.sampling.1.max(1)),
                 size,
                 samples,
-            }
+            })
         })
         .collect()
 }
