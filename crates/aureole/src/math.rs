@@ -188,6 +188,18 @@ pub fn j1(x: f64) -> f64 {
     if !(8.0..1e5).contains(&a) {
         return libm::j1(x);
     }
+    let value = j1_far(a);
+    if x < 0.0 {
+        -value
+    } else {
+        value
+    }
+}
+
+/// [`j1`] for 8 ≤ `a` < 10⁵ alone, without a branch: rows of it take
+/// vectors, with the same bits.
+#[inline(always)]
+pub fn j1_far(a: f64) -> f64 {
     let (s, c) = sin_cos(a);
     let z = 1.0 / (a * a);
     let (pr, ps, qr, qs) = (&J1_PR8, &J1_PS8, &J1_QR8, &J1_QS8);
@@ -199,12 +211,7 @@ pub fn j1(x: f64) -> f64 {
             / (1.0
                 + z * (qs[0] + z * (qs[1] + z * (qs[2] + z * (qs[3] + z * (qs[4] + z * qs[5])))))))
         / a;
-    let value = FRAC_1_SQRT_PI * (p * (s - c) - q * (-s - c)) / a.sqrt();
-    if x < 0.0 {
-        -value
-    } else {
-        value
-    }
+    FRAC_1_SQRT_PI * (p * (s - c) - q * (-s - c)) / a.sqrt()
 }
 
 /// The f64s of `bits`.

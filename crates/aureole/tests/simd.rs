@@ -5,6 +5,7 @@
 //! vector width. In a test binary of its own, since the switch holds for
 //! the whole process.
 
+use aureole::config::ConfigFile;
 use aureole::convolve::{force_scalar, vectors_in_use};
 use aureole::{presets, ApplyOptions, Config, Frame, FrameOptions, Image, Layout, Method, Session};
 
@@ -23,8 +24,21 @@ fn scene() -> Image {
     image
 }
 
+/// The camera a name stands for: a preset, or the dusty lens of
+/// `configs/` (its dust and grease take the spots' loops).
+fn camera(name: &str) -> ConfigFile {
+    match name {
+        "dusty-lens" => ConfigFile::parse(
+            include_str!("../../../configs/dusty-lens.toml"),
+            "dusty-lens.toml",
+        )
+        .unwrap(),
+        preset => presets::find(preset).unwrap().config().unwrap(),
+    }
+}
+
 fn through(preset: &str, image: &Image) -> Vec<Vec<f32>> {
-    let config = Config::compose([presets::find(preset).unwrap().config().unwrap()]);
+    let config = Config::compose([camera(preset)]);
     let frame = Frame::new(image.clone(), &FrameOptions::default()).unwrap();
     let options = ApplyOptions {
         method: Method::Fft,
@@ -50,6 +64,7 @@ fn the_vector_and_scalar_loops_give_the_same_bits() {
         "camera-f8-7blade",
         "camera-f11-6blade",
         "human-eye-vos",
+        "dusty-lens",
     ] {
         force_scalar(false);
         let vector = through(preset, &image);

@@ -408,16 +408,20 @@ impl Pupil {
             .fold(0.0, f64::max);
         let spots = self.spots(reach);
         // The small spots first, then the large ones ([`Pupil::add_spots`]).
-        let spot_phases = dnu_x
+        let spot_phases = spots
             .iter()
-            .zip(&dnu_y)
-            .map(|(&x, &y)| {
-                spots
+            .flatten()
+            .map(|s| {
+                dnu_x
                     .iter()
-                    .flatten()
-                    .map(|s| phase(1.0, [TAU * x, TAU * y], s.centre))
-                    .collect()
+                    .zip(&dnu_y)
+                    .map(|(&x, &y)| {
+                        let [re, im] = phase(1.0, [TAU * x, TAU * y], s.centre);
+                        (re, im)
+                    })
+                    .unzip()
             })
+            .map(|(re, im): (Vec<f64>, Vec<f64>)| [re, im])
             .collect();
         Offsets {
             x: dnu_x,
@@ -576,6 +580,8 @@ impl Pupil {
         let mut terms = vec![[0.0; 6]; small.len()];
         let mut points = vec![[0.0; 2]; large.len()];
         let mut sample_q = vec![0.0; count];
+        let mut sums = [vec![0.0; count], vec![0.0; count]];
+        let mut far = vec![0.0; count];
         for (i, &x) in nu_x.iter().enumerate() {
             let nu = [TAU * x, TAU * nu_y];
             let centre_q = (nu[0] * nu[0] + nu[1] * nu[1]).sqrt();
@@ -604,24 +610,61 @@ impl Pupil {
             for (p, spot) in points.iter_mut().zip(large) {
                 *p = product(spot.weight, phase(1.0, nu, spot.centre));
             }
-            for (k, (&q, t)) in sample_q.iter().zip(&mut total[row]).enumerate() {
-                let dq = q - centre_q;
-                let (by_small, by_large) = offsets.spot_phases[k].split_at(small.len());
-                let mut sum = [0.0, 0.0];
-                for (term, b) in terms.iter().zip(by_small) {
-                    let re = term[0] + dq * (term[2] + dq * term[4]);
-                    let im = term[1] + dq * (term[3] + dq * term[5]);
-                    sum[0] += re * b[0] - im * b[1];
-                    sum[1] += re * b[1] + im * b[0];
+            let (by_small, by_large) = offsets.spot_phases.split_at(small.len());
+            crate::convolve::widest(
+                #[inline(always)]
+                || add_small_spots(&terms, by_small, &sample_q, centre_q, &mut sums),
+            );
+            let [sums_re, sums_im] = &mut sums;
+            for ((p, spot), [b_re, b_im]) in points.iter().zip(large).zip(by_large) {
+                crate::convolve::widest(
+                    #[inline(always)]
+                    || jinc::far_all(&sample_q, spot.radius, &mut far),
+                );
+                for (k, &q) in sample_q.iter().enumerate() {
+                    let z = q * spot.radius;
+                    let magnitude = if (jinc::END..jinc::FAR_END).contains(&z) {
+                        far[k]
+                    } else {
+                        table.value(z)
+                    };
+                    sums_re[k] += magnitude * (p[0] * b_re[k] - p[1] * b_im[k]);
+                    sums_im[k] += magnitude * (p[0] * b_im[k] + p[1] * b_re[k]);
                 }
-                for ((p, spot), b) in points.iter().zip(large).zip(by_large) {
-                    let magnitude = table.value(q * spot.radius);
-                    sum[0] += magnitude * (p[0] * b[0] - p[1] * b[1]);
-                    sum[1] += magnitude * (p[0] * b[1] + p[1] * b[0]);
-                }
-                t[0] += sum[0];
-                t[1] += sum[1];
             }
+            for ((t, re), im) in total[row].iter_mut().zip(&*sums_re).zip(&*sums_im) {
+                t[0] += re;
+                t[1] += im;
+            }
+        }
+    }
+}
+
+/// The small spots' sums at every sample of a pixel (|q| = `sample_q`[k]),
+/// from their Taylor `terms` about the pixel's centre (|q| = `centre_q`)
+/// and their phases by offset, into `sums` (real and imaginary parts),
+/// spot after spot: the inner loop of [`Pupil::add_spots`], four samples
+/// at once with AVX2, the same bits.
+#[inline(always)]
+fn add_small_spots(
+    terms: &[[f64; 6]],
+    phases: &[[Vec<f64>; 2]],
+    sample_q: &[f64],
+    centre_q: f64,
+    [sums_re, sums_im]: &mut [Vec<f64>; 2],
+) {
+    let n = sample_q.len();
+    let (sums_re, sums_im) = (&mut sums_re[..n], &mut sums_im[..n]);
+    sums_re.fill(0.0);
+    sums_im.fill(0.0);
+    for (term, [b_re, b_im]) in terms.iter().zip(phases) {
+        let (b_re, b_im) = (&b_re[..n], &b_im[..n]);
+        for k in 0..n {
+            let dq = sample_q[k] - centre_q;
+            let re = term[0] + dq * (term[2] + dq * term[4]);
+            let im = term[1] + dq * (term[3] + dq * term[5]);
+            sums_re[k] += re * b_re[k] - im * b_im[k];
+            sums_im[k] += re * b_im[k] + im * b_re[k];
         }
     }
 }
@@ -638,8 +681,10 @@ pub struct Offsets {
     /// imaginary parts, the half phase's), per offset: apart, so that
     /// the inner loop loads each in vectors.
     phases: Vec<[Vec<f64>; 4]>,
-    /// Per offset, per spot, e^(−iδ·c), c its centre.
-    spot_phases: Vec<Vec<Amplitude>>,
+    /// Per spot, e^(−iδ·c) (c its centre) at every offset, its real and
+    /// imaginary parts apart, so that the sums over a pixel's samples run
+    /// in vectors.
+    spot_phases: Vec<[Vec<f64>; 2]>,
     /// The spots, small and large ([`Pupil::spots`]), in the order of
     /// `spot_phases`.
     spots: [Vec<SpotSum>; 2],
@@ -762,7 +807,10 @@ mod jinc {
     /// Nodes per unit of z, and where the table ends (beyond, libm): its
     /// values in 48 KB, which stay in the first-level cache.
     const PER_UNIT: f64 = 128.0;
-    const END: f64 = 16.0;
+    pub(super) const END: f64 = 16.0;
+
+    /// Where [`crate::math::j1_far`] ends.
+    pub(super) const FAR_END: f64 = 1e5;
 
     /// How far from the point of a Taylor expansion z may lie: the third
     /// order's term is below (1/4)³/6·max|jinc‴| < 10⁻³ there.
@@ -787,6 +835,18 @@ mod jinc {
             -2.0 * j2 / z,
             -2.0 * j1 / z + 6.0 * j2 / (z * z),
         ]
+    }
+
+    /// 2J₁(z)/z at z = |q|·`radius` for every |q| of `q`, into `out`, as
+    /// [`Table::value`] gives it for END ≤ z < FAR_END (other z are
+    /// computed at END and wasted: the caller looks those up): the large
+    /// spots' part of the near field, four samples at once with AVX2.
+    #[inline(always)]
+    pub(super) fn far_all(q: &[f64], radius: f64, out: &mut [f64]) {
+        for (o, &q) in out.iter_mut().zip(q) {
+            let z = (q * radius).max(END);
+            *o = 2.0 * crate::math::j1_far(z) / z;
+        }
     }
 
     pub(super) struct Table(Vec<[f64; 3]>);
