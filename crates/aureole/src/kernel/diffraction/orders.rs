@@ -48,22 +48,22 @@ pub(super) fn through_filter(
     let corrected = Corrected::new(&lattice, &lines, weakest);
     let share = 0.9 / planes.len().max(1) as f64;
     let mut filtered = Vec::with_capacity(planes.len());
-    for (c, (plane, comb)) in planes.iter().zip(combs).enumerate() {
+    // Each plane becomes its zero order, and the other orders are added
+    // into it: a 4K star filter's three f64 planes are not held twice.
+    for (c, (mut plane, comb)) in planes.into_iter().zip(combs).enumerate() {
         let mut part = control.part(0.1 + c as f64 * share, 0.1 + (c + 1) as f64 * share);
-        let mut moved = spread_orders(
+        plane.par_iter_mut().for_each(|p| *p *= zero);
+        add_orders(
             &comb,
             &windows[c],
             extent,
+            &mut plane,
             composing,
             &mut part.part(0.0, 0.9),
         )?;
         drop(comb);
-        cores.correct(&corrected, c, extent, &mut moved, &mut part.part(0.9, 1.0))?;
-        moved
-            .par_iter_mut()
-            .zip(plane)
-            .for_each(|(m, p)| *m += zero * p);
-        filtered.push(moved);
+        cores.correct(&corrected, c, extent, &mut plane, &mut part.part(0.9, 1.0))?;
+        filtered.push(plane);
     }
     Ok(filtered)
 }
@@ -71,16 +71,17 @@ pub(super) fn through_filter(
 /// The largest half-size in px of the pattern the non-zero orders carry.
 const ORDER_REACH: usize = 64;
 
-/// The comb with the window placed at each of its pixels, by direct
-/// scattering or by FFT convolution, whichever the operation counts say is
-/// cheaper.
-fn spread_orders(
+/// Adds to `out` the comb with the window placed at each of its pixels, by
+/// direct scattering or by FFT convolution, whichever the operation counts
+/// say is cheaper.
+fn add_orders(
     comb: &[f32],
     window: &Window,
     extent: &Extent,
+    out: &mut [f64],
     composing: &mut Composing,
     control: &mut Control,
-) -> Result<Vec<f64>> {
+) -> Result<()> {
     let entries = comb.iter().filter(|v| **v != 0.0).count() as f64;
     let side = 2 * window.reach + 1;
     let direct = entries * (side * side) as f64;
@@ -90,7 +91,7 @@ fn spread_orders(
     let padded = (2 * extent.width) as f64 * (2 * extent.height) as f64;
     let fft = 0.3 * padded * libm::log2(padded);
     if direct <= fft {
-        return scatter(comb, window, extent, control);
+        return scatter(comb, window, extent, out, control);
     }
     let plane: Vec<f32> = window.values.iter().map(|&v| v as f32).collect();
     match Kernel::from_planes(side, side, vec![plane]) {
@@ -104,12 +105,12 @@ fn spread_orders(
                 composing,
                 control,
             )?;
-            Ok(composed
-                .into_par_iter()
-                .map(|v| f64::from(v).max(0.0))
-                .collect())
+            out.par_iter_mut()
+                .zip(composed)
+                .for_each(|(o, v)| *o += f64::from(v).max(0.0));
+            Ok(())
         }
-        Err(_) => scatter(comb, window, extent, control),
+        Err(_) => scatter(comb, window, extent, out, control),
     }
 }
 
@@ -150,15 +151,17 @@ impl Window {
     }
 }
 
-/// The comb with the window placed at each of its pixels (zero outside the
-/// extent). Each output row gathers the comb rows within reach, so rows run
-/// in parallel and the sums come out in the same order every run.
+/// Adds to `out` the comb with the window placed at each of its pixels
+/// (nothing outside the extent). Each output row gathers the comb rows
+/// within reach, so rows run in parallel and the sums come out in the same
+/// order every run.
 fn scatter(
     comb: &[f32],
     window: &Window,
     extent: &Extent,
+    out: &mut [f64],
     control: &mut Control,
-) -> Result<Vec<f64>> {
+) -> Result<()> {
     let (w, h) = (extent.width, extent.height);
     let reach = window.reach as i64;
     let side = 2 * window.reach + 1;
@@ -172,10 +175,7 @@ fn scatter(
                 .collect()
         })
         .collect();
-    let mut out = crate::image::zeros(w * h)?;
-    for_each_row(&mut out, w, control, |y, row| {
-        // Written before read, as the combs are.
-        row.fill(0.0);
+    for_each_row(out, w, control, |y, row| {
         for dy in -reach..=reach {
             let source = y as i64 - dy;
             if source < 0 || source >= h as i64 {
@@ -191,8 +191,7 @@ fn scatter(
                 }
             }
         }
-    })?;
-    Ok(out)
+    })
 }
 
 /// The filter's orders, (ν, share |c_m|²), sorted by ν_y (as
@@ -918,7 +917,8 @@ mod tests {
         };
         let cancel = Cancel::new();
         let mut quiet = Control::quiet(&cancel);
-        let direct = scatter(&comb, &window, &extent, &mut quiet).unwrap();
+        let mut direct = vec![0.0; 47 * 33];
+        scatter(&comb, &window, &extent, &mut direct, &mut quiet).unwrap();
         let plane: Vec<f32> = window.values.iter().map(|&v| v as f32).collect();
         let kernel = Kernel::from_planes(7, 7, vec![plane]).unwrap();
         let fft = convolve::compose(
