@@ -2,7 +2,7 @@
 """How long the studio takes from a changed parameter to the new picture.
 
 Starts `target/release/aureole studio` on a free port, then for each chain
-(bloom, corona, Vos, a spectral aperture) renders a 1280-wide preview of the
+(bloom, corona, Vos, a spectral aperture, configs/dusty-lens.toml) renders a 1280-wide preview of the
 demo street five times, changing one parameter each time, and prints the
 median of the last four (the first also loads the image). Then the same
 camera with only the exposure changed. Then, where Chromium is installed,
@@ -73,6 +73,8 @@ def main():
                 reply.read()
             return (time.time() - start) * 1e3
 
+        with open(os.path.join(ROOT, "configs", "dusty-lens.toml")) as f:
+            dusty = f.read()
         bloom = '[[effect]]\ntype = "bloom"\nradius = "10.4px"\nbeta = 2\nepsilon = {}\n'
         chains = {
             "bloom": lambda k: bloom.format(0.005 + 0.001 * k),
@@ -82,6 +84,7 @@ def main():
                 "epsilon = 0.05", f"epsilon = {0.04 + 0.005 * k}"),
             "aperture, spectral": lambda k: presets["camera-f8-7blade"].replace(
                 "blades = 7", f"blades = {6 + k % 3}"),
+            "dusty lens": lambda k: dusty.replace("dust = 60", f"dust = {58 + k}"),
         }
         print(f"{width}x{height} preview of the demo street on device {args.device}, "
               "median of 4 changes (ms):")
