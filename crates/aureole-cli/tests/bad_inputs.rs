@@ -3,6 +3,8 @@
 //! stderr naming the file and the problem, leaves no output behind and does
 //! not touch its input.
 
+#[path = "../../../tests/support/required.rs"]
+mod required;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command as Process;
@@ -448,7 +450,10 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
 fn files_it_may_not_read_or_write_are_refused() {
     use std::os::unix::fs::PermissionsExt;
     if is_root() && Process::new("setpriv").arg("--version").output().is_err() {
-        eprintln!("skipped: running as root without setpriv to drop privileges");
+        required::missing(
+            "files_it_may_not_read_or_write_are_refused",
+            "running as root without setpriv (util-linux) to drop privileges",
+        );
         return;
     }
     let temp = tempfile::tempdir().unwrap();

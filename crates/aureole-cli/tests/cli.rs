@@ -1,5 +1,7 @@
 //! The `aureole` command as a user runs it.
 
+#[path = "../../../tests/support/required.rs"]
+mod required;
 use std::path::Path;
 
 use assert_cmd::Command;
@@ -760,7 +762,10 @@ fn the_candle_recipe_changes_candleglass_visibly() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let input = root.join("../shared/data/CandleGlass.exr");
     if !input.is_file() {
-        eprintln!("skipped: {} is absent", input.display());
+        required::missing(
+            "the_candle_recipe_changes_candleglass_visibly",
+            &format!("{} is absent", input.display()),
+        );
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -888,7 +893,13 @@ fn on_the_gpu_or_refused(
     if gpu.get_output().status.success() {
         gpu.stderr(predicate::str::contains(said));
     } else {
-        eprintln!("no GPU here: the GPU run is not checked");
+        required::missing(
+            "on_the_gpu_or_refused",
+            &format!(
+                "no GPU adapter (Debian: mesa-vulkan-drivers for lavapipe): {}",
+                one_line(&gpu.get_output().stderr)
+            ),
+        );
     }
     let refused = refused
         .arg("-q")

@@ -4,6 +4,8 @@
 //! written with the `exr` crate, as a renderer would, or come from
 //! OpenEXR's sample set.
 
+#[path = "../../../tests/support/required.rs"]
+mod required;
 use std::path::{Path, PathBuf};
 
 use assert_cmd::Command;
@@ -537,7 +539,7 @@ fn sample(name: &str) -> Option<PathBuf> {
     if path.is_file() {
         Some(path)
     } else {
-        eprintln!("skipped: {} is absent", path.display());
+        required::missing("compositing", &format!("{} is absent", path.display()));
         None
     }
 }

@@ -8,6 +8,8 @@
 //! scene is every pixel within ten stops of the highlights (a black sky or
 //! table is not part of it).
 
+#[path = "../../../tests/support/required.rs"]
+mod required;
 use std::path::Path;
 
 use aureole::Image;
@@ -115,7 +117,10 @@ fn the_demo_street_meters_like_a_photograph() {
 fn the_night_photographs_and_a_day_scene_meter_like_photographs() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
     if !data.is_dir() {
-        eprintln!("skipped: {} is absent", data.display());
+        required::missing(
+            "the_night_photographs_and_a_day_scene_meter_like_photographs",
+            &format!("{} is absent", data.display()),
+        );
         return;
     }
     // Tree.exr is backlit: its shaded trunk and foreground are the lit

@@ -2,6 +2,9 @@
 
 use std::path::Path;
 
+#[path = "../../../tests/support/required.rs"]
+mod required;
+
 use aureole::{Image, Layout};
 use aureole_io::limits::Limits;
 use aureole_io::read::read_image;
@@ -354,17 +357,48 @@ fn outputs_are_ordinary_files_that_others_may_read() {
 #[cfg(unix)]
 #[test]
 fn an_unwritable_folder_leaves_no_file() {
-    use std::os::unix::fs::PermissionsExt;
+    // A file where the folder should be: refused for root too.
     let dir = tempfile::tempdir().unwrap();
+    let not_a_folder = dir.path().join("not-a-folder");
+    std::fs::write(&not_a_folder, b"kept").unwrap();
+    assert!(write_linear(
+        &not_a_folder.join("out.pfm"),
+        &test_image(Layout::Rgb, false),
+        LinearOptions::default()
+    )
+    .is_err());
+    assert_eq!(std::fs::read(&not_a_folder).unwrap(), b"kept");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    // A folder without write permission: root writes there regardless, so
+    // as root this test runs again as `nobody` (setpriv) and must pass.
+    if running_as_root() {
+        let again = std::process::Command::new("setpriv")
+            .args(["--reuid=65534", "--regid=65534", "--clear-groups"])
+            .arg(std::env::current_exe().unwrap())
+            .args([
+                "--exact",
+                "an_unwritable_folder_leaves_no_file",
+                "--test-threads=1",
+            ])
+            .output();
+        match again {
+            Ok(out) => assert!(
+                out.status.success() && String::from_utf8_lossy(&out.stdout).contains("1 passed"),
+                "as nobody: {}{}",
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            ),
+            Err(_) => required::missing(
+                "an_unwritable_folder_leaves_no_file",
+                "running as root without setpriv (util-linux) to drop privileges",
+            ),
+        }
+        return;
+    }
+    use std::os::unix::fs::PermissionsExt;
     let locked = dir.path().join("locked");
     std::fs::create_dir(&locked).unwrap();
     std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
-    // Root writes anywhere: then there is nothing this test can observe.
-    let probe = locked.join("probe");
-    if std::fs::write(&probe, b"").is_ok() {
-        std::fs::remove_file(&probe).unwrap();
-        return;
-    }
     let path = locked.join("out.pfm");
     assert!(write_linear(
         &path,
@@ -373,6 +407,15 @@ fn an_unwritable_folder_leaves_no_file() {
     )
     .is_err());
     assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
+}
+
+/// Whether this process runs as root, who writes whatever the permissions
+/// say.
+fn running_as_root() -> bool {
+    std::process::Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
 }
 
 /// The Radiance file at `path` with `lines` added to its header, as a

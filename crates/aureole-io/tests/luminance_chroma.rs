@@ -34,7 +34,10 @@ fn reference(dir: &Path) -> Option<PathBuf> {
     let flags = match flags {
         Ok(out) if out.status.success() => String::from_utf8_lossy(&out.stdout).into_owned(),
         _ => {
-            eprintln!("skipped: pkg-config finds no OpenEXR (Debian: pkg-config, libopenexr-dev)");
+            common::required::missing(
+                "luminance_chroma",
+                "pkg-config finds no OpenEXR (Debian: pkg-config, libopenexr-dev)",
+            );
             return None;
         }
     };
@@ -54,7 +57,7 @@ fn reference(dir: &Path) -> Option<PathBuf> {
             String::from_utf8_lossy(&out.stderr)
         ),
         Err(_) => {
-            eprintln!("skipped: no C++ compiler (c++)");
+            common::required::missing("luminance_chroma", "no C++ compiler (c++)");
             None
         }
     }

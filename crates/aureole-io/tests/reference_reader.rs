@@ -21,7 +21,10 @@ use common::read_all;
 fn installed(tool: &str) -> bool {
     let found = Command::new(tool).arg("--help").output().is_ok();
     if !found {
-        eprintln!("skipped the {tool} check: {tool} is not installed (Debian: openimageio-tools, openexr)");
+        common::required::missing(
+            "reference_reader",
+            &format!("{tool} is not installed (Debian: openimageio-tools, openexr)"),
+        );
     }
     found
 }

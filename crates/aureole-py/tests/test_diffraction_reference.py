@@ -223,7 +223,9 @@ def check(blades, f_number, pitch_um, roundness):
         SIZE, SIZE, image_width=round(36000 / pitch_um), sent_by="point")
     theirs = reference(blades, f_number, pitch_um, roundness)
     finer = reference(blades, f_number, pitch_um, roundness, pupil_samples=384, sub_pixels=9)
-    compare(ours, theirs, finer, (12, 30, 60), blades)
+    # At f/2.8 (λN 1.5 px) hcipy's own error reaches 1 % by 30 px: the rays
+    # are counted from 25 px there (room for 2·9 rays in 2 px sectors).
+    compare(ours, theirs, finer, (12, 25, 30, 60), blades, rays_from=25 if f_number < 4 else 30)
 
 
 @pytest.mark.parametrize("blades,rotation,obstruction,vanes,spectral", [
@@ -250,7 +252,8 @@ def test_the_far_field_matches_hcipy(blades, rotation, obstruction, vanes, spect
         reference(blades, 8.0, PITCH_4K_UM, size=size, mask=mask, light=light, pupil_samples=n,
                   sub_pixels=k)
         for n, k in ((1024, 6), (1536, 9)))
-    compare(ours, theirs, finer, (30, 60, 75), blades or 2 * vanes)
+    # The blue plane of the spectral telescope is trusted inside 30 px only.
+    compare(ours, theirs, finer, (20, 30, 60, 75), blades or 2 * vanes, rays_from=20)
 
 
 @pytest.mark.parametrize("blades,extra", [
@@ -346,12 +349,15 @@ grease_transmission = 0.7
 grease_phase_deg = 120"""
 
 
-@pytest.mark.parametrize("dirt,f_number", [
-    (DIRT, 8.0),
-    ("dust = 200\ndust_min_um = 30\ndust_max_um = 300", 4.0),
-    ("scratches = 6\nscratch_width_um = 50\nscratch_spread_deg = 30", 8.0),
+@pytest.mark.parametrize("dirt,f_number,counted", [
+    (DIRT, 8.0, True),
+    # 200 specks at f/4: hcipy's own error is 1 % or more beyond 15 px, too
+    # close in for 14 rays: the profile is compared at 15 px, the rays are
+    # counted in the two other cases.
+    ("dust = 200\ndust_min_um = 30\ndust_max_um = 300", 4.0, False),
+    ("scratches = 6\nscratch_width_um = 50\nscratch_spread_deg = 30", 8.0, True),
 ])
-def test_dirt_in_the_pupil_matches_hcipy(dirt, f_number):
+def test_dirt_in_the_pupil_matches_hcipy(dirt, f_number, counted):
     # Dust, scratches and grease on a 7-blade stop at the 4K pitch: hcipy
     # propagates the very pupil aureole draws (Camera.pupil, the dirt from
     # the camera's seed), so that the near field's exact transform with
@@ -371,7 +377,7 @@ def test_dirt_in_the_pupil_matches_hcipy(dirt, f_number):
     theirs, finer = (
         reference(7, f_number, PITCH_4K_UM, size=size, mask=mask, pupil_samples=n, sub_pixels=k)
         for n, k in ((1024, 6), (1536, 9)))
-    compare(ours, theirs, finer, (30, 60, 75), 7)
+    compare(ours, theirs, finer, (15, 30, 60, 75), 7 if counted else 0)
     # The dirt is more than the tolerances: the clean stop fails them.
     clean = np.asarray(clean, dtype=np.float64)
     clean_ee, theirs_ee = encircled(clean / clean.sum()), encircled(theirs)
@@ -380,11 +386,12 @@ def test_dirt_in_the_pupil_matches_hcipy(dirt, f_number):
         l2(profile(clean, r), profile(theirs, r)) for r in (30, 60, 75)) > 0.06, far_light
 
 
-def compare(ours, theirs, finer, radii, rays_expected):
+def compare(ours, theirs, finer, radii, rays_expected, rays_from=30):
     """Each plane of our kernel against hcipy's: encircled energy within
     0.5 % at every radius and the angular profile on the rings `radii`
     within 3 % wherever hcipy's own error is below 1 %, the ray count equal
-    on rings of 30 px and more."""
+    on those rings of `rays_from` px and more. Each plane must have a ring
+    compared, and one where its rays are counted when rays are expected."""
     ours = np.asarray(ours, dtype=np.float64)
     if ours.ndim == 3:
         ours = np.moveaxis(ours, 2, 0)
@@ -398,15 +405,24 @@ def compare(ours, theirs, finer, radii, rays_expected):
         assert trusted.any() and error.max() < 0.005, (
             f"plane {plane}: encircled energy off by {error.max():.4f} "
             f"at r = {np.flatnonzero(trusted)[np.argmax(error)] + 1} px")
+        # A ring where hcipy's own error is 1 % or more is not compared;
+        # a plane none of whose rings is compared fails, and so does a
+        # plane whose ray count was checked on no ring where one is asked.
+        profiles = ray_counts = 0
         for radius in radii:
             a, b, c = profile(o, radius), profile(t, radius), profile(f, radius)
             if l2(c, b) >= 0.01:
                 continue
+            profiles += 1
             assert l2(a, b) < 0.03, (
                 f"plane {plane}, ring {radius} px: angular profile off by {l2(a, b):.3f}")
             # Rays are counted where a ring has room for them (sectors 2 px
             # wide).
-            if rays_expected and radius >= 30:
+            if rays_expected and radius >= rays_from:
+                ray_counts += 1
                 counted = (rays(o, radius), rays(t, radius))
                 assert counted[0] == counted[1], (
                     f"plane {plane}, ring {radius} px: {counted[0]} rays, hcipy {counted[1]}")
+        assert profiles > 0, f"plane {plane}: hcipy's error is 1 % or more on every ring {radii}"
+        assert ray_counts > 0 or not rays_expected, (
+            f"plane {plane}: no ring of {rays_from} px or more was trusted for the ray count")

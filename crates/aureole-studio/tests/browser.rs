@@ -5,6 +5,8 @@
 //! roots shows its one line.
 //! Screenshots are saved in `target/studio-screenshots/`.
 
+#[path = "../../../tests/support/required.rs"]
+mod required;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -95,7 +97,7 @@ impl Visit {
 #[test]
 fn the_page_renders_in_a_real_browser_and_shows_every_view_and_error() {
     let Some(browser) = chromium() else {
-        eprintln!("skipped: no chromium (apt-get install chromium)");
+        required::missing("browser", "no chromium (apt-get install chromium)");
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -251,7 +253,7 @@ fn dump(browser: &Path, profile: &Path, extra: &[&str], url: &str) -> String {
 #[test]
 fn pages_of_other_sites_cannot_drive_the_studio_in_a_real_browser() {
     let Some(browser) = chromium() else {
-        eprintln!("skipped: no chromium (apt-get install chromium)");
+        required::missing("browser", "no chromium (apt-get install chromium)");
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -344,7 +346,7 @@ const tries = {{
 #[test]
 fn two_tabs_render_side_by_side_without_cancelling_each_other() {
     let Some(browser) = chromium() else {
-        eprintln!("skipped: no chromium (apt-get install chromium)");
+        required::missing("browser", "no chromium (apt-get install chromium)");
         return;
     };
     let dir = tempfile::tempdir().unwrap();

@@ -6,6 +6,8 @@
 #![cfg(feature = "gpu")]
 
 mod noise;
+#[path = "../../../tests/support/required.rs"]
+mod required;
 
 use aureole::control::{Cancel, Control};
 use aureole::convolve::{engine, Backend, Centre, Precision, Spread, Term};
@@ -17,7 +19,10 @@ fn gpu_present(test: &str) -> bool {
     match aureole::convolve::choose(aureole::convolve::Device::Gpu) {
         Ok(_) => true,
         Err(why) => {
-            eprintln!("{test}: skipped, {why}");
+            required::missing(
+                test,
+                &format!("{why} (Debian: mesa-vulkan-drivers for lavapipe)"),
+            );
             false
         }
     }

@@ -2,6 +2,8 @@
 //! uses a part of it, hence the allowance below.
 #![allow(dead_code)]
 
+#[path = "../../../../tests/support/required.rs"]
+pub mod required;
 use std::path::{Path, PathBuf};
 
 use exr::prelude::*;
@@ -13,7 +15,7 @@ pub fn images() -> Option<PathBuf> {
     if dir.is_dir() {
         Some(dir)
     } else {
-        eprintln!("skipped: {} is absent", dir.display());
+        required::missing("openexr-images", &format!("{} is absent", dir.display()));
         None
     }
 }

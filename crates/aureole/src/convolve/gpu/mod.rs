@@ -874,6 +874,11 @@ impl Engine for GpuConvolver {
     }
 }
 
+// The tests' shared rule for a missing reference.
+#[cfg(test)]
+#[path = "../../../../../tests/support/required.rs"]
+mod required;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -884,7 +889,10 @@ mod tests {
     #[test]
     fn frames_sent_up_as_halves_give_the_same_bits() {
         let Ok(gpu) = gpu() else {
-            eprintln!("frames_sent_up_as_halves_give_the_same_bits: skipped, no GPU");
+            super::required::missing(
+                "frames_sent_up_as_halves_give_the_same_bits",
+                "no GPU adapter (Debian: mesa-vulkan-drivers for lavapipe)",
+            );
             return;
         };
         let (w, h) = (97, 61);
