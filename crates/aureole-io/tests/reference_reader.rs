@@ -1,8 +1,12 @@
 //! The EXR files we write, read by the reference library: OpenImageIO's
-//! `oiiotool` (over OpenEXR) compares them with files `exr` writes itself,
-//! and OpenEXR's `exrheader` reads their headers. Where the tools are not
-//! installed (Debian's `openimageio-tools` and `openexr`), the tests say so
-//! and check only what the `exr` crate reads back.
+//! `oiiotool` (over OpenEXR) compares them with files the `exr` crate
+//! writes of the same pixels, and OpenEXR's `exrheader` reads their
+//! headers. Our own reader (on the `exr` crate) must give back what was
+//! written. The values OpenEXR itself reads from our files, and those our
+//! reader takes from OpenEXR's, are compared with the originals in
+//! `crates/aureole-py/tests/test_exr_interop.py` (the OpenEXR package).
+//! Where the tools are missing the tests fail where CI runs, and skip,
+//! listed, elsewhere (tests/support/required.rs).
 
 use std::path::Path;
 use std::process::Command;
@@ -102,7 +106,7 @@ fn zip_files_are_read_back_bit_for_bit_by_exr_and_openexr() {
                 };
                 write_linear(&ours, &image, options).unwrap();
                 let what = format!("{compression} {samples:?} {layout:?}");
-                // The exr crate's reader, sample by sample.
+                // Our reader, sample by sample.
                 let back = read_image(&ours, Limits::NONE).unwrap().image;
                 let expected: Vec<u32> = image
                     .planes
@@ -116,7 +120,7 @@ fn zip_files_are_read_back_bit_for_bit_by_exr_and_openexr() {
                 let found: Vec<u32> = back.planes.iter().flatten().map(|v| v.to_bits()).collect();
                 assert!(expected == found, "{what}: samples differ");
                 assert_eq!(back.alpha.as_ref().map(Vec::len), Some(333 * 77), "{what}");
-                // The reference library, against what exr itself writes.
+                // The reference library, against what the exr crate writes.
                 let theirs = dir.path().join("theirs.exr");
                 read_all(&ours).write().to_file(&theirs).unwrap();
                 same_pixels(&ours, &theirs);
