@@ -702,7 +702,7 @@ fn night_street(w: usize, h: usize) -> Image {
 }
 
 #[test]
-fn a_night_street_sets_its_lamps_apart_and_keeps_its_dark_pixels_within_one_percent() {
+fn a_night_street_sets_its_lamps_apart_and_keeps_its_dark_pixels_within_3e_4() {
     let (w, h) = (240, 135);
     let image = night_street(w, h);
     let plan = Plan::for_image(&preset_config("camera-f8-7blade"), w, h, None).unwrap();
@@ -752,7 +752,8 @@ fn a_night_street_sets_its_lamps_apart_and_keeps_its_dark_pixels_within_one_perc
         100.0 * lamps_worst,
         100.0 * alone_worst
     );
-    assert!(lamps_worst < 0.01, "{lamps_worst}");
+    // docs/physics.md §8's bound (3·10⁻⁴, measured at 4K; 5·10⁻⁵ here).
+    assert!(lamps_worst < 3e-4, "{lamps_worst}");
     assert!(alone_worst > 0.01, "f32 alone is exact enough: no test");
 
     // The lamps' route gives the same bytes on any number of threads.

@@ -75,7 +75,7 @@ fn around(image: &Image, (x, y): (usize, usize)) -> [[f64; 12]; 3] {
 }
 
 /// Holds the 4K frame reduced to 1080p to the 1080p frame: each ring's
-/// energy within 1 %, each sector within 1 % of its ring. A kernel takes
+/// energy within 0.2 %, each sector within 0.2 % of its ring. A kernel takes
 /// the light of the sending pixel as well as the receiving one's over its
 /// area (docs/physics.md §2), so the 4K lamp's four pixels and the 1080p
 /// lamp's one send the same light; without that the ring of 4 to 16 px
@@ -100,14 +100,16 @@ fn same_look(effect: &str) {
         rings.map(|r| 100.0 * r),
         sectors.map(|r| 100.0 * r)
     );
+    // The README's figure: within 0.2 % (measured 0.13 % at worst, the
+    // aperture's middle ring).
     for ring in 0..3 {
         assert!(
-            rings[ring] <= 0.01,
+            rings[ring] <= 0.002,
             "ring {ring}: energy off by {:.4}",
             rings[ring]
         );
         assert!(
-            sectors[ring] <= 0.01,
+            sectors[ring] <= 0.002,
             "ring {ring}: a sector off by {:.4}",
             sectors[ring]
         );
@@ -134,6 +136,18 @@ fn an_aperture_looks_the_same_at_1080p_and_at_4k() {
 #[test]
 fn halation_looks_the_same_at_1080p_and_at_4k() {
     same_look("type = \"halation\"");
+}
+
+/// Not yet: Vos's k/θⁿ has no integral at θ = 0 for n ≥ 2, so its kernel
+/// leaves the centre pixel unspread and normalises the rest over the
+/// pixels; a pixel half as wide takes in more of the near light, and every
+/// ring around a lamp gets 7 % less at 4K than at 1080p. The cure is an
+/// angle, not a pixel, for the unspread core (the CIE equation's 0.1°,
+/// issue 46).
+#[test]
+#[ignore = "Vos's rings differ by 7 % between 1080p and 4K: its core is a pixel, not an angle"]
+fn the_eyes_glare_looks_the_same_at_1080p_and_at_4k() {
+    same_look("type = \"vos\"\nepsilon = 0.05\nexponent = 2.0");
 }
 
 /// The kernel of `effect` for an image `image_width` wide, `side` px square.
