@@ -1,46 +1,53 @@
 """Ctrl-C stops a long call long before its end, through the session's
-cancellation, and the package stays usable. The aim is a second; the
-bounds asserted are generous (a loaded machine must not fail them), far
-below the work's own length, so that a stop that waits for the work's end
-fails."""
+cancellation, and the package stays usable. No clock: the signal is sent
+once the work reports progress, and the work's own progress after the
+interrupt shows where it stopped (docs/python.md gives the measured
+delay: well under a second)."""
 
 import os
 import signal
 import threading
-import time
 
 import numpy as np
 import pytest
 
 import aureole
 
-# Timed: run alone (scripts/test), not beside other tests.
+# Run alone (scripts/test): the signal goes to the whole process.
 pytestmark = pytest.mark.latency
 
 
-def interrupted(call, after):
-    """Sends SIGINT `after` seconds into `call`; the seconds from the
-    signal to the KeyboardInterrupt."""
-    sent = []
+def interrupted(call):
+    """Runs `call(progress)` and sends SIGINT from another thread once the
+    work reports progress (it is then under way, whatever the machine's
+    load); returns the furthest fraction reported, per stage, after the
+    KeyboardInterrupt."""
+    seen = {}
+    started = threading.Event()
+
+    def progress(stage, done):
+        seen[stage] = max(seen.get(stage, 0.0), done)
+        if done > 0.0:
+            started.set()
 
     def interrupt():
-        sent.append(time.monotonic())
+        started.wait()
         os.kill(os.getpid(), signal.SIGINT)
 
     # A process started in the background by a shell without job control
     # inherits SIGINT ignored, and Python then leaves it so: Ctrl-C is
     # Python's default handler, installed here for the call.
     before = signal.signal(signal.SIGINT, signal.default_int_handler)
-    timer = threading.Timer(after, interrupt)
+    sender = threading.Thread(target=interrupt)
     try:
-        timer.start()
+        sender.start()
         with pytest.raises(KeyboardInterrupt):
-            call()
-        stopped = time.monotonic()
+            call(progress)
     finally:
-        timer.join()
+        started.set()
+        sender.join()
         signal.signal(signal.SIGINT, before)
-    return stopped - sent[0]
+    return seen
 
 
 def slow_camera():
@@ -62,18 +69,20 @@ roundness = 0.5
 def test_ctrl_c_stops_a_long_kernel_before_its_end():
     camera = slow_camera()
     # About 20 s of work on two cores: 1 µm pixels put 440 000 pixels in
-    # the exact near field.
-    seconds = interrupted(lambda: camera.kernel(6001, 6001, image_width=36000), 0.5)
-    assert seconds < 5.0, seconds
+    # the exact near field. Interrupted as soon as it reports progress, it
+    # stops with most of the work not done.
+    seen = interrupted(lambda progress: camera.kernel(
+        6001, 6001, image_width=36000, progress=progress))
+    assert seen and max(seen.values()) < 0.5, seen
     # The camera still works afterwards.
     assert camera.kernel(33, 33).shape == (33, 33, 3)
 
 
 def test_ctrl_c_stops_a_long_apply_before_its_end():
-    # About 3.5 s on two cores, the kernel's build 2.5 of them: a stop
-    # within 2 s of the signal, sent after 1 s, is before the end.
+    # About 3.5 s on two cores, the kernel's build 2.5 of them: interrupted
+    # once under way, it never reaches the convolution's end.
     camera = slow_camera()
     image = np.full((2160, 3840, 3), 0.05, np.float32)
     image[1000, 2000] = 1e5
-    seconds = interrupted(lambda: camera.apply(image), 1.0)
-    assert seconds < 2.0, seconds
+    seen = interrupted(lambda progress: camera.apply(image, progress=progress))
+    assert seen and seen.get("convolving", 0.0) < 1.0, seen

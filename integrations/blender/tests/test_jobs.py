@@ -63,19 +63,17 @@ def test_cancel_stops_a_long_frame_before_its_end(tmp_path):
         assert time.monotonic() - start < 60
         time.sleep(0.01)
     # Cancelled once its work has begun, not after a sleep that would race
-    # the frame's end; the outcome is what is asserted: both jobs
-    # cancelled, neither output written. The bound is generous (a second
-    # is the aim): it fails a Cancel that waits for the frame's end, not a
-    # loaded machine.
+    # the frame's end; the outcome is what is asserted, with no clock: both
+    # jobs cancelled, the long one's apply_file never returned (a Cancel
+    # honoured only at the frame's end would have a result), neither
+    # output written.
     assert long.state == "running", "the frame ended before it could be cancelled"
-    cancelled = time.monotonic()
     runner.cancel_all()
-    wait(runner, 30)
-    seconds = time.monotonic() - cancelled
+    wait(runner, 60)
     assert (long.state, waiting.state) == ("cancelled", "cancelled")
+    assert long.result is None
     assert not (tmp_path / "out" / "long.exr").exists()
     assert not (tmp_path / "out" / "next.exr").exists()
-    assert seconds < 5.0, seconds
 
 
 def test_a_failure_is_one_line(tmp_path):
