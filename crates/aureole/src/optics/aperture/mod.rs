@@ -7,6 +7,7 @@
 //! [`crate::kernel::diffraction`].
 
 mod dirt;
+pub(crate) mod jinc;
 pub mod pupil;
 pub mod spectrum;
 

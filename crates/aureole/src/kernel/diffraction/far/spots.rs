@@ -14,7 +14,8 @@
 use std::collections::BTreeMap;
 
 use super::{Line, PLANES};
-use crate::optics::aperture::pupil::{jinc, SpotTerm};
+use crate::optics::aperture::jinc::jinc;
+use crate::optics::aperture::pupil::SpotTerm;
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
 
