@@ -16,6 +16,15 @@ pub fn in_ci() -> bool {
     std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "0" && v != "false")
 }
 
+/// Whether this process runs as root, who reads and writes whatever the
+/// permissions say: a test of them runs again as `nobody` (setpriv).
+pub fn running_as_root() -> bool {
+    std::process::Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+}
+
 /// `test` cannot run here because `what` is missing (with how to get
 /// it): panics under CI, else records the skip and returns, for the test
 /// to return too.

@@ -1,6 +1,6 @@
 //! `aureole apply`: what the camera would have recorded.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::mpsc;
 use std::time::Instant;
 
@@ -197,11 +197,6 @@ impl Args {
     }
 }
 
-/// The file a job reads (every job of the command line has one).
-fn input_of(job: &Job) -> &Path {
-    job.input.as_deref().unwrap_or(&job.output)
-}
-
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
     let pairs = batch::pairs(
         &args.inputs,
@@ -243,8 +238,9 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     };
     // The threshold of the camera a --kernel was built from, unless one
     // is given.
+    let options = args.options(kernel_threshold);
     for job in &mut jobs {
-        job.options = args.options(kernel_threshold);
+        job.options = options;
     }
     let done = |job: &Job| args.skip_existing && job.output.is_file();
     let todo: Vec<&Job> = jobs.iter().filter(|job| !done(job)).collect();
@@ -258,7 +254,7 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
     // header, before it is decoded.
     if let Some(job) = todo.first() {
         job.check_header(&session, Limits { max_bytes: limit })
-            .map_err(|e| input::failure(input_of(job), e))?;
+            .map_err(|e| input::failure(job.file(), e))?;
     }
     let skipped = jobs.len() - todo.len();
     if let [job] = jobs.as_slice() {
@@ -430,7 +426,7 @@ impl Run<'_> {
             if built != width {
                 return Err(Failure::Usage(anyhow::anyhow!(
                     "{}: the kernel {} was built for images {built} px wide (aureole psf --image-width), this one is {width} px wide: its µm and mm, which became pixels at that pitch, would be a factor {:.2} off here; build one with --image-width {width}, or pass --kernel-any-width",
-                    input_of(job).display(),
+                    job.file().display(),
                     kernel.display(),
                     built as f64 / width as f64
                 )));
@@ -439,11 +435,11 @@ impl Run<'_> {
         if job.options.method == Method::Splat && !self.quiet {
             let costs = session
                 .costs(&read.input.frame, &job.options)
-                .map_err(|e| input::about(input_of(job), e))?;
+                .map_err(|e| input::about(job.file(), e))?;
             if costs.splat > 60.0 {
                 self.progress.println(&format!(
                     "aureole: warning: {}: splatting {} bright pixels will take about {} (the FFT about {:.1} s: --method auto or fft); Ctrl-C stops it",
-                    input_of(job).display(),
+                    job.file().display(),
                     costs.spread_pixels,
                     duration(costs.splat),
                     costs.fft
@@ -456,7 +452,7 @@ impl Run<'_> {
         let mut report = |stage, done| progress.update(stage, done);
         let applied = job
             .apply(&mut read.input, session, &mut report)
-            .map_err(|e| input::about(input_of(job), e))?;
+            .map_err(|e| input::about(job.file(), e))?;
         read.input.give_back_planes();
         let kernel = session
             .plan()

@@ -50,7 +50,7 @@ impl SourceArgs {
 /// the luminance scale it takes; with the rest of the file, for writing
 /// the result back into it.
 pub fn read(job: &Job, limits: Limits, spares: &Spares, quiet: bool) -> Result<Input, Failure> {
-    let path = job.input.as_deref().unwrap_or(&job.output);
+    let path = job.file();
     let mut input = job.decode(limits, spares).map_err(|e| failure(path, e))?;
     say_read(path, &mut input, quiet);
     if !quiet {

@@ -59,18 +59,11 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, (Vec<u8>, u32)> {
     files
 }
 
-fn is_root() -> bool {
-    Process::new("id")
-        .arg("-u")
-        .output()
-        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
-}
-
 /// Runs `args` in `dir`; as the unprivileged user `nobody` when `unprivileged`
 /// (root reads and writes whatever the permissions say).
 fn run(dir: &Path, args: &[String], unprivileged: bool) -> std::process::Output {
     let binary = assert_cmd::cargo::cargo_bin("aureole");
-    let mut command = if unprivileged && is_root() {
+    let mut command = if unprivileged && required::running_as_root() {
         let mut c = Command::new("setpriv");
         c.args(["--reuid=65534", "--regid=65534", "--clear-groups"])
             .arg(binary);
@@ -449,7 +442,7 @@ fn every_bad_input_gets_one_line_a_status_and_leaves_nothing() {
 #[test]
 fn files_it_may_not_read_or_write_are_refused() {
     use std::os::unix::fs::PermissionsExt;
-    if is_root() && Process::new("setpriv").arg("--version").output().is_err() {
+    if required::running_as_root() && Process::new("setpriv").arg("--version").output().is_err() {
         required::missing(
             "files_it_may_not_read_or_write_are_refused",
             "running as root without setpriv (util-linux) to drop privileges",

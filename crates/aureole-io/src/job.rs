@@ -366,6 +366,12 @@ impl Job {
         input(path, loaded, &self.frame)
     }
 
+    /// The file the job is about, for the user's messages: its input,
+    /// else (an image made in memory) its output.
+    pub fn file(&self) -> &Path {
+        self.input.as_deref().unwrap_or(&self.output)
+    }
+
     fn input_path(&self) -> Result<&Path> {
         self.input.as_deref().ok_or_else(|| Error::Refused {
             path: self.output.clone(),
@@ -416,7 +422,7 @@ impl Job {
         let applied = self
             .apply(&mut input, session, report)
             .map_err(|error| Error::Content {
-                path: self.input.clone().unwrap_or_else(|| self.output.clone()),
+                path: self.file().to_path_buf(),
                 error,
             })?;
         self.write(input, applied)

@@ -371,7 +371,7 @@ fn an_unwritable_folder_leaves_no_file() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     // A folder without write permission: root writes there regardless, so
     // as root this test runs again as `nobody` (setpriv) and must pass.
-    if running_as_root() {
+    if required::running_as_root() {
         let again = std::process::Command::new("setpriv")
             .args(["--reuid=65534", "--regid=65534", "--clear-groups"])
             .arg(std::env::current_exe().unwrap())
@@ -407,15 +407,6 @@ fn an_unwritable_folder_leaves_no_file() {
     )
     .is_err());
     assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
-}
-
-/// Whether this process runs as root, who writes whatever the permissions
-/// say.
-fn running_as_root() -> bool {
-    std::process::Command::new("id")
-        .arg("-u")
-        .output()
-        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
 }
 
 /// The Radiance file at `path` with `lines` added to its header, as a

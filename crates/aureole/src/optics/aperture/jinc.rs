@@ -16,10 +16,10 @@ pub(crate) fn jinc(z: f64) -> f64 {
 /// Nodes per unit of z, and where the table ends (beyond, libm): its
 /// values in 48 KB, which stay in the first-level cache.
 const PER_UNIT: f64 = 128.0;
-pub(super) const END: f64 = 16.0;
+const END: f64 = 16.0;
 
 /// Where [`crate::math::j1_far`] ends.
-pub(super) const FAR_END: f64 = 1e5;
+const FAR_END: f64 = 1e5;
 
 /// How far from the point of a Taylor expansion z may lie: the third
 /// order's term is below (1/4)³/6·max|jinc‴| < 10⁻³ there.
@@ -46,12 +46,11 @@ fn exact(z: f64) -> [f64; 3] {
     ]
 }
 
-/// 2J₁(z)/z at z = |q|·`radius` for every |q| of `q`, into `out`, as
-/// [`Table::value`] gives it for END ≤ z < FAR_END (other z are
-/// computed at END and wasted: the caller looks those up): the large
-/// spots' part of the near field, four samples at once with AVX2.
+/// 2J₁(z)/z at z = |q|·`radius` for END ≤ z < FAR_END and every |q| of
+/// `q`, into `out` (other z are computed at END, to be replaced), four at
+/// once with AVX2: the values [`Table::values`] takes beyond the table.
 #[inline(always)]
-pub(super) fn far_all(q: &[f64], radius: f64, out: &mut [f64]) {
+fn far_all(q: &[f64], radius: f64, out: &mut [f64]) {
     for (o, &q) in out.iter_mut().zip(q) {
         let z = (q * radius).max(END);
         *o = 2.0 * crate::math::j1_far(z) / z;
@@ -89,6 +88,22 @@ impl Table {
         );
         let (h01, h11) = (t * t * (3.0 - 2.0 * t), t * t * (t - 1.0));
         h00 * a[0] + h10 * h * a[1] + h01 * b[0] + h11 * h * b[1]
+    }
+
+    /// [`Table::value`] at z = |q|·`radius` for every |q| of `q`, into
+    /// `out`, with the same bits: those beyond the table, most of a large
+    /// spot's, in vectors ([`far_all`]), the others one at a time.
+    pub(super) fn values(&self, q: &[f64], radius: f64, out: &mut [f64]) {
+        crate::convolve::widest(
+            #[inline(always)]
+            || far_all(q, radius, out),
+        );
+        for (o, &q) in out.iter_mut().zip(q) {
+            let z = q * radius;
+            if !(END..FAR_END).contains(&z) {
+                *o = self.value(z);
+            }
+        }
     }
 
     /// The value and the first two derivatives at z ≥ 0: those of the

@@ -582,7 +582,7 @@ impl Pupil {
         let mut points = vec![[0.0; 2]; large.len()];
         let mut sample_q = vec![0.0; count];
         let mut sums = [vec![0.0; count], vec![0.0; count]];
-        let mut far = vec![0.0; count];
+        let mut magnitudes = vec![0.0; count];
         for (i, &x) in nu_x.iter().enumerate() {
             let nu = [TAU * x, TAU * nu_y];
             let centre_q = (nu[0] * nu[0] + nu[1] * nu[1]).sqrt();
@@ -618,17 +618,8 @@ impl Pupil {
             );
             let [sums_re, sums_im] = &mut sums;
             for ((p, spot), [b_re, b_im]) in points.iter().zip(large).zip(by_large) {
-                crate::convolve::widest(
-                    #[inline(always)]
-                    || jinc::far_all(&sample_q, spot.radius, &mut far),
-                );
-                for (k, &q) in sample_q.iter().enumerate() {
-                    let z = q * spot.radius;
-                    let magnitude = if (jinc::END..jinc::FAR_END).contains(&z) {
-                        far[k]
-                    } else {
-                        table.value(z)
-                    };
+                table.values(&sample_q, spot.radius, &mut magnitudes);
+                for (k, magnitude) in magnitudes.iter().enumerate() {
                     sums_re[k] += magnitude * (p[0] * b_re[k] - p[1] * b_im[k]);
                     sums_im[k] += magnitude * (p[0] * b_im[k] + p[1] * b_re[k]);
                 }
