@@ -718,8 +718,6 @@ impl CoronaShape {
     }
 }
 
-/// n = −1/ln cos ω; 0 where ω ≥ π/2 (or NaN), ∞ where cos ω rounds to 1.
-#[inline(always)]
 /// W(n) = ∫ cosⁿ u du over (−π/2, π/2) = √π Γ((n+1)/2) / Γ(n/2 + 1): π for
 /// the isotropic core (n = 0), √(2π/n)(1 − 1/(4n) + 1/(32n²)) where the
 /// Gammas' logarithms would lose the digits of their difference.
@@ -734,6 +732,8 @@ fn lobe(n: f64) -> f64 {
     }
 }
 
+/// n = −1/ln cos ω; 0 where ω ≥ π/2 (or NaN), ∞ where cos ω rounds to 1.
+#[inline(always)]
 fn exponent_of(omega: f64) -> f64 {
     let g = math::neg_ln_cos(omega);
     let n = if g <= 0.0 { f64::INFINITY } else { 1.0 / g };
