@@ -35,6 +35,9 @@ const FADED: f64 = 1e-9;
 /// rounding (6·10⁻⁸), and computing it cost most of a corona's time.
 const DARK: f64 = 1e-12;
 
+/// −2 ln [`DARK`]: the lobe's exponent n (kδ/2)² beyond which it is dark.
+const DARK_LOBE: f64 = 55.262_042_231_857_1;
+
 /// A jittered factor never goes below this fraction of its mean, so that a
 /// ray's length, width and intensity stay positive.
 const JITTER_FLOOR: f64 = 0.05;
@@ -346,7 +349,7 @@ struct CoronaShape {
     /// below [`DARK`] of the brightest ray's start: the kernel holds 0.
     dark_radius: f64,
     /// Whether every direction may be lit at every radius: s = 1, where n
-    /// stays too small for the lobes to underflow between the rays.
+    /// stays too small for the lobes to fall below [`DARK`] between the rays.
     lobes_never_dark: bool,
     /// Where the brightest ray falls below [`FADED`] of its start.
     faded_radius: f64,
@@ -371,7 +374,7 @@ struct Chunk {
     n: [f64; CHUNK_POINTS],
     spacing: ([f64; CHUNK_POINTS], [f64; CHUNK_POINTS]),
     /// Whether `sample`'s dark test holds: the lobes leave the whole pixel
-    /// at exactly 0.
+    /// below [`DARK`] of the brightest ray's start.
     dark: [bool; CHUNK_POINTS],
     /// f there.
     f: [f64; CHUNK_POINTS],
@@ -405,14 +408,15 @@ const STEPS: [f64; CHUNK_POINTS] = {
 
 impl CoronaShape {
     /// The angle from a ray's axis beyond which a pixel centred at distance
-    /// r (or more) from the centre is exactly 0, for a least exponent n over
-    /// its radii. |cos u| ≤ exp(−u²/2) for |u| ≤ π/2 bounds the lobe by
-    /// exp(−n (k δ/2)²/2); below e^−760 its exp underflows to exactly 0,
-    /// with room for the round-off of log and cos. The pixel spans
+    /// r (or more) from the centre is dark, for a least exponent n over its
+    /// radii: there f < DARK·brightest, the bound `dark_radius` holds along
+    /// the rays, here across them. |cos u| ≤ exp(−u²/2) for |u| ≤ π/2
+    /// bounds the lobe by exp(−n (k δ/2)²/2), below DARK where
+    /// n (k δ/2)² > −2 ln DARK, and f ≤ brightest × lobe. The pixel spans
     /// directions within asin(√2/2 / r) < 0.78/r of its centre's, found to
     /// 5·10⁻¹⁶ rad (3·10⁻⁵ rad to spare). Infinite where n = 0.
     fn dark_angle(&self, n: f64, r: f64) -> f64 {
-        2.0 / self.k * (1520.0 / n).sqrt() + 0.78 / r + 3e-5
+        2.0 / self.k * (DARK_LOBE / n).sqrt() + 0.78 / r + 3e-5
     }
 
     /// The least exponent n of any ray at radii in [near, far]: ω = (r/w)^(s−1)
