@@ -71,9 +71,28 @@ work=$(mktemp -d)
 ./target/release/aureole apply "$work/street.exr" --preset camera-f8-7blade -o "$work/camera.exr" -q
 "$venv/bin/python" bench/codec.py target/release/bench_codec "$work/camera.exr" "$work/codec" >> bench/RESULTS.md
 rm -rf "$work"
+# Lens kernels and the studio's previews on the GPU too where this machine
+# has one (a small kernel built there is the test).
+probe=$(mktemp -d)
+devices=cpu
+if ./target/release/aureole psf --preset paper-fig4-bloom --size 33x33 --device gpu -q -o "$probe/k.pfm" 2>/dev/null; then
+  devices=cpu,gpu
+fi
+rm -rf "$probe"
 # Lens kernels: every preset, the dusty lens and issue 42's bloom with
 # corona at 4K, the build alone as `psf` reports it and with writing.
-{ echo "## Lens kernels (\`python3 bench/kernels.py\`, medians of 3)"; echo; python3 bench/kernels.py target/release/aureole; echo; } >> bench/RESULTS.md
+{ echo "## Lens kernels (\`python3 bench/kernels.py --devices $devices\`, medians of 3)"; echo; python3 bench/kernels.py target/release/aureole --devices "$devices"; echo; } >> bench/RESULTS.md
+# The studio: from a changed parameter to the new picture, each effect.
+{
+  echo "## The studio after a change (\`python3 bench/studio_latency.py --device D\`)"
+  echo
+  for device in ${devices//,/ }; do
+    echo '```text'
+    python3 bench/studio_latency.py --device "$device"
+    echo '```'
+    echo
+  done
+} >> bench/RESULTS.md
 # The --max-memory estimate against the measured peaks of whole runs.
 { echo "## Memory: the estimate against measured peaks"; echo; python3 bench/memory.py target/release/aureole; echo; } >> bench/RESULTS.md
 cat bench/RESULTS.md
