@@ -113,7 +113,9 @@ def run(command):
     return subprocess.run(command, check=True, capture_output=True, text=True)
 
 
-def aureole_batch(aureole, work, kernel, count, ext="exr"):
+def aureole_batch(aureole, work, kernel, count, ext="exr", any_width=False):
+    """`any_width`: the kernel is one numpy wrote, in pixels, without the
+    image width `psf` records."""
     out = os.path.join(work, f"out{count}")
     shutil.rmtree(out, ignore_errors=True)
     os.makedirs(out)
@@ -121,7 +123,8 @@ def aureole_batch(aureole, work, kernel, count, ext="exr"):
     start = time.perf_counter()
     done = run(["/usr/bin/time", "-f", "peak %M faults %R", aureole, "apply",
                 os.path.join(work, f"s.%04d.{ext}"), "--frames", f"1-{count}",
-                "--kernel", kernel, "-o", out + "/"] + half)
+                "--kernel", kernel, "-o", out + "/"] + half
+               + (["--kernel-any-width"] if any_width else []))
     wall = time.perf_counter() - start
     stages = [tuple(map(float, m)) for m in re.findall(
         r"read ([\d.]+) s, camera ([\d.]+) s, write ([\d.]+) s", done.stderr)]
@@ -144,12 +147,13 @@ def fresh_mib(faults_before, faults_after):
     return (faults_after - faults_before) / FRAMES * 4096 / 2**20
 
 
-def workload(name, aureole, work, kernel):
+def workload(name, aureole, work, kernel, any_width=False):
     for n in range(2, 2 * FRAMES + 2):
         shutil.copyfile(os.path.join(work, "s.0001.exr"), os.path.join(work, f"s.{n:04d}.exr"))
-    one, _, _, _, faults_one = aureole_batch(aureole, work, kernel, 1)
-    many, stages, peak, out, faults_many = aureole_batch(aureole, work, kernel, FRAMES + 1)
-    faults_more = aureole_batch(aureole, work, kernel, 2 * FRAMES + 1)[4]
+    batch = lambda count: aureole_batch(aureole, work, kernel, count, any_width=any_width)
+    one, _, _, _, faults_one = batch(1)
+    many, stages, peak, out, faults_many = batch(FRAMES + 1)
+    faults_more = batch(2 * FRAMES + 1)[4]
     fresh = (f"{fresh_mib(faults_one, faults_many):.0f} MiB, "
              f"{fresh_mib(faults_many, faults_more):.1f} MiB")
     per_frame = (many - one) / FRAMES
@@ -167,12 +171,13 @@ def workload(name, aureole, work, kernel):
     print(f"| {name} | OpenEXR + scipy fftconvolve (2 workers) | {theirs['frame']:.2f} s | {theirs['read']:.2f} s | {theirs['convolve']:.2f} s | {theirs['write']:.2f} s | {theirs['peak_mb']:.0f} MB | | {theirs['frame'] / per_frame:.1f} | {difference:.1e} |")
 
 
-def pfm_batch(name, aureole, work, kernel):
+def pfm_batch(name, aureole, work, kernel, any_width=False):
     """aureole alone, PFM in and out (float32, no compression)."""
     for n in range(2, FRAMES + 2):
         shutil.copyfile(os.path.join(work, "s.0001.pfm"), os.path.join(work, f"s.{n:04d}.pfm"))
-    one, _, _, _, faults_one = aureole_batch(aureole, work, kernel, 1, "pfm")
-    many, stages, peak, _, faults_many = aureole_batch(aureole, work, kernel, FRAMES + 1, "pfm")
+    one, _, _, _, faults_one = aureole_batch(aureole, work, kernel, 1, "pfm", any_width)
+    many, stages, peak, _, faults_many = aureole_batch(aureole, work, kernel, FRAMES + 1, "pfm",
+                                                       any_width)
     steady = stages[1:]
     read, camera, write = (statistics.median(s[i] for s in steady) for i in range(3))
     print(f"| {name} | aureole | {(many - one) / FRAMES:.2f} s | {read:.2f} s | {camera:.2f} s | {write:.2f} s | {peak:.0f} MB | {fresh_mib(faults_one, faults_many):.0f} MiB | | |")
@@ -333,9 +338,9 @@ def main(aureole, bench_codec, work, workload_dir):
     write_exr(os.path.join(dir, "s.0001.exr"), image, ("R", "G", "B"))
     kernel = os.path.join(dir, "kernel.exr")
     write_exr(kernel, [np.load(os.path.join(workload_dir, "kernel.npy"))], ("Y",))
-    workload("issue-5 workload 4K", aureole, dir, kernel)
+    workload("issue-5 workload 4K", aureole, dir, kernel, any_width=True)
     write_pfm(os.path.join(dir, "s.0001.pfm"), list(image))
-    pfm_batch("issue-5 workload 4K, PFM in and out", aureole, dir, kernel)
+    pfm_batch("issue-5 workload 4K, PFM in and out", aureole, dir, kernel, any_width=True)
     print()
     kernels(aureole, bench_codec, work)
     still(aureole, work)
