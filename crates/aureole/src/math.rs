@@ -174,6 +174,18 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     (f64::from_bits(s ^ half), f64::from_bits(c ^ half))
 }
 
+/// (sin x, cos x) for any x: [`sin_cos`] where it holds (|x| < 10⁵),
+/// libm's reduction beyond. For phases computed once per row or per run of
+/// pixels, where the branch is taken the same way every time.
+#[inline]
+pub fn sin_cos_wide(x: f64) -> (f64, f64) {
+    if x.abs() < 1e5 {
+        sin_cos(x)
+    } else {
+        libm::sincos(x)
+    }
+}
+
 /// J₁(x), the Bessel function of the first kind of order one, within
 /// 2·10⁻¹⁶ of libm's for 8 ≤ |x| < 10⁵ and libm's own elsewhere. There,
 /// as libm, J₁ = √(2/(πx))·(P₁ cos(x − 3π/4) − Q₁ sin(x − 3π/4)) with
@@ -527,6 +539,16 @@ mod tests {
         assert_eq!(ln(0.0), f64::NEG_INFINITY);
         assert!(ln(-1.0).is_nan());
         assert!(ulps(ln(1e-310), libm::log(1e-310)) <= 2.0);
+    }
+
+    #[test]
+    fn sin_cos_wide_is_libms_within_4e_16_at_any_phase() {
+        let phases = (0..200_000).map(|i| -3e5 + 3.000_001 * f64::from(i));
+        for x in phases.chain([1e5 - 1e-9, 1e5, -1e5, 1e12, 0.0, -0.0]) {
+            let (s, c) = sin_cos_wide(x);
+            let (ls, lc) = libm::sincos(x);
+            assert!((s - ls).abs() <= 4e-16 && (c - lc).abs() <= 4e-16, "{x}");
+        }
     }
 
     #[test]

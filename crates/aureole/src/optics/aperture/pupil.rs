@@ -756,7 +756,7 @@ fn edge_phases(e: &Edge, qx: f64, qy: f64) -> EdgePhases {
         qx * e.middle[0] + qy * e.middle[1],
         0.5 * (qx * e.delta[0] + qy * e.delta[1]),
     );
-    let ((sm, cm), (sd, cd)) = (libm::sincos(m), libm::sincos(d));
+    let ((sm, cm), (sd, cd)) = (crate::math::sin_cos_wide(m), crate::math::sin_cos_wide(d));
     ([cm, -sm], [cd, sd])
 }
 

@@ -624,10 +624,10 @@ fn band(c0: f64, c1: f64, reach: f64, count: usize) -> std::ops::Range<usize> {
 /// cos(`start` + i·`step`) into `out[i]` for i in `range`: a rotation from
 /// pixel to pixel, started afresh every 32 so that round-off cannot grow.
 fn cosines(start: f64, step: f64, range: std::ops::Range<usize>, out: &mut [f64]) {
-    let (sin_step, cos_step) = libm::sincos(step);
+    let (sin_step, cos_step) = crate::math::sin_cos_wide(step);
     let mut i = range.start;
     while i < range.end {
-        let (mut s, mut c) = libm::sincos(start + i as f64 * step);
+        let (mut s, mut c) = crate::math::sin_cos_wide(start + i as f64 * step);
         for value in &mut out[i..range.end.min(i + 32)] {
             *value = c;
             (c, s) = (c * cos_step - s * sin_step, s * cos_step + c * sin_step);
