@@ -676,6 +676,28 @@ mod tests {
     use crate::optics::Aperture;
     use means::MOST_FOOTPRINT;
 
+    #[test]
+    fn cosines_are_the_cosines_of_their_phases_and_touch_nothing_else() {
+        for (start, step, range) in [
+            (0.3, 0.01, 0..100),
+            (2.0e4, -1.7, 5..6),
+            (-7.5, 0.9, 3..38),
+            (123.4, 2.6, 31..97),
+            (1.0, 0.5, 7..7),
+        ] {
+            let mut out = vec![f64::NAN; 100];
+            cosines(start, step, range.clone(), &mut out);
+            for (i, v) in out.iter().enumerate() {
+                if range.contains(&i) {
+                    let exact = libm::cos(start + i as f64 * step);
+                    assert!((v - exact).abs() < 1e-13, "{start} {step} {i}: {v} {exact}");
+                } else {
+                    assert!(v.is_nan(), "{i} written outside {range:?}");
+                }
+            }
+        }
+    }
+
     fn optics(blades: u32, vanes: u32) -> Optics {
         let aperture = Aperture {
             blades,
