@@ -41,8 +41,10 @@ pub(crate) trait SpreadShape: Sync {
     }
 
     /// What the rasteriser needs of the pixel (or unit square) centred at
-    /// (x, y), in one call: whether f is exactly 0 (in f64) over all of it
-    /// (only a cheap, conservative test: `Dark` must be true), else its
+    /// (x, y), in one call: whether the kernel holds 0 there, f being 0 or
+    /// below the shape's own bound of what it drops (the corona's 10⁻¹² of
+    /// its brightest ray) over all of it (only a cheap, conservative test:
+    /// `Dark` must be true), else its
     /// grid, and where that grid is a single point f there. A shape whose
     /// test, grid and density share work (a direction, the nearest ray)
     /// computes it once here; the grid and f must be those of `grid` and
@@ -88,7 +90,7 @@ pub(crate) trait SpreadShape: Sync {
     }
 
     /// On the row of pixels centred at height y: ranges of x (pixel
-    /// centres, inclusive) outside which f is exactly 0 over every pixel,
+    /// centres, inclusive) outside which every pixel is `Dark`,
     /// or `None` where any pixel may be lit. Like [`SpreadShape::sample`]'s
     /// `Dark`, a conservative, cheap answer.
     fn lit_spans(&self, _y: f64) -> Option<Vec<(f64, f64)>> {
@@ -120,7 +122,8 @@ pub(crate) fn in_chunks(
 /// [`SpreadShape::sample`]'s answer for one pixel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Sample {
-    /// f is exactly 0 over the pixel.
+    /// The kernel holds 0: f is 0, or below the shape's bound of what it
+    /// drops, over the pixel.
     Dark,
     /// One point is enough: f at the pixel's centre.
     One(f64),
