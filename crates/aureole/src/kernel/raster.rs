@@ -16,30 +16,31 @@ use crate::optics::whole::{Whole, Window};
 /// Pixels of a row rasterised together where f has no mirror symmetry.
 const PIECE: usize = 256;
 
-/// f averaged as `extent.sending` asks and normalised by its light over
-/// the whole plane ([`SpreadShape::whole`]), so that ΣF is the share of
-/// the light the extent holds, at most 1; `None` when f is not finite
-/// there. A mirror-symmetric f is computed on a quarter and mirrored.
+/// f averaged as `extent.sending` asks, normalised by its light over the
+/// whole plane ([`SpreadShape::whole`]) and scaled by `share`, so that ΣF
+/// is `share` times the share of the light the extent holds; `None` when
+/// f is not finite there. A mirror-symmetric f is computed, summed and
+/// scaled on a quarter, then mirrored: the plane itself is written once.
 pub(super) fn shape_plane(
     shape: &dyn SpreadShape,
     extent: &Extent,
+    share: f64,
     control: &mut Control,
 ) -> Result<Option<Vec<f32>>> {
-    let width = extent.width;
     // A shape singular at the centre keeps the sending pixel a point.
-    let mut plane = if extent.sending == Sending::Pixel && shape.spreads_centre() {
+    let mut raster = if extent.sending == Sending::Pixel && shape.spreads_centre() {
         tent_plane(shape, extent, control)?
     } else {
         point_plane(shape, extent, control)?
     };
-    let within = plane_sum(&plane, width);
+    let within = raster.sum(extent);
     if !within.is_finite() {
         return Ok(None);
     }
     // None of it falls within the extent (Vos's light in a 1-pixel
     // frame): all of it leaves.
     if within == 0.0 {
-        return Ok(Some(plane));
+        return raster.into_plane(extent).map(Some);
     }
     let window = Window::of(extent.width, extent.height);
     let whole = match shape.whole(&window) {
@@ -49,27 +50,81 @@ pub(super) fn shape_plane(
     // The pixel means and the integral differ by the midpoint rule's
     // 10⁻³ at most: a window that holds nearly all the light keeps it
     // all, and never more.
-    let scale = 1.0
+    let scale = share
         / if whole.is_finite() {
             whole.max(within)
         } else {
             within
         };
-    plane
+    raster
+        .values()
         .par_iter_mut()
         .for_each(|v| *v = (f64::from(*v) * scale) as f32);
-    Ok(Some(plane))
+    raster.into_plane(extent).map(Some)
+}
+
+/// A shape rasterised: the whole plane, or the quarter of offsets
+/// 0..`span` along x and down the rows of a mirror-symmetric one.
+enum Raster {
+    Plane(Vec<f32>),
+    Quarter { values: Vec<f32>, span: usize },
+}
+
+impl Raster {
+    /// Σ over the extent's plane in f64, the same bits with any number of
+    /// threads: a quarter's values count once for each pixel they mirror
+    /// into.
+    fn sum(&self, extent: &Extent) -> f64 {
+        match self {
+            Raster::Plane(plane) => plane_sum(plane, extent.width),
+            Raster::Quarter { values, span } => {
+                let (cx, cy) = extent.centre();
+                // Pixels d from the centre along an axis of n: one or two.
+                let count = |d: usize, c: usize, n: usize| {
+                    f64::from(u8::from(d <= c) + u8::from(d > 0 && c + d < n))
+                };
+                let rows: Vec<f64> = values
+                    .par_chunks(*span)
+                    .enumerate()
+                    .map(|(dy, row)| {
+                        let (inner, outer) = row.split_at(1);
+                        let ends = count(dy, cy, extent.height);
+                        // The columns on both sides, then those on one.
+                        let both = cx.min(extent.width - 1 - cx).min(outer.len());
+                        let one = &outer[both..];
+                        ends * (f64::from(inner[0]) + 2.0 * sum_f64(&outer[..both]) + sum_f64(one))
+                    })
+                    .collect();
+                rows.iter().sum()
+            }
+        }
+    }
+
+    /// What is scaled: the plane or the quarter.
+    fn values(&mut self) -> &mut [f32] {
+        match self {
+            Raster::Plane(plane) => plane,
+            Raster::Quarter { values, .. } => values,
+        }
+    }
+
+    /// The extent's plane.
+    fn into_plane(self, extent: &Extent) -> Result<Vec<f32>> {
+        match self {
+            Raster::Plane(plane) => Ok(plane),
+            Raster::Quarter { values, span } => {
+                let mut plane = zeros(extent.width * extent.height)?;
+                mirror(&values, span, &mut plane, extent.width, extent.centre());
+                Ok(plane)
+            }
+        }
+    }
 }
 
 /// f averaged over every receiving pixel, for light sent by a point.
-fn point_plane(
-    shape: &dyn SpreadShape,
-    extent: &Extent,
-    control: &mut Control,
-) -> Result<Vec<f32>> {
+fn point_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -> Result<Raster> {
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = extent.centre();
-    let mut plane = zeros(width * height)?;
     if shape.mirror_symmetric() {
         // Offsets 0..=reach along each axis cover both sides of the centre.
         let (reach_x, reach_y) = (cx.max(width - 1 - cx), cy.max(height - 1 - cy));
@@ -87,38 +142,41 @@ fn point_plane(
             })?;
             quarter
         };
-        mirror(&quarter, reach_x + 1, &mut plane, width, (cx, cy));
-    } else {
-        // Pieces of rows rather than rows: the few rows through the centre,
-        // where every ray is sampled finely, would otherwise hold a batch
-        // up on one thread.
-        let mut pieces: Vec<(usize, usize, &mut [f32])> = plane
-            .chunks_mut(width)
-            .enumerate()
-            .flat_map(|(j, row)| {
-                row.chunks_mut(PIECE)
-                    .enumerate()
-                    .map(move |(p, piece)| (j, p * PIECE, piece))
-            })
-            .collect();
-        for_each(&mut pieces, control, |_, (j, first, piece)| {
-            let (j, first) = (*j, *first);
-            let y = cy as f64 - j as f64;
-            let spans = shape.lit_spans(y);
-            for (i, value) in piece.iter_mut().enumerate() {
-                let i = first + i;
-                let x = i as f64 - cx as f64;
-                // Pixels outside the lit spans stay 0.
-                if let Some(spans) = &spans {
-                    if !spans.iter().any(|&(a, b)| a <= x && x <= b) {
-                        continue;
-                    }
-                }
-                *value = pixel_mean(shape, x, y, (i, j) == (cx, cy)) as f32;
-            }
-        })?;
+        return Ok(Raster::Quarter {
+            values: quarter,
+            span: reach_x + 1,
+        });
     }
-    Ok(plane)
+    let mut plane = zeros(width * height)?;
+    // Pieces of rows rather than rows: the few rows through the centre,
+    // where every ray is sampled finely, would otherwise hold a batch
+    // up on one thread.
+    let mut pieces: Vec<(usize, usize, &mut [f32])> = plane
+        .chunks_mut(width)
+        .enumerate()
+        .flat_map(|(j, row)| {
+            row.chunks_mut(PIECE)
+                .enumerate()
+                .map(move |(p, piece)| (j, p * PIECE, piece))
+        })
+        .collect();
+    for_each(&mut pieces, control, |_, (j, first, piece)| {
+        let (j, first) = (*j, *first);
+        let y = cy as f64 - j as f64;
+        let spans = shape.lit_spans(y);
+        for (i, value) in piece.iter_mut().enumerate() {
+            let i = first + i;
+            let x = i as f64 - cx as f64;
+            // Pixels outside the lit spans stay 0.
+            if let Some(spans) = &spans {
+                if !spans.iter().any(|&(a, b)| a <= x && x <= b) {
+                    continue;
+                }
+            }
+            *value = pixel_mean(shape, x, y, (i, j) == (cx, cy)) as f32;
+        }
+    })?;
+    Ok(Raster::Plane(plane))
 }
 
 /// Σ of a plane in f64: row sums in parallel, added in row order, so the
@@ -167,10 +225,9 @@ const BAND: usize = 32;
 /// §2): the unit squares between four pixel centres are each sampled once
 /// ([`corners`]), and a pixel sums its four. A mirror-symmetric f is
 /// computed on a quarter and mirrored.
-fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -> Result<Vec<f32>> {
+fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -> Result<Raster> {
     let (width, height) = (extent.width, extent.height);
     let (cx, cy) = extent.centre();
-    let mut plane = zeros(width * height)?;
     if shape.mirror_symmetric() {
         // Squares at (p + ½, q + ½) for p, q ≥ 0; the one at −½ is the
         // mirror of the one at +½. A pixel at offset d ≥ 0 takes the inner
@@ -224,29 +281,31 @@ fn tent_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) -
             )?;
             quarter
         };
-        mirror(&quarter, reach_x + 1, &mut plane, width, (cx, cy));
-    } else {
-        // Square row k lies between pixel rows k − 1 and k, square i
-        // between columns i − 1 and i.
-        rasterise_bands(
-            shape,
-            (&mut plane, width),
-            &|k| cy as f64 - k as f64 + 0.5,
-            -(cx as f64) - 0.5,
-            &|r, columns, rows, row| {
-                let ends = columns.start..columns.end + 1;
-                let (above, below) = (&rows.get(r)[ends.clone()], &rows.get(r + 1)[ends]);
-                let pairs = above.windows(2).zip(below.windows(2));
-                for (value, (a, b)) in row[columns].iter_mut().zip(pairs) {
-                    *value =
-                        (a[0][BOTTOM_RIGHT] + a[1][BOTTOM_LEFT] + b[0][TOP_RIGHT] + b[1][TOP_LEFT])
-                            as f32;
-                }
-            },
-            control,
-        )?;
+        return Ok(Raster::Quarter {
+            values: quarter,
+            span: reach_x + 1,
+        });
     }
-    Ok(plane)
+    let mut plane = zeros(width * height)?;
+    // Square row k lies between pixel rows k − 1 and k, square i between
+    // columns i − 1 and i.
+    rasterise_bands(
+        shape,
+        (&mut plane, width),
+        &|k| cy as f64 - k as f64 + 0.5,
+        -(cx as f64) - 0.5,
+        &|r, columns, rows, row| {
+            let ends = columns.start..columns.end + 1;
+            let (above, below) = (&rows.get(r)[ends.clone()], &rows.get(r + 1)[ends]);
+            let pairs = above.windows(2).zip(below.windows(2));
+            for (value, (a, b)) in row[columns].iter_mut().zip(pairs) {
+                *value = (a[0][BOTTOM_RIGHT] + a[1][BOTTOM_LEFT] + b[0][TOP_RIGHT] + b[1][TOP_LEFT])
+                    as f32;
+            }
+        },
+        control,
+    )?;
+    Ok(Raster::Plane(plane))
 }
 
 /// `plane` (rows of `width`, its centre at `centre`) from the `quarter` of
@@ -568,6 +627,29 @@ mod tests {
     /// pixel, for light sent by a pixel and by a point, and hold most of
     /// its pixels (else this would compare the same computation twice).
     #[test]
+    fn a_quarter_sums_to_the_plane_it_mirrors_into() {
+        // Odd and even sides: an even side has one pixel less right of
+        // (or below) the centre than left of (above) it.
+        for (w, h) in [(1, 1), (2, 1), (5, 4), (8, 7), (12, 9), (3, 16), (601, 401)] {
+            let extent = Extent::new(w, h).unwrap();
+            let (cx, cy) = extent.centre();
+            let span = cx.max(w - 1 - cx) + 1;
+            let rows = cy.max(h - 1 - cy) + 1;
+            let values: Vec<f32> = (0..span * rows)
+                .map(|i| ((i * 37 % 101) as f32 + 0.5) * 1e-3)
+                .collect();
+            let quarter = Raster::Quarter { values, span };
+            let sum = quarter.sum(&extent);
+            let plane = quarter.into_plane(&extent).unwrap();
+            let direct = plane_sum(&plane, w);
+            assert!(
+                (sum - direct).abs() <= 1e-12 * direct,
+                "{w}x{h}: {sum} against {direct}"
+            );
+        }
+    }
+
+    #[test]
     fn a_radial_kernel_from_tables_is_the_kernel_pixel_by_pixel() {
         let effects = r#"
             [camera]
@@ -631,9 +713,9 @@ mod tests {
                 };
                 for shape in &shapes {
                     assert!(shape.radial());
-                    let tables = shape_plane(shape.as_ref(), &extent, &mut quiet).unwrap();
+                    let tables = shape_plane(shape.as_ref(), &extent, 1.0, &mut quiet).unwrap();
                     let each = PixelByPixel(shape.as_ref());
-                    let exact = shape_plane(&each, &extent, &mut quiet).unwrap();
+                    let exact = shape_plane(&each, &extent, 1.0, &mut quiet).unwrap();
                     let (tables, exact) = (tables.unwrap(), exact.unwrap());
                     let (mut differ, mut worst) = (0, 0.0f64);
                     for (t, e) in tables.iter().zip(&exact) {

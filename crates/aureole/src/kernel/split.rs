@@ -35,19 +35,15 @@ impl SplitKernel {
         control: &mut Control,
     ) -> Result<SplitKernel> {
         let spread = if epsilon > 0.0 {
-            shape_plane(shape, extent, control)?
+            shape_plane(shape, extent, epsilon, control)?
         } else {
             None
         };
         let layer = match spread {
-            Some(mut f) => {
-                f.par_iter_mut()
-                    .for_each(|v| *v = (epsilon * f64::from(*v)) as f32);
-                Layer {
-                    centre: 1.0 - epsilon,
-                    spread: f,
-                }
-            }
+            Some(spread) => Layer {
+                centre: 1.0 - epsilon,
+                spread,
+            },
             // Nothing spread: all light stays.
             None => Layer {
                 centre: 1.0,
