@@ -95,6 +95,58 @@ struct Element {
     power: f64,
 }
 
+impl Element {
+    /// Whether this element is `other` with its coordinates multiplied by
+    /// `mirror` (one of them −1), to `tolerance` mm.
+    fn is_mirror_of(&self, other: &Element, mirror: [f64; 2], tolerance: f64) -> bool {
+        let near = |a: f64, b: f64| (a - b).abs() <= tolerance;
+        let mirrored =
+            |p: [f64; 2], q: [f64; 2]| near(p[0], q[0] * mirror[0]) && near(p[1], q[1] * mirror[1]);
+        if self.weight != other.weight {
+            return false;
+        }
+        match (&self.shape, &other.shape) {
+            (Outline::Polygon { edges, .. }, Outline::Polygon { edges: theirs, .. }) => {
+                // A mirror reverses the turn from edge to edge: a curved
+                // piece's fan swaps its two sides.
+                let same_fan = |a: Option<[f64; 2]>, b: Option<[f64; 2]>| match (a, b) {
+                    (None, None) => true,
+                    (Some(a), Some(b)) => {
+                        (near(a[0], b[1]) && near(a[1], b[0]))
+                            || (near(a[0], b[0]) && near(a[1], b[1]))
+                    }
+                    _ => false,
+                };
+                edges.len() == theirs.len()
+                    && theirs.iter().all(|t| {
+                        edges.iter().any(|e| {
+                            near(e.length, t.length)
+                                && mirrored(e.middle, t.middle)
+                                && (e.normal[0] - t.normal[0] * mirror[0]).abs() <= 1e-9
+                                && (e.normal[1] - t.normal[1] * mirror[1]).abs() <= 1e-9
+                                && same_fan(e.fan, t.fan)
+                        })
+                    })
+            }
+            (
+                Outline::Disc { centre, radius },
+                Outline::Disc {
+                    centre: c,
+                    radius: r,
+                },
+            )
+            | (
+                Outline::Spot { centre, radius },
+                Outline::Spot {
+                    centre: c,
+                    radius: r,
+                },
+            ) => mirrored(*centre, *c) && near(*radius, *r),
+            _ => false,
+        }
+    }
+}
+
 /// A pupil made of polygons and discs, lengths in mm.
 #[derive(Debug, Clone, Default)]
 pub struct Pupil {
@@ -265,6 +317,35 @@ impl Pupil {
                 .elements
                 .iter()
                 .all(|e| matches!(e.shape, Outline::Disc { centre, .. } if centre == [0.0, 0.0]))
+    }
+
+    /// Whether it is its own mirror image across the x axis or across the
+    /// y axis (a stop whose blade tip or blade side lies on an axis, vanes
+    /// in pairs about it, spots mirrored). A real pupil's pattern is then
+    /// mirrored across both axes: across the pupil's axis by the mirror,
+    /// across the other by the mirror and the centrosymmetry together.
+    /// Geometry that agrees to 10⁻⁹ of the pupil's reach counts as the same.
+    pub fn is_mirror_symmetric(&self) -> bool {
+        let reach = self
+            .elements
+            .iter()
+            .map(|e| match &e.shape {
+                Outline::Polygon {
+                    centroid, reach, ..
+                } => libm::hypot(centroid[0], centroid[1]) + reach,
+                Outline::Disc { centre, radius } | Outline::Spot { centre, radius } => {
+                    libm::hypot(centre[0], centre[1]) + radius
+                }
+            })
+            .fold(0.0, f64::max);
+        let tolerance = 1e-9 * reach.max(f64::MIN_POSITIVE);
+        [[1.0, -1.0], [-1.0, 1.0]].into_iter().any(|mirror| {
+            self.elements.iter().all(|e| {
+                self.elements
+                    .iter()
+                    .any(|f| f.is_mirror_of(e, mirror, tolerance))
+            })
+        })
     }
 
     /// The amplitude the pupil transmits at `point` (mm).
@@ -812,6 +893,53 @@ fn phase(magnitude: f64, q: [f64; 2], c: [f64; 2]) -> Amplitude {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A regular polygon of `n` vertices on a circle of 3 mm, the first at
+    /// `start` rad.
+    fn regular(n: usize, start: f64) -> Vec<[f64; 2]> {
+        (0..n)
+            .map(|k| {
+                let a = start + TAU * k as f64 / n as f64;
+                [3.0 * libm::cos(a), 3.0 * libm::sin(a)]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_pupil_is_mirror_symmetric_when_every_element_has_its_mirror_image() {
+        let with = |build: &dyn Fn(&mut Pupil)| {
+            let mut pupil = Pupil::new();
+            build(&mut pupil);
+            pupil.is_mirror_symmetric()
+        };
+        // A tip on +x (across the x axis), a tip on +y (across the y axis).
+        assert!(with(&|p| p.add_polygon(&regular(7, 0.0), true)));
+        assert!(with(&|p| p.add_polygon(&regular(6, PI / 6.0), true)));
+        assert!(with(&|p| p.add_sampled_polygon(&regular(28, 0.0), true, 4)));
+        assert!(!with(&|p| p.add_polygon(&regular(7, 0.1), true)));
+        assert!(!with(&|p| p.add_polygon(&regular(7, 1e-8), true)));
+        // A spot off the axes breaks the symmetry; its mirror image restores it.
+        let spot = |p: &mut Pupil| {
+            p.add_disc([0.0, 0.0], 3.0, true);
+            p.add_spot([1.0, 0.5], 0.1, [0.0, 0.0]);
+        };
+        assert!(!with(&spot));
+        assert!(with(&|p| {
+            spot(p);
+            p.add_spot([1.0, -0.5], 0.1, [0.0, 0.0]);
+        }));
+        // A vane on one side only, and a pair about the x axis.
+        let vane = |y: f64| vec![[0.5, y], [3.0, y], [3.0, y + 0.1], [0.5, y + 0.1]];
+        assert!(!with(&|p| {
+            p.add_disc([0.0, 0.0], 3.0, true);
+            p.add_polygon(&vane(0.3), false);
+        }));
+        assert!(with(&|p| {
+            p.add_disc([0.0, 0.0], 3.0, true);
+            p.add_polygon(&vane(0.3), false);
+            p.add_polygon(&vane(-0.4), false);
+        }));
+    }
 
     /// Â by brute-force summation over a fine grid, for comparison.
     fn numeric(pupil_inside: impl Fn(f64, f64) -> bool, half: f64, nu: [f64; 2]) -> Amplitude {
