@@ -1,8 +1,8 @@
 //! The f32 engine's loops and the pupil transform's inner loop (which
-//! builds every diffraction kernel's near field) with AVX2 and their
-//! scalar twin give the same bits (RustFFT keeps and tests its scalar twin
-//! the same way): the same IEEE operations in the same order, whatever the
-//! vector width. In a test binary of its own, since the switch holds for
+//! builds every diffraction kernel's near field) with AVX2 (AVX-512 for
+//! the latter where the CPU has it) and their scalar twin give the same
+//! bits (RustFFT keeps and tests its scalar twin the same way): the same
+//! IEEE operations in the same order, whatever the vector width. In a test binary of its own, since the switch holds for
 //! the whole process.
 
 use aureole::config::ConfigFile;
@@ -77,6 +77,6 @@ fn the_vector_and_scalar_loops_give_the_same_bits() {
             .flatten()
             .zip(scalar.iter().flatten())
             .all(|(a, b)| a.to_bits() == b.to_bits());
-        assert!(same, "{preset}: the AVX2 and scalar loops differ");
+        assert!(same, "{preset}: the vector and scalar loops differ");
     }
 }

@@ -25,8 +25,8 @@ mod single;
 
 pub use gpu::{software_adapter, Gpu};
 pub use grid::{fast_size, padded_size};
-pub(crate) use simd::widest;
 pub use simd::{force_scalar, vectors_in_use};
+pub(crate) use simd::{widest, widest_sums};
 pub use single::Convolver;
 
 use crate::control::Control;

@@ -602,7 +602,7 @@ impl Pupil {
             for e in edges {
                 let by_offset = &offsets.phases[edge_index];
                 edge_index += 1;
-                crate::convolve::widest(
+                crate::convolve::widest_sums(
                     #[inline(always)]
                     || {
                         add_edge(
@@ -693,7 +693,7 @@ impl Pupil {
                 *p = product(spot.weight, phase(1.0, nu, spot.centre));
             }
             let (by_small, by_large) = offsets.spot_phases.split_at(small.len());
-            crate::convolve::widest(
+            crate::convolve::widest_sums(
                 #[inline(always)]
                 || add_small_spots(&terms, by_small, &sample_q, centre_q, &mut sums),
             );
