@@ -136,7 +136,15 @@ fn point_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) 
         } else {
             let mut quarter = zeros((reach_x + 1) * (reach_y + 1))?;
             for_each_row(&mut quarter, reach_x + 1, control, |dy, row| {
+                let spans = shape.lit_spans(dy as f64);
                 for (dx, value) in row.iter_mut().enumerate() {
+                    let x = dx as f64;
+                    // Pixels outside the lit spans stay 0.
+                    if let Some(spans) = &spans {
+                        if !spans.iter().any(|&(a, b)| a <= x && x <= b) {
+                            continue;
+                        }
+                    }
                     *value = exact(dx, dy) as f32;
                 }
             })?;
@@ -619,6 +627,104 @@ mod tests {
         }
         fn lit_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
             self.0.lit_spans(y)
+        }
+    }
+
+    /// A shape as it is, but not said to be mirror symmetric: its whole
+    /// plane computed.
+    struct Unmirrored<'a>(&'a dyn SpreadShape);
+
+    impl SpreadShape for Unmirrored<'_> {
+        fn density(&self, x: f64, y: f64) -> f64 {
+            self.0.density(x, y)
+        }
+        fn whole(&self, window: &Window) -> Whole {
+            self.0.whole(window)
+        }
+        fn grid(&self, x: f64, y: f64) -> Supersampling {
+            self.0.grid(x, y)
+        }
+        fn spreads_centre(&self) -> bool {
+            self.0.spreads_centre()
+        }
+        fn sample(&self, x: f64, y: f64) -> Sample {
+            self.0.sample(x, y)
+        }
+        fn one_point_squared(&self) -> f64 {
+            self.0.one_point_squared()
+        }
+        fn sample_row(&self, x0: f64, y: f64, out: &mut [Sample]) {
+            self.0.sample_row(x0, y, out)
+        }
+        fn density_at(&self, xs: &[f64], ys: &[f64], out: &mut [f64]) {
+            self.0.density_at(xs, ys, out)
+        }
+        fn lit_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
+            self.0.lit_spans(y)
+        }
+    }
+
+    #[test]
+    fn a_corona_of_identical_rays_on_the_axes_is_computed_on_a_quarter() {
+        // Rays on the axes (turned by 0° or half a period), an even count,
+        // no jitter: mirrored. Any of those otherwise: not. The quarter is
+        // the whole plane's, diagonal rays (8 and 12 here) included: each
+        // is sampled along the same axis as its mirror images.
+        let corona = |extra: &str| {
+            let toml = format!(
+                "[[effect]]\ntype = \"corona\"\nepsilon = 0.1\nlength = \"30px\"\nwidth = \"2px\"\n{extra}"
+            );
+            let file = ConfigFile::parse(&toml, "test").unwrap();
+            let extent = Extent::new(121, 81).unwrap();
+            let context = Context {
+                camera: &CameraGeometry::default(),
+                pitch_mm: None,
+                seed: 1,
+                index_of_kind: 0,
+                kernel_size: (extent.width, extent.height),
+                sending: Sending::Pixel,
+            };
+            match file.effects[0].source(&context).unwrap() {
+                Source::Shape(_, shape) => shape,
+                _ => unreachable!("a corona is one shape"),
+            }
+        };
+        let still = "length_jitter = 0.0\n";
+        for (extra, mirrored) in [
+            (format!("{still}rays = 8\nspread = 0.5"), true),
+            (
+                format!("{still}rays = 12\nrotation_deg = 15.0\nspread = 1.0"),
+                true,
+            ),
+            (format!("{still}rays = 6\nspread = -1.0"), true),
+            (format!("{still}rays = 7"), false),
+            (format!("{still}rays = 8\nrotation_deg = 5.0"), false),
+            ("rays = 8\nlength_jitter = 0.25".to_string(), false),
+            (format!("{still}rays = 8\nwidth_jitter = 0.1"), false),
+        ] {
+            let shape = corona(&extra);
+            assert_eq!(shape.mirror_symmetric(), mirrored, "{extra}");
+            if !mirrored {
+                continue;
+            }
+            let cancel = Cancel::new();
+            let mut quiet = Control::quiet(&cancel);
+            for (w, h, sending) in [(121, 81, Sending::Pixel), (120, 81, Sending::Point)] {
+                let extent = Extent::new(w, h).unwrap().sent_by(sending);
+                let quarter = shape_plane(shape.as_ref(), &extent, 1.0, &mut quiet).unwrap();
+                let whole = Unmirrored(shape.as_ref());
+                let whole = shape_plane(&whole, &extent, 1.0, &mut quiet).unwrap();
+                let (quarter, whole) = (quarter.unwrap(), whole.unwrap());
+                let peak = whole.iter().fold(0.0f32, |m, v| m.max(*v));
+                for (k, (a, b)) in quarter.iter().zip(&whole).enumerate() {
+                    assert!(
+                        (a - b).abs() <= 1e-6 * b.abs() + 1e-12 * peak,
+                        "{extra}, {w}x{h}: pixel {} {}: {a} vs {b}",
+                        k % w,
+                        k / w
+                    );
+                }
+            }
         }
     }
 

@@ -271,7 +271,10 @@ impl Corona {
                     // Along the ray, l(r) changes by a factor e^(σ/l_m)
                     // per pixel.
                     along: ((6.5 * fade_per_px).ceil() as u32).clamp(1, 64),
-                    horizontal: libm::fabs(libm::cos(axis)) >= libm::fabs(libm::sin(axis)),
+                    // A diagonal ray counts as horizontal whichever way
+                    // its cosine and sine round, so that mirror images
+                    // are sampled alike.
+                    horizontal: libm::fabs(libm::cos(axis)) >= libm::fabs(libm::sin(axis)) - 1e-12,
                 }
             })
             .collect::<Vec<Ray>>();
@@ -530,6 +533,23 @@ impl CoronaShape {
 impl SpreadShape for CoronaShape {
     fn whole(&self, _window: &Window) -> Whole {
         Whole::Plane(self.plane())
+    }
+
+    /// An even count of identical rays (no jitter drew them apart), one of
+    /// them on a mirror axis of the frame (2φ₀ a whole number of periods
+    /// 2π/k, to 10⁻⁹ of one): the rays are then their own mirror images
+    /// across both axes.
+    fn mirror_symmetric(&self) -> bool {
+        let turns = 2.0 * self.rotation * self.k / TAU;
+        let same = |a: &Ray, b: &Ray| {
+            (a.fade_per_px, a.width, a.intensity) == (b.fade_per_px, b.width, b.intensity)
+        };
+        self.rays.len() % 2 == 0
+            && (turns - libm::round(turns)).abs() < 1e-9
+            && self
+                .rays
+                .first()
+                .is_some_and(|first| self.rays.iter().all(|ray| same(ray, first)))
     }
 
     fn lit_spans(&self, y: f64) -> Option<Vec<(f64, f64)>> {
