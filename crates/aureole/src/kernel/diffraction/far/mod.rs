@@ -28,6 +28,7 @@ use crate::optics::aperture::pupil::{sinc, EdgeTerm};
 use crate::optics::aperture::Optics;
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
+use std::sync::Arc;
 
 /// How far across its ray, in units of the longest wavelength's u, a pair
 /// of parallel edges is summed line by line in spectral light: beyond it
@@ -99,14 +100,21 @@ struct Edge {
     normal: [f64; 2],
     along: [f64; 2],
     l_over_f: f64,
-    /// The pixel means of its light across its ray, tabulated.
-    received: Received,
+    /// The pixel means of its light across its ray, tabulated (shared
+    /// with the edges whose pixels project alike).
+    received: Arc<Received>,
     /// Where its pairs are summed line by line: each line's own means
     /// near the ray, tabulated.
-    line_means: Vec<Received>,
+    line_means: Arc<Vec<Received>>,
     /// The equal, parallel edges after it, whose rays coincide with its
     /// own and interfere with it.
     pairs: Vec<Pair>,
+}
+
+/// The tables of means that edges whose pixels project alike share.
+struct Tables {
+    received: Arc<Received>,
+    line_means: Arc<Vec<Received>>,
 }
 
 /// Two equal, parallel straight edges as the first of them sees it.
@@ -202,33 +210,72 @@ impl FarField {
         let fringes = Fringes::new(&discs, &straight, &lines, f, pitch, sending, area);
         let table = Cumulative::new(&(0..planes).map(light).collect::<Vec<_>>());
         let longest = lines.iter().map(|l| l.lambda).fold(0.0, f64::max);
-        let edges = straight
-            .into_par_iter()
-            .zip(pairs)
-            .map(|(e, pairs)| {
+        // Edges whose pixels project alike across their rays (parallel
+        // edges, mirror images, a square's sides) have the same tables of
+        // means: each is built once.
+        let keys: Vec<[f64; 3]> = straight
+            .iter()
+            .map(|e| {
                 let k = e.length / f;
                 let (beta, gamma) = projections(e.along, k, pitch);
-                let within = reach * k;
+                [beta, gamma, reach * k]
+            })
+            .collect();
+        let alike = |a: &[f64; 3], b: &[f64; 3]| {
+            a.iter()
+                .zip(b)
+                .all(|(a, b)| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()))
+        };
+        let first_alike: Vec<usize> = (0..keys.len())
+            .map(|i| (0..i).find(|&j| alike(&keys[j], &keys[i])).unwrap_or(i))
+            .collect();
+        let near = PAIR_REACH * longest;
+        let tables: Vec<Option<Tables>> = (0..keys.len())
+            .into_par_iter()
+            .map(|i| {
+                if first_alike[i] != i {
+                    return None;
+                }
+                let [beta, gamma, within] = keys[i];
                 let received = Received::new(&table, (beta, gamma), sending, (table.end, within));
-                let near = PAIR_REACH * longest;
-                let line_means = if pairs.is_empty() {
-                    Vec::new()
-                } else {
+                // Each line's own means, where an edge of these tables
+                // has pairs.
+                let paired = (i..keys.len()).any(|j| first_alike[j] == i && !pairs[j].is_empty());
+                let line_means = if paired {
                     lines
                         .iter()
                         .filter_map(|line| line.table.as_ref())
                         .map(|own| Received::new(own, (beta, gamma), sending, (near, within)))
                         .collect()
+                } else {
+                    Vec::new()
                 };
-                Edge {
+                Some(Tables {
+                    received: Arc::new(received),
+                    line_means: Arc::new(line_means),
+                })
+            })
+            .collect();
+        let no_means = Arc::new(Vec::new());
+        let edges = straight
+            .into_iter()
+            .zip(pairs)
+            .enumerate()
+            .filter_map(|(i, (e, pairs))| {
+                let shared = tables[first_alike[i]].as_ref()?;
+                Some(Edge {
                     l2: e.length * e.length,
                     normal: e.normal,
                     along: e.along,
-                    l_over_f: k,
-                    received,
-                    line_means,
+                    l_over_f: e.length / f,
+                    received: Arc::clone(&shared.received),
+                    line_means: if pairs.is_empty() {
+                        Arc::clone(&no_means)
+                    } else {
+                        Arc::clone(&shared.line_means)
+                    },
                     pairs,
-                }
+                })
             })
             .collect();
         FarField {
