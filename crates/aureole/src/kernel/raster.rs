@@ -326,8 +326,11 @@ fn mirror(quarter: &[f32], span: usize, plane: &mut [f32], width: usize, centre:
         .for_each(|(j, row)| {
             let dy = j.abs_diff(cy);
             let source = &quarter[dy * span..(dy + 1) * span];
-            for (i, value) in row.iter_mut().enumerate() {
-                *value = source[i.abs_diff(cx)];
+            // Right of the centre a copy, left of it the same reversed.
+            let (left, right) = row.split_at_mut(cx);
+            right.copy_from_slice(&source[..right.len()]);
+            for (value, mirrored) in left.iter_mut().rev().zip(&source[1..]) {
+                *value = *mirrored;
             }
         });
 }
