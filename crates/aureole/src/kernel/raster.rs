@@ -137,15 +137,11 @@ fn point_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) 
             let mut quarter = zeros((reach_x + 1) * (reach_y + 1))?;
             for_each_row(&mut quarter, reach_x + 1, control, |dy, row| {
                 let spans = shape.lit_spans(dy as f64);
+                // Pixels outside the lit spans stay 0.
                 for (dx, value) in row.iter_mut().enumerate() {
-                    let x = dx as f64;
-                    // Pixels outside the lit spans stay 0.
-                    if let Some(spans) = &spans {
-                        if !spans.iter().any(|&(a, b)| a <= x && x <= b) {
-                            continue;
-                        }
+                    if lit(spans.as_deref(), dx as f64) {
+                        *value = exact(dx, dy) as f32;
                     }
-                    *value = exact(dx, dy) as f32;
                 }
             })?;
             quarter
@@ -176,15 +172,18 @@ fn point_plane(shape: &dyn SpreadShape, extent: &Extent, control: &mut Control) 
             let i = first + i;
             let x = i as f64 - cx as f64;
             // Pixels outside the lit spans stay 0.
-            if let Some(spans) = &spans {
-                if !spans.iter().any(|&(a, b)| a <= x && x <= b) {
-                    continue;
-                }
+            if lit(spans.as_deref(), x) {
+                *value = pixel_mean(shape, x, y, (i, j) == (cx, cy)) as f32;
             }
-            *value = pixel_mean(shape, x, y, (i, j) == (cx, cy)) as f32;
         }
     })?;
     Ok(Raster::Plane(plane))
+}
+
+/// Whether x lies in one of a row's lit spans ([`SpreadShape::lit_spans`];
+/// `None`: anywhere may be lit).
+fn lit(spans: Option<&[(f64, f64)]>, x: f64) -> bool {
+    spans.is_none_or(|s| s.iter().any(|&(a, b)| a <= x && x <= b))
 }
 
 /// Σ of a plane in f64: row sums in parallel, added in row order, so the
@@ -426,12 +425,7 @@ fn rasterise_bands(
                     .enumerate()
                     .for_each(|(p, piece)| {
                         let start = x0 + (range.start + p * PIECE) as f64;
-                        let lit = |m: usize| {
-                            let x = start + m as f64;
-                            spans
-                                .as_ref()
-                                .is_none_or(|s| s.iter().any(|&(a, b)| a <= x && x <= b))
-                        };
+                        let lit = |m: usize| lit(spans.as_deref(), start + m as f64);
                         let mut samples = [Sample::Dark; PIECE];
                         // Runs of lit squares, sampled a run at a time.
                         let mut m = 0;
@@ -637,6 +631,20 @@ mod tests {
         }
     }
 
+    /// `shape`'s plane over `extent` as the rasteriser computes it, and
+    /// as it computes the [`Plain`] shape (`mirrored` as given).
+    fn against_plain(
+        shape: &dyn SpreadShape,
+        extent: &Extent,
+        mirrored: bool,
+        control: &mut Control,
+    ) -> (Vec<f32>, Vec<f32>) {
+        let plain = Plain { shape, mirrored };
+        let as_is = shape_plane(shape, extent, 1.0, control).unwrap().unwrap();
+        let plain = shape_plane(&plain, extent, 1.0, control).unwrap().unwrap();
+        (as_is, plain)
+    }
+
     #[test]
     fn a_corona_of_identical_rays_on_the_axes_is_computed_on_a_quarter() {
         // Rays on the axes (turned by 0° or half a period), an even count,
@@ -684,13 +692,7 @@ mod tests {
             let mut quiet = Control::quiet(&cancel);
             for (w, h, sending) in [(121, 81, Sending::Pixel), (120, 81, Sending::Point)] {
                 let extent = Extent::new(w, h).unwrap().sent_by(sending);
-                let quarter = shape_plane(shape.as_ref(), &extent, 1.0, &mut quiet).unwrap();
-                let whole = Plain {
-                    shape: shape.as_ref(),
-                    mirrored: false,
-                };
-                let whole = shape_plane(&whole, &extent, 1.0, &mut quiet).unwrap();
-                let (quarter, whole) = (quarter.unwrap(), whole.unwrap());
+                let (quarter, whole) = against_plain(shape.as_ref(), &extent, false, &mut quiet);
                 let peak = whole.iter().fold(0.0f32, |m, v| m.max(*v));
                 for (k, (a, b)) in quarter.iter().zip(&whole).enumerate() {
                     assert!(
@@ -795,13 +797,7 @@ mod tests {
                 };
                 for shape in &shapes {
                     assert!(shape.radial());
-                    let tables = shape_plane(shape.as_ref(), &extent, 1.0, &mut quiet).unwrap();
-                    let each = Plain {
-                        shape: shape.as_ref(),
-                        mirrored: true,
-                    };
-                    let exact = shape_plane(&each, &extent, 1.0, &mut quiet).unwrap();
-                    let (tables, exact) = (tables.unwrap(), exact.unwrap());
+                    let (tables, exact) = against_plain(shape.as_ref(), &extent, true, &mut quiet);
                     let (mut differ, mut worst) = (0, 0.0f64);
                     for (t, e) in tables.iter().zip(&exact) {
                         if t != e {

@@ -111,10 +111,7 @@ impl Element {
                 // piece's fan swaps its two sides.
                 let same_fan = |a: Option<[f64; 2]>, b: Option<[f64; 2]>| match (a, b) {
                     (None, None) => true,
-                    (Some(a), Some(b)) => {
-                        (near(a[0], b[1]) && near(a[1], b[0]))
-                            || (near(a[0], b[0]) && near(a[1], b[1]))
-                    }
+                    (Some(a), Some(b)) => near(a[0], b[1]) && near(a[1], b[0]),
                     _ => false,
                 };
                 edges.len() == theirs.len()

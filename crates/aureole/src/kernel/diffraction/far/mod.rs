@@ -226,21 +226,28 @@ impl FarField {
                 .zip(b)
                 .all(|(a, b)| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()))
         };
-        let first_alike: Vec<usize> = (0..keys.len())
-            .map(|i| (0..i).find(|&j| alike(&keys[j], &keys[i])).unwrap_or(i))
+        // Each edge's set of alike edges, numbered in order of first edge.
+        let mut firsts: Vec<usize> = Vec::new();
+        let set: Vec<usize> = (0..keys.len())
+            .map(|i| {
+                firsts
+                    .iter()
+                    .position(|&j| alike(&keys[j], &keys[i]))
+                    .unwrap_or_else(|| {
+                        firsts.push(i);
+                        firsts.len() - 1
+                    })
+            })
             .collect();
         let near = PAIR_REACH * longest;
-        let tables: Vec<Option<Tables>> = (0..keys.len())
-            .into_par_iter()
-            .map(|i| {
-                if first_alike[i] != i {
-                    return None;
-                }
+        let tables: Vec<Tables> = firsts
+            .par_iter()
+            .enumerate()
+            .map(|(n, &i)| {
                 let [beta, gamma, within] = keys[i];
                 let received = Received::new(&table, (beta, gamma), sending, (table.end, within));
-                // Each line's own means, where an edge of these tables
-                // has pairs.
-                let paired = (i..keys.len()).any(|j| first_alike[j] == i && !pairs[j].is_empty());
+                // Each line's own means, where an edge of the set has pairs.
+                let paired = (0..keys.len()).any(|j| set[j] == n && !pairs[j].is_empty());
                 let line_means = if paired {
                     lines
                         .iter()
@@ -250,32 +257,29 @@ impl FarField {
                 } else {
                     Vec::new()
                 };
-                Some(Tables {
+                Tables {
                     received: Arc::new(received),
                     line_means: Arc::new(line_means),
-                })
+                }
             })
             .collect();
         let no_means = Arc::new(Vec::new());
         let edges = straight
             .into_iter()
             .zip(pairs)
-            .enumerate()
-            .filter_map(|(i, (e, pairs))| {
-                let shared = tables[first_alike[i]].as_ref()?;
-                Some(Edge {
-                    l2: e.length * e.length,
-                    normal: e.normal,
-                    along: e.along,
-                    l_over_f: e.length / f,
-                    received: Arc::clone(&shared.received),
-                    line_means: if pairs.is_empty() {
-                        Arc::clone(&no_means)
-                    } else {
-                        Arc::clone(&shared.line_means)
-                    },
-                    pairs,
-                })
+            .zip(set)
+            .map(|((e, pairs), n)| Edge {
+                l2: e.length * e.length,
+                normal: e.normal,
+                along: e.along,
+                l_over_f: e.length / f,
+                received: Arc::clone(&tables[n].received),
+                line_means: if pairs.is_empty() {
+                    Arc::clone(&no_means)
+                } else {
+                    Arc::clone(&tables[n].line_means)
+                },
+                pairs,
             })
             .collect();
         FarField {
