@@ -8,6 +8,7 @@
 //! whole from [`diffraction`], in the same shares. The effects of a chain
 //! compose by convolution ([`split`]).
 
+mod coarse;
 pub mod diffraction;
 pub mod profile;
 mod radial;

@@ -5,6 +5,7 @@
 
 use rayon::prelude::*;
 
+use super::coarse::Coarse;
 use super::raster::shape_plane;
 use super::{Extent, Kernel};
 use crate::control::Control;
@@ -24,6 +25,10 @@ struct Layer {
     /// f32 like the kernel it becomes: half the memory of f64 while a 4K
     /// chain is built, and sums over it run in f64.
     spread: Vec<f32>,
+    /// Whether the spread is a shape of the distance from the centre alone
+    /// (a composition of such shapes too): one such may compose coarsely
+    /// far from the centre ([`Coarse`]).
+    radial: bool,
 }
 
 impl SplitKernel {
@@ -43,11 +48,13 @@ impl SplitKernel {
             Some(spread) => Layer {
                 centre: 1.0 - epsilon,
                 spread,
+                radial: shape.radial(),
             },
             // Nothing spread: all light stays.
             None => Layer {
                 centre: 1.0,
                 spread: zeros(extent.width * extent.height)?,
+                radial: true,
             },
         };
         Ok(SplitKernel {
@@ -85,6 +92,7 @@ impl SplitKernel {
                 .map(|plane| Layer {
                     centre: 0.0,
                     spread: plane.par_iter().map(|&v| v as f32).collect(),
+                    radial: false,
                 })
                 .collect(),
         }
@@ -93,46 +101,40 @@ impl SplitKernel {
     /// This PSF followed by `next` in the optical chain: their convolution.
     /// (a δ + S) ⊛ (b δ + T) = ab δ + a T + b S + S ⊛ T over the extent,
     /// whose light beyond it leaves, like any spread light. A plane of a
-    /// one-plane PSF pairs with every plane of the other.
+    /// one-plane PSF pairs with every plane of the other. This PSF's
+    /// spread planes become the result's where they can.
     pub fn then(
-        &self,
+        self,
         next: &SplitKernel,
         composing: &mut Composing,
         control: &mut Control,
     ) -> Result<SplitKernel> {
         let count = self.planes.len().max(next.planes.len());
+        let extent = self.extent;
+        let mut own = self.planes;
+        let shared = own.len() < count;
         let mut planes = Vec::with_capacity(count);
-        for c in 0..count {
-            let a = &self.planes[c.min(self.planes.len() - 1)];
+        for c in (0..count).rev() {
+            // A one-plane PSF's plane is copied for every plane of `next`
+            // but the first.
+            let a = if !shared || c == 0 {
+                own.pop()
+            } else {
+                own.last().map(|a| Layer {
+                    spread: a.spread.clone(),
+                    ..*a
+                })
+            };
+            let Some(a) = a else {
+                break;
+            };
             let b = &next.planes[c.min(next.planes.len() - 1)];
-            let lit = |plane: &[f32]| plane.par_iter().any(|&v| v > 0.0);
-            let lit = lit(&a.spread) && lit(&b.spread);
             let share = 1.0 / count as f64;
             let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
-            let mut twice = if lit {
-                compose(&a.spread, &b.spread, &self.extent, composing, &mut part)?
-            } else {
-                zeros(a.spread.len())?
-            };
-            // FFT round-off leaves tiny negatives where the true value is
-            // ~0; light is never negative.
-            twice
-                .par_iter_mut()
-                .zip(&a.spread)
-                .zip(&b.spread)
-                .for_each(|((v, &s), &t)| {
-                    *v = (a.centre * f64::from(t) + b.centre * f64::from(s) + f64::from(v.max(0.0)))
-                        as f32;
-                });
-            planes.push(Layer {
-                centre: a.centre * b.centre,
-                spread: twice,
-            });
+            planes.push(compose_layers(a, b, &extent, composing, &mut part)?);
         }
-        Ok(SplitKernel {
-            extent: self.extent,
-            planes,
-        })
+        planes.reverse();
+        Ok(SplitKernel { extent, planes })
     }
 
     /// The kernel: each plane's spread part with its centre weight added.
@@ -155,6 +157,76 @@ impl SplitKernel {
             planes,
         }
     }
+}
+
+/// One layer followed by another: (a δ + P) ⊛ (b δ + Q), P ⊛ Q computed
+/// coarsely far from the centre where one of them is radial and smooth
+/// enough there ([`Coarse`]), else exactly; the result in P's memory.
+fn compose_layers(
+    mut a: Layer,
+    b: &Layer,
+    extent: &Extent,
+    composing: &mut Composing,
+    control: &mut Control,
+) -> Result<Layer> {
+    let lit = |plane: &[f32]| plane.par_iter().any(|&v| v > 0.0);
+    let radial = a.radial && b.radial;
+    let weights = (b.centre, a.centre);
+    let centre = a.centre * b.centre;
+    if !(lit(&a.spread) && lit(&b.spread)) {
+        a.spread
+            .par_iter_mut()
+            .zip(&b.spread)
+            .for_each(|(p, &q)| *p = combined(weights, *p, q, 0.0));
+        return Ok(Layer {
+            centre,
+            radial,
+            spread: a.spread,
+        });
+    }
+    if a.radial || b.radial {
+        let (s, t) = if a.radial {
+            (&a.spread, &b.spread)
+        } else {
+            (&b.spread, &a.spread)
+        };
+        let t_reach = reach(t, extent);
+        if let Some(coarse) = Coarse::plan(s, t_reach, extent) {
+            let s_is_p = a.radial;
+            coarse.compose_into(
+                (&mut a.spread, &b.spread, s_is_p),
+                t_reach,
+                weights,
+                extent,
+                composing,
+                control,
+            )?;
+            return Ok(Layer {
+                centre,
+                radial,
+                spread: a.spread,
+            });
+        }
+    }
+    let mut twice = compose(&a.spread, &b.spread, extent, composing, control)?;
+    twice
+        .par_iter_mut()
+        .zip(&a.spread)
+        .zip(&b.spread)
+        .for_each(|((v, &p), &q)| *v = combined(weights, p, q, f64::from(*v)));
+    Ok(Layer {
+        centre,
+        radial,
+        spread: twice,
+    })
+}
+
+/// A composed spread's value from P, Q and P ⊛ Q there: `weights` are
+/// those of P and Q (each the other's centre weight). FFT round-off
+/// leaves tiny negatives in P ⊛ Q where the true value is ~0; light is
+/// never negative.
+pub(super) fn combined((wp, wq): (f64, f64), p: f32, q: f32, twice: f64) -> f32 {
+    (wp * f64::from(p) + wq * f64::from(q) + twice.max(0.0)) as f32
 }
 
 /// S ⊛ T over the extent, both centred: the linear convolution in f32, zero
@@ -203,7 +275,7 @@ fn compose(
 
 /// How far from the centre a plane of the extent holds light, columns and
 /// rows (0, 0 for none or the centre alone).
-fn reach(plane: &[f32], extent: &Extent) -> (usize, usize) {
+pub(super) fn reach(plane: &[f32], extent: &Extent) -> (usize, usize) {
     let (cx, cy) = extent.centre();
     plane
         .par_chunks(extent.width)
