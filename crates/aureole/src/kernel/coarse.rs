@@ -154,22 +154,14 @@ impl Coarse {
         let w = extent.width;
         let (cx, cy) = extent.centre();
         let (s, t) = if s_is_p { (&*p, q) } else { (q, &*p) };
-        let nodes = self.far_composed(
+        let pair = Pair {
             s,
             t,
             t_reach,
             extent,
-            composing,
-            &mut control.part(0.0, 0.3),
-        )?;
-        let near = self.near_composed(
-            s,
-            t,
-            t_reach,
-            extent,
-            composing,
-            &mut control.part(0.3, 0.9),
-        )?;
+        };
+        let nodes = self.far_composed(&pair, composing, &mut control.part(0.0, 0.3))?;
+        let near = self.near_composed(&pair, composing, &mut control.part(0.3, 0.9))?;
         control.check()?;
         let step = self.step as i64;
         let (mx, my) = (nodes.x_reach as i64, nodes.y_reach as i64);
@@ -225,17 +217,20 @@ impl Coarse {
     /// sum of reaches: exact, as [`super::split`]'s composition is.
     fn near_composed(
         &self,
-        s: &[f32],
-        t: &[f32],
-        (tx, ty): (usize, usize),
-        extent: &Extent,
+        pair: &Pair,
         composing: &mut Composing,
         control: &mut Control,
     ) -> Result<Boxed> {
+        let Pair {
+            s,
+            t,
+            t_reach: (tx, ty),
+            extent,
+        } = *pair;
         let (w, h) = (extent.width, extent.height);
         let (cx, cy) = extent.centre();
-        // Within the extent on every side: `near` is a quarter of the
-        // shortest side's reach.
+        // Within the extent on every side: `near` is at most a quarter of
+        // the shortest side's reach.
         let k = 2 * self.near;
         let side = 2 * k + 1;
         let mut part = vec![0.0f32; side * side];
@@ -275,16 +270,14 @@ impl Coarse {
     /// a grid that covers the extent.
     fn far_composed(
         &self,
-        s: &[f32],
-        t: &[f32],
-        (tx, ty): (usize, usize),
-        extent: &Extent,
+        pair: &Pair,
         composing: &mut Composing,
         control: &mut Control,
     ) -> Result<Nodes> {
-        let (w, h) = (extent.width, extent.height);
-        let (cx, cy) = extent.centre();
         let step = self.step;
+        let (s, t, extent) = (pair.s, pair.t, pair.extent);
+        let ((w, h), (cx, cy)) = ((extent.width, extent.height), extent.centre());
+        let (tx, ty) = pair.t_reach;
         // The nodes cover a pixel beyond the extent's farthest side, so
         // that every pixel lies between nodes; S's are 0 beyond the extent.
         let (mx, my) = (
@@ -358,6 +351,16 @@ impl Coarse {
             y_reach: my,
         })
     }
+}
+
+/// The planes composed: S, the radial one, and T, whose light lies
+/// within `t_reach` (columns, rows) of the centre of `extent`.
+#[derive(Clone, Copy)]
+struct Pair<'a> {
+    s: &'a [f32],
+    t: &'a [f32],
+    t_reach: (usize, usize),
+    extent: &'a Extent,
 }
 
 /// S ⊛ T at the nodes, `x_reach` and `y_reach` nodes either side of the
