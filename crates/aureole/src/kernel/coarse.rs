@@ -309,29 +309,38 @@ impl Coarse {
         let (tw, th) = (2 * ux + 1, 2 * uy + 1);
         let (left, right) = (cx - tx.min(cx), cx + tx.min(w - 1 - cx));
         let (top, bottom) = (cy - ty.min(cy), cy + ty.min(h - 1 - cy));
+        // Per column: the node left of it and the share of the node right
+        // of it.
+        let columns: Vec<(usize, f64)> = (left..=right)
+            .map(|x| {
+                let dx = x as i64 - cx as i64;
+                let x0 = dx.div_euclid(step as i64);
+                (
+                    (x0 + ux as i64) as usize,
+                    (dx - x0 * step as i64) as f64 / step as f64,
+                )
+            })
+            .collect();
         let mut spread = zeros(tw * th)?;
         for_each_row(&mut spread, tw, &mut control.part(0.0, 0.5), |j, row| {
-            // Pixel rows within a step of this row of nodes.
+            // The pixel rows within a step of this row of nodes, summed by
+            // their shares of it, then each column shared by its nodes.
             let centre = cy as i64 + (j as i64 - uy as i64) * step as i64;
-            let mut sums = vec![0.0f64; tw];
+            let mut line = vec![0.0f64; columns.len()];
             let first = (centre - step as i64 + 1).max(top as i64);
             let last = (centre + step as i64 - 1).min(bottom as i64);
             for y in first..=last {
                 let wy = 1.0 - (y - centre).unsigned_abs() as f64 / step as f64;
-                for x in left..=right {
-                    let v = f64::from(t[y as usize * w + x]);
-                    if v == 0.0 {
-                        continue;
-                    }
-                    let dx = x as i64 - cx as i64;
-                    let x0 = dx.div_euclid(step as i64);
-                    let fx = (dx - x0 * step as i64) as f64 / step as f64;
-                    let i = (x0 + ux as i64) as usize;
-                    sums[i] += v * wy * (1.0 - fx);
-                    if fx > 0.0 {
-                        sums[i + 1] += v * wy * fx;
-                    }
+                let pixels = &t[y as usize * w + left..=y as usize * w + right];
+                for (sum, &v) in line.iter_mut().zip(pixels) {
+                    *sum += wy * f64::from(v);
                 }
+            }
+            // A node past the last, which only a share of 0 reaches.
+            let mut sums = vec![0.0f64; tw + 1];
+            for (&v, &(i, fx)) in line.iter().zip(&columns) {
+                sums[i] += v * (1.0 - fx);
+                sums[i + 1] += v * fx;
             }
             for (value, sum) in row.iter_mut().zip(sums) {
                 *value = sum as f32;
