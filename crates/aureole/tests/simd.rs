@@ -2,8 +2,8 @@
 //! builds every diffraction kernel's near field) with AVX2 (AVX-512 for
 //! the latter where the CPU has it) and their scalar twin give the same
 //! bits (RustFFT keeps and tests its scalar twin the same way): the same
-//! IEEE operations in the same order, whatever the vector width. In a test binary of its own, since the switch holds for
-//! the whole process.
+//! IEEE operations in the same order, whatever the vector width. In a
+//! test binary of its own, since the switch holds for the whole process.
 
 use aureole::config::ConfigFile;
 use aureole::convolve::{force_scalar, vectors_in_use};

@@ -10,7 +10,7 @@ use std::f64::consts::FRAC_PI_2;
 
 use rayon::prelude::*;
 
-use super::split::combined;
+use super::split::{combined, reach};
 use super::Extent;
 use crate::control::{for_each_row, Control};
 use crate::convolve::pool::Scratch;
@@ -42,15 +42,16 @@ pub(super) struct Coarse {
 }
 
 impl Coarse {
-    /// How to compose the radial plane `s` coarsely with a plane whose
-    /// light reaches `t_reach` (columns, rows) from the centre, or `None`
-    /// where the kernel is small or S's far part is too curved for every
-    /// step: a ring, a core wider than the taper.
-    pub fn plan(s: &[f32], t_reach: (usize, usize), extent: &Extent) -> Option<Coarse> {
+    /// How to compose the radial plane `s` coarsely with `t`, and how far
+    /// from the centre t's light reaches (columns, rows); `None` where the
+    /// kernel is small or S's far part is too curved for every step: a
+    /// ring, a core wider than the taper.
+    pub fn plan(s: &[f32], t: &[f32], extent: &Extent) -> Option<(Coarse, (usize, usize))> {
         if extent.width * extent.height < LEAST_PIXELS {
             return None;
         }
-        Coarse::fitting(s, t_reach, extent)
+        let t_reach = reach(t, extent);
+        Coarse::fitting(s, t_reach, extent).map(|coarse| (coarse, t_reach))
     }
 
     /// [`Coarse::plan`] at any size: of the tapers at 1/16, 1/8 and 1/4 of
@@ -101,6 +102,14 @@ impl Coarse {
         }
     }
 
+    /// The node at or before offset `d` (px) from the centre, counted in
+    /// steps, and the share of the node after it: where `d` lies between.
+    fn cell(&self, d: i64) -> (i64, f64) {
+        let step = self.step as i64;
+        let node = d.div_euclid(step);
+        (node, (d - node * step) as f64 / step as f64)
+    }
+
     /// Whether the far part of `s` interpolates bilinearly from its nodes
     /// within [`TOLERANCE`] of S, checked on the rows through the centre
     /// and half a step from it, the column through it and the diagonal:
@@ -118,14 +127,11 @@ impl Coarse {
         let right = (w as i64 - 1 - cx) / step * step;
         let below = (h as i64 - 1 - cy) / step * step;
         let fits = |dx: i64, dy: i64| {
-            let (x0, y0) = (dx.div_euclid(step) * step, dy.div_euclid(step) * step);
+            let ((x0, fx), (y0, fy)) = (self.cell(dx), self.cell(dy));
+            let (x0, y0) = (x0 * step, y0 * step);
             if x0 + step > right || y0 + step > below {
                 return true;
             }
-            let (fx, fy) = (
-                (dx - x0) as f64 / step as f64,
-                (dy - y0) as f64 / step as f64,
-            );
             let between = (1.0 - fy) * ((1.0 - fx) * far(x0, y0) + fx * far(x0 + step, y0))
                 + fy * ((1.0 - fx) * far(x0, y0 + step) + fx * far(x0 + step, y0 + step));
             (far(dx, dy) - between).abs() <= TOLERANCE * value(dx, dy)
@@ -163,31 +169,28 @@ impl Coarse {
         let nodes = self.far_composed(&pair, composing, &mut control.part(0.0, 0.3))?;
         let near = self.near_composed(&pair, composing, &mut control.part(0.3, 0.9))?;
         control.check()?;
-        let step = self.step as i64;
         let (mx, my) = (nodes.x_reach as i64, nodes.y_reach as i64);
         let span = nodes.x_reach * 2 + 1;
         // Per column: the node left of it (an index into a row of nodes)
         // and the share of the node right of it.
         let columns: Vec<(usize, f64)> = (0..w as i64)
             .map(|x| {
-                let dx = x - cx as i64;
-                let x0 = dx.div_euclid(step);
-                ((x0 + mx) as usize, (dx - x0 * step) as f64 / step as f64)
+                let (node, share) = self.cell(x - cx as i64);
+                ((node + mx) as usize, share)
             })
             .collect();
-        let mixes = Scratch::<Vec<f64>>::default();
+        let rows = Scratch::<(Vec<f64>, Vec<f64>)>::default();
         for_each_row(p, w, &mut control.part(0.9, 1.0), |y, row| {
-            let dy = y as i64 - cy as i64;
-            let y0 = dy.div_euclid(step);
-            let fy = (dy - y0 * step) as f64 / step as f64;
-            let upper = &nodes.values[(y0 + my) as usize * span..][..span];
+            let (node, fy) = self.cell(y as i64 - cy as i64);
+            let upper = &nodes.values[(node + my) as usize * span..][..span];
+            let mut lent = rows.lend(Default::default);
+            let (mixed, twice) = &mut *lent;
             // The row of nodes interpolated to this row first: a pixel on a
             // row of nodes takes nothing from the next row, which past the
             // last row does not exist.
-            let mut mixed = mixes.lend(Vec::new);
             mixed.clear();
             if fy > 0.0 {
-                let lower = &nodes.values[(y0 + my + 1) as usize * span..][..span];
+                let lower = &nodes.values[(node + my + 1) as usize * span..][..span];
                 mixed.extend(
                     upper
                         .iter()
@@ -200,13 +203,19 @@ impl Coarse {
             // A last node right of the last column, so that every pixel
             // reads two.
             mixed.push(0.0);
-            let line = near.row(y);
-            let q = &q[y * w..(y + 1) * w];
-            for (x, ((value, &(i, fx)), &q)) in row.iter_mut().zip(&columns).zip(q).enumerate() {
-                let mut twice = (1.0 - fx) * mixed[i] + fx * mixed[i + 1];
-                if let Some(n) = line.and_then(|line| line.get(x.wrapping_sub(near.left))) {
-                    twice += f64::from(*n);
+            twice.clear();
+            twice.extend(
+                columns
+                    .iter()
+                    .map(|&(i, fx)| (1.0 - fx) * mixed[i] + fx * mixed[i + 1]),
+            );
+            if let Some(line) = near.row(y) {
+                for (value, &n) in twice[near.left..].iter_mut().zip(line) {
+                    *value += f64::from(n);
                 }
+            }
+            let q = &q[y * w..(y + 1) * w];
+            for ((value, &q), &twice) in row.iter_mut().zip(q).zip(twice.iter()) {
                 *value = combined(weights, *value, q, twice);
             }
         })?;
@@ -313,12 +322,8 @@ impl Coarse {
         // of it.
         let columns: Vec<(usize, f64)> = (left..=right)
             .map(|x| {
-                let dx = x as i64 - cx as i64;
-                let x0 = dx.div_euclid(step as i64);
-                (
-                    (x0 + ux as i64) as usize,
-                    (dx - x0 * step as i64) as f64 / step as f64,
-                )
+                let (node, share) = self.cell(x as i64 - cx as i64);
+                ((node + ux as i64) as usize, share)
             })
             .collect();
         let mut spread = zeros(tw * th)?;
@@ -456,7 +461,7 @@ mod tests {
         let s = plane(&extent, s);
         let cancel = Cancel::new();
         for t in [plane(&extent, short), plane(&extent, long)] {
-            let t_reach = super::super::split::reach(&t, &extent);
+            let t_reach = reach(&t, &extent);
             let coarse = Coarse::fitting(&s, t_reach, &extent).unwrap();
             assert!(coarse.step > 1, "{coarse:?}");
             let mut p = s.clone();
@@ -517,9 +522,7 @@ mod tests {
             None
         );
         // A small kernel is composed exactly whatever its shape.
-        assert_eq!(
-            Coarse::plan(&plane(&extent, moffat), (10, 10), &extent),
-            None
-        );
+        let bloom = plane(&extent, moffat);
+        assert_eq!(Coarse::plan(&bloom, &bloom, &extent), None);
     }
 }

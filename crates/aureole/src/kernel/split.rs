@@ -112,28 +112,25 @@ impl SplitKernel {
         let count = self.planes.len().max(next.planes.len());
         let extent = self.extent;
         let mut own = self.planes;
-        let shared = own.len() < count;
-        let mut planes = Vec::with_capacity(count);
-        for c in (0..count).rev() {
-            // A one-plane PSF's plane is copied for every plane of `next`
-            // but the first.
-            let a = if !shared || c == 0 {
-                own.pop()
-            } else {
-                own.last().map(|a| Layer {
-                    spread: a.spread.clone(),
-                    ..*a
-                })
+        // A one-plane PSF's plane pairs with every plane of `next`: copies
+        // for all but the last.
+        while let Some(last) = own.last().filter(|_| own.len() < count) {
+            let copy = Layer {
+                spread: last.spread.clone(),
+                ..*last
             };
-            let Some(a) = a else {
-                break;
-            };
-            let b = &next.planes[c.min(next.planes.len() - 1)];
-            let share = 1.0 / count as f64;
-            let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
-            planes.push(compose_layers(a, b, &extent, composing, &mut part)?);
+            own.push(copy);
         }
-        planes.reverse();
+        let share = 1.0 / count as f64;
+        let planes = own
+            .into_iter()
+            .enumerate()
+            .map(|(c, a)| {
+                let b = &next.planes[c.min(next.planes.len() - 1)];
+                let mut part = control.part(c as f64 * share, (c + 1) as f64 * share);
+                compose_layers(a, b, &extent, composing, &mut part)
+            })
+            .collect::<Result<_>>()?;
         Ok(SplitKernel { extent, planes })
     }
 
@@ -170,19 +167,18 @@ fn compose_layers(
     control: &mut Control,
 ) -> Result<Layer> {
     let lit = |plane: &[f32]| plane.par_iter().any(|&v| v > 0.0);
-    let radial = a.radial && b.radial;
     let weights = (b.centre, a.centre);
-    let centre = a.centre * b.centre;
+    let layer = |spread| Layer {
+        centre: a.centre * b.centre,
+        radial: a.radial && b.radial,
+        spread,
+    };
     if !(lit(&a.spread) && lit(&b.spread)) {
         a.spread
             .par_iter_mut()
             .zip(&b.spread)
             .for_each(|(p, &q)| *p = combined(weights, *p, q, 0.0));
-        return Ok(Layer {
-            centre,
-            radial,
-            spread: a.spread,
-        });
+        return Ok(layer(a.spread));
     }
     if a.radial || b.radial {
         let (s, t) = if a.radial {
@@ -190,22 +186,16 @@ fn compose_layers(
         } else {
             (&b.spread, &a.spread)
         };
-        let t_reach = reach(t, extent);
-        if let Some(coarse) = Coarse::plan(s, t_reach, extent) {
-            let s_is_p = a.radial;
+        if let Some((coarse, t_reach)) = Coarse::plan(s, t, extent) {
             coarse.compose_into(
-                (&mut a.spread, &b.spread, s_is_p),
+                (&mut a.spread, &b.spread, a.radial),
                 t_reach,
                 weights,
                 extent,
                 composing,
                 control,
             )?;
-            return Ok(Layer {
-                centre,
-                radial,
-                spread: a.spread,
-            });
+            return Ok(layer(a.spread));
         }
     }
     let mut twice = compose(&a.spread, &b.spread, extent, composing, control)?;
@@ -214,11 +204,7 @@ fn compose_layers(
         .zip(&a.spread)
         .zip(&b.spread)
         .for_each(|((v, &p), &q)| *v = combined(weights, p, q, f64::from(*v)));
-    Ok(Layer {
-        centre,
-        radial,
-        spread: twice,
-    })
+    Ok(layer(twice))
 }
 
 /// A composed spread's value from P, Q and P ⊛ Q there: `weights` are
