@@ -35,6 +35,7 @@ impl From<aureole_io::Error> for Failure {
             | E::OverwritesInput { .. }
             | E::Output { .. }
             | E::Refused { .. }
+            | E::Lens(_)
             | E::Options(_) => Failure::Usage(error.into()),
         }
     }

@@ -28,6 +28,7 @@ mod failure;
 mod info;
 mod input;
 mod interrupt;
+mod lens;
 mod output;
 mod presets;
 mod progress;
@@ -68,6 +69,8 @@ enum Command {
     Demo(demo::Args),
     /// Describe an image: size, channels, luminance range, bright pixels.
     Info(info::Args),
+    /// Describe a lens prescription (aureole's TOML, pbrt's .dat, lentil's JSON): focal length, back focus, pupil, surfaces; -o writes it as TOML.
+    Lens(lens::Args),
     /// Write the camera's PSF as a convolution kernel (PFM, EXR or a PNG picture).
     Psf(psf::Args),
     /// List the built-in presets, or print one as TOML to start a config from.
@@ -121,6 +124,7 @@ fn main() -> ExitCode {
         Command::Apply(args) => apply::run(args, sub("apply"), cli.quiet),
         Command::Demo(args) => demo::run(args, sub("demo"), cli.quiet),
         Command::Info(args) => info::run(args, cli.quiet),
+        Command::Lens(args) => lens::run(args, cli.quiet),
         Command::Psf(args) => psf::run(args, sub("psf"), cli.quiet),
         Command::Presets(args) => presets::run(args),
         Command::Studio(args) => studio::run(args, cli.quiet),

@@ -83,6 +83,11 @@ pub enum Error {
     #[error("{0}")]
     Options(aureole::Error),
 
+    /// A lens file the library refused, in its words (which name the file,
+    /// the line and the surface).
+    #[error("{0}")]
+    Lens(aureole::Error),
+
     /// What a file holds is refused by the library (a kernel file whose
     /// weights are negative, say).
     #[error("{path}: {error}")]

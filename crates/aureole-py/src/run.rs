@@ -120,6 +120,7 @@ pub fn file_error(error: aureole_io::Error) -> PyErr {
         | E::OverwritesInput { .. }
         | E::Content { .. }
         | E::Refused { .. }
+        | E::Lens(_)
         | E::Options(_) => PyValueError::new_err(message),
     }
 }

@@ -58,6 +58,16 @@ pub enum Error {
         incomplete_effect: Option<String>,
     },
 
+    /// A lens prescription that cannot be a camera lens, or a surface of
+    /// it that breaks the schema.
+    #[error("lens {name:?}: {message}")]
+    Lens {
+        /// The lens's name, or its file.
+        name: String,
+        /// What is wrong and what is allowed.
+        message: String,
+    },
+
     /// A preset name that is not built in.
     #[error("unknown preset {name:?}{}; the presets are: {available}", suggestion.map(|s| format!(" (did you mean {s:?}?)")).unwrap_or_default())]
     UnknownPreset {

@@ -78,6 +78,7 @@ pub mod convolve;
 pub mod error;
 pub mod image;
 pub mod kernel;
+pub mod lens;
 mod math;
 pub mod memory;
 pub mod optics;
