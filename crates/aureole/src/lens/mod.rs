@@ -29,8 +29,10 @@
 //! # Ok::<(), aureole::Error>(())
 //! ```
 
+pub mod coating;
 pub mod paraxial;
 mod parse;
+pub mod trace;
 
 pub use paraxial::Paraxial;
 

@@ -1,0 +1,134 @@
+//! How much light a surface reflects: Fresnel's equations for bare glass,
+//! and for a coated surface the thin-film stack's characteristic matrices
+//! (Abelès), for s and p light at the angle of incidence, averaged for
+//! unpolarised light (docs/physics.md §12). The layers and media are
+//! lossless, so what is not reflected is transmitted.
+
+use std::f64::consts::PI;
+
+use rustfft::num_complex::Complex64;
+
+use super::Layer;
+
+/// The reflectance, for unpolarised light of wavelength `nm`, of the
+/// interface from a medium of index `n_in` into one of `n_out` through
+/// `layers` (listed from the incidence side inwards), where the ray meets
+/// it at `cos_in`, the cosine of its angle from the normal in `n_in`.
+pub fn reflectance(n_in: f64, n_out: f64, layers: &[Layer], cos_in: f64, nm: f64) -> f64 {
+    let sin2 = (1.0 - cos_in * cos_in).max(0.0);
+    // n sin θ is kept through every layer (Snell); cos θ in a layer is
+    // imaginary where the light cannot propagate there (beyond the
+    // critical angle), with a positive part so that the field decays.
+    let invariant = n_in * n_in * sin2;
+    let cos_of = |n: f64| root(1.0 - invariant / (n * n));
+    let (cos_sub, cos_0) = (cos_of(n_out), Complex64::new(cos_in, 0.0));
+    let mut total = 0.0;
+    for p_polarised in [false, true] {
+        // The tilted admittances: n cos θ for s light, n / cos θ for p.
+        let admittance = |n: f64, cos: Complex64| {
+            if p_polarised {
+                Complex64::new(n, 0.0) / cos
+            } else {
+                cos * n
+            }
+        };
+        let (mut b, mut c) = (Complex64::new(1.0, 0.0), admittance(n_out, cos_sub));
+        // [B, C] = M₁ M₂ … M_q [1, η_sub], the innermost layer applied first.
+        for layer in layers.iter().rev() {
+            let cos = cos_of(layer.index);
+            let eta = admittance(layer.index, cos);
+            let delta = cos * (2.0 * PI * layer.index * layer.thickness_nm / nm);
+            let (sin_d, cos_d) = sin_cos(delta);
+            let i = Complex64::new(0.0, 1.0);
+            (b, c) = (
+                cos_d * b + i * sin_d / eta * c,
+                i * eta * sin_d * b + cos_d * c,
+            );
+        }
+        let eta_0 = admittance(n_in, cos_0);
+        let r = (eta_0 * b - c) / (eta_0 * b + c);
+        total += r.norm_sqr();
+    }
+    (0.5 * total).clamp(0.0, 1.0)
+}
+
+/// √x for a real x, with a positive imaginary part where x < 0.
+fn root(x: f64) -> Complex64 {
+    if x >= 0.0 {
+        Complex64::new(x.sqrt(), 0.0)
+    } else {
+        Complex64::new(0.0, (-x).sqrt())
+    }
+}
+
+/// sin z and cos z through `libm`, the same bits on every machine (the
+/// complex type's own call the platform's maths library).
+fn sin_cos(z: Complex64) -> (Complex64, Complex64) {
+    let (sin, cos) = (libm::sin(z.re), libm::cos(z.re));
+    let (sinh, cosh) = (libm::sinh(z.im), libm::cosh(z.im));
+    (
+        Complex64::new(sin * cosh, cos * sinh),
+        Complex64::new(cos * cosh, -sin * sinh),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bare_glass_reflects_as_fresnel_says() {
+        // Normal incidence: ((n − 1)/(n + 1))², 4 % for n = 1.5.
+        let r = reflectance(1.0, 1.5, &[], 1.0, 550.0);
+        assert!((r - 0.04).abs() < 1e-15, "{r}");
+        // 45°: the s and p amplitudes of Fresnel's equations.
+        let (n1, n2, ci) = (1.0f64, 1.5f64, libm::cos(PI / 4.0));
+        let ct = (1.0 - (n1 / n2).powi(2) * (1.0 - ci * ci)).sqrt();
+        let rs = (n1 * ci - n2 * ct) / (n1 * ci + n2 * ct);
+        let rp = (n2 * ci - n1 * ct) / (n2 * ci + n1 * ct);
+        let r = reflectance(n1, n2, &[], ci, 550.0);
+        assert!((r - 0.5 * (rs * rs + rp * rp)).abs() < 1e-15);
+        // Brewster's angle reflects no p light; from the glass side the
+        // same interface reflects as much (a lossless interface).
+        let brewster = libm::atan(1.5);
+        let r = reflectance(1.0, 1.5, &[], libm::cos(brewster), 550.0);
+        let ct = libm::cos(libm::asin(libm::sin(brewster) / 1.5));
+        let rs = (libm::cos(brewster) - 1.5 * ct) / (libm::cos(brewster) + 1.5 * ct);
+        assert!((r - 0.5 * rs * rs).abs() < 1e-15);
+        assert!((reflectance(1.5, 1.0, &[], ct, 550.0) - r).abs() < 1e-15);
+        // Beyond the critical angle, everything.
+        assert!((reflectance(1.5, 1.0, &[], libm::cos(0.8), 550.0) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_quarter_wave_layer_reflects_as_its_admittances_say() {
+        // At its design wavelength and normal incidence a quarter-wave
+        // layer of n_f on n_s reflects ((n₀n_s − n_f²)/(n₀n_s + n_f²))²:
+        // MgF₂ on n = 1.52 about 1.3 %, and none where n_f² = n_s.
+        let layer = |n: f64| Layer {
+            index: n,
+            thickness_nm: 550.0 / (4.0 * n),
+        };
+        let expected = |nf: f64, ns: f64| ((ns - nf * nf) / (ns + nf * nf)).powi(2);
+        let r = reflectance(1.0, 1.52, &[layer(1.38)], 1.0, 550.0);
+        assert!((r - expected(1.38, 1.52)).abs() < 1e-15, "{r}");
+        assert!(reflectance(1.0, 1.69, &[layer(1.3)], 1.0, 550.0) < 1e-15);
+        // A half-wave layer is absent at its wavelength.
+        let half = Layer {
+            index: 1.38,
+            thickness_nm: 550.0 / 2.0 / 1.38,
+        };
+        let bare = reflectance(1.0, 1.52, &[], 1.0, 550.0);
+        assert!((reflectance(1.0, 1.52, &[half], 1.0, 550.0) - bare).abs() < 1e-15);
+        // Away from the design wavelength it reflects more, towards bare
+        // glass, and a stack read from the other side reflects alike.
+        let blue = reflectance(1.0, 1.52, &[layer(1.38)], 1.0, 400.0);
+        assert!(blue > r && blue < bare, "{blue}");
+        let stack = [layer(1.65), layer(2.1), layer(1.38)];
+        let front = reflectance(1.0, 1.6, &stack, 0.9, 480.0);
+        let reversed: Vec<Layer> = stack.iter().rev().copied().collect();
+        let cos_glass = (1.0f64 - (1.0 - 0.81) / (1.6 * 1.6)).sqrt();
+        let back = reflectance(1.6, 1.0, &reversed, cos_glass, 480.0);
+        assert!((front - back).abs() < 1e-12, "{front} {back}");
+    }
+}

@@ -1,0 +1,313 @@
+//! Real rays through a prescription: exact refraction and reflection at
+//! spherical surfaces (no paraxial approximation), clipped at every
+//! surface's clear semi-aperture, the weight of a ray multiplied by each
+//! surface's Fresnel transmittance or reflectance on the way
+//! (docs/physics.md §12). A path is the light's way through the lens: the
+//! direct one, refracted by every surface in turn, or a ghost, reflected
+//! at one surface back towards the front and at an earlier one forwards
+//! again.
+
+use super::{coating, Coating, Lens};
+
+/// A point or a direction: x, y across the axis, z along it (mm, from the
+/// first surface's vertex, towards the image).
+pub type Vector = [f64; 3];
+
+/// A ray: where it is, and its unit direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray {
+    /// A point of the ray.
+    pub point: Vector,
+    /// Its unit direction.
+    pub direction: Vector,
+}
+
+/// The light's way through a lens.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Path {
+    /// Refracted by every surface in turn: the image.
+    Direct,
+    /// Reflected back at surface `second`, then forwards again at the
+    /// earlier surface `first`: a ghost (surfaces counted from 0).
+    Ghost {
+        /// The surface that sends the light forwards again.
+        first: usize,
+        /// The surface that reflects it back.
+        second: usize,
+    },
+}
+
+/// What happens at one surface on a path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Event {
+    /// Refraction through surface `s`, going forwards (towards the image)
+    /// or backwards.
+    Through { s: usize, forwards: bool },
+    /// Reflection at surface `s`, arriving forwards or backwards.
+    Reflect { s: usize, forwards: bool },
+}
+
+/// A lens set out for tracing: each surface's vertex on the axis, in mm.
+#[derive(Debug, Clone)]
+pub struct Layout<'a> {
+    lens: &'a Lens,
+    /// z of each surface's vertex, mm.
+    vertices: Vec<f64>,
+    /// z of the image plane, mm.
+    pub image: f64,
+    /// The entrance pupil: z of its centre and its radius, mm.
+    pub pupil: (f64, f64),
+}
+
+impl<'a> Layout<'a> {
+    /// `lens` in mm, its image plane at its paraxial focus (d line).
+    pub fn new(lens: &'a Lens) -> crate::Result<Layout<'a>> {
+        let paraxial = lens.paraxial()?;
+        let mm = lens.mm_per_unit;
+        let last: f64 = lens.surfaces[..lens.surfaces.len() - 1]
+            .iter()
+            .map(|s| s.thickness * mm)
+            .sum();
+        let pupil = (
+            paraxial.entrance_pupil * mm,
+            paraxial.entrance_pupil_radius * mm,
+        );
+        Ok(Layout::with_image(
+            lens,
+            last + paraxial.back_focus * mm,
+            pupil,
+        ))
+    }
+
+    /// `lens` in mm with its image plane at z = `image` (mm) and the
+    /// entrance pupil given: for a system that forms no image of its own
+    /// (a stack of plates).
+    pub fn with_image(lens: &'a Lens, image: f64, pupil: (f64, f64)) -> Layout<'a> {
+        let mm = lens.mm_per_unit;
+        let mut z = 0.0;
+        let vertices = lens
+            .surfaces
+            .iter()
+            .map(|s| {
+                let here = z;
+                z += s.thickness * mm;
+                here
+            })
+            .collect::<Vec<f64>>();
+        Layout {
+            lens,
+            vertices,
+            image,
+            pupil,
+        }
+    }
+
+    /// The ray of a distant source in direction `field` (a unit vector,
+    /// +z into the lens) through the point (px, py) of the entrance pupil
+    /// in units of its radius, started in front of the first surface.
+    pub fn collimated(&self, field: Vector, (px, py): (f64, f64)) -> Ray {
+        let (z, radius) = self.pupil;
+        let at_pupil = [px * radius, py * radius, z];
+        // Back along the ray to in front of every surface: none bulges
+        // forwards by more than its clear semi-aperture.
+        let widest = self
+            .lens
+            .surfaces
+            .iter()
+            .map(|s| s.semi_aperture * self.lens.mm_per_unit)
+            .fold(0.0, f64::max);
+        let back = (z + widest + 1.0) / field[2];
+        Ray {
+            point: add(at_pupil, scale(field, -back)),
+            direction: field,
+        }
+    }
+
+    /// The paths of two reflections, every pair of surfaces that reflect
+    /// (the stop and a surface between equal media reflect nothing).
+    pub fn ghosts(&self) -> Vec<Path> {
+        let reflects = |s: usize| {
+            let surface = &self.lens.surfaces[s];
+            !surface.stop && self.lens.medium_before(s) != surface.medium
+        };
+        let n = self.lens.surfaces.len();
+        let mut paths = Vec::new();
+        for second in 0..n {
+            for first in 0..second {
+                if reflects(first) && reflects(second) {
+                    paths.push(Path::Ghost { first, second });
+                }
+            }
+        }
+        paths
+    }
+
+    /// The surfaces a path meets, in order.
+    fn events(&self, path: Path) -> Vec<Event> {
+        let n = self.lens.surfaces.len();
+        let through = |s, forwards| Event::Through { s, forwards };
+        match path {
+            Path::Direct => (0..n).map(|s| through(s, true)).collect(),
+            Path::Ghost { first, second } => (0..second)
+                .map(|s| through(s, true))
+                .chain([Event::Reflect {
+                    s: second,
+                    forwards: true,
+                }])
+                .chain((first + 1..second).rev().map(|s| through(s, false)))
+                .chain([Event::Reflect {
+                    s: first,
+                    forwards: false,
+                }])
+                .chain((first + 1..n).map(|s| through(s, true)))
+                .collect(),
+        }
+    }
+
+    /// `ray` (in the air in front of the lens) along `path` at `nm`, to
+    /// the image plane: where it lands and the share of its light that
+    /// arrives there, or `None` where a surface's aperture stops it, it
+    /// misses a surface, or it is reflected wholly where it should pass.
+    pub fn trace(&self, path: Path, mut ray: Ray, nm: f64) -> Option<(Vector, f64)> {
+        let mut weight = 1.0;
+        for event in self.events(path) {
+            let (s, forwards, reflect) = match event {
+                Event::Through { s, forwards } => (s, forwards, false),
+                Event::Reflect { s, forwards } => (s, forwards, true),
+            };
+            let surface = &self.lens.surfaces[s];
+            let curvature = surface
+                .radius
+                .map_or(0.0, |r| 1.0 / (r * self.lens.mm_per_unit));
+            let semi = surface.semi_aperture * self.lens.mm_per_unit;
+            let point = hit(&ray, self.vertices[s], curvature, semi)?;
+            let (front, back) = (self.lens.medium_before(s), surface.medium);
+            let (n_in, n_out) = if forwards {
+                (front.index_at(nm), back.index_at(nm))
+            } else {
+                (back.index_at(nm), front.index_at(nm))
+            };
+            // The normal, turned to point along the ray.
+            let mut normal = normal(point, self.vertices[s], curvature);
+            if dot(normal, ray.direction) < 0.0 {
+                normal = scale(normal, -1.0);
+            }
+            let cos_in = dot(normal, ray.direction);
+            let r = self.reflectance(s, forwards, (n_in, n_out), cos_in, nm);
+            ray = if reflect {
+                weight *= r;
+                Ray {
+                    point,
+                    direction: add(ray.direction, scale(normal, -2.0 * cos_in)),
+                }
+            } else {
+                weight *= 1.0 - r;
+                Ray {
+                    point,
+                    direction: refract(ray.direction, normal, cos_in, n_in / n_out)?,
+                }
+            };
+        }
+        // On to the image plane.
+        let t = (self.image - ray.point[2]) / ray.direction[2];
+        if !(t.is_finite() && t >= 0.0) || weight <= 0.0 {
+            return None;
+        }
+        Some((add(ray.point, scale(ray.direction, t)), weight))
+    }
+
+    /// Surface `s`'s reflectance for light arriving forwards (from its
+    /// front medium) or backwards, at `cos_in` from its normal.
+    fn reflectance(
+        &self,
+        s: usize,
+        forwards: bool,
+        (n_in, n_out): (f64, f64),
+        cos_in: f64,
+        nm: f64,
+    ) -> f64 {
+        let surface = &self.lens.surfaces[s];
+        if surface.stop {
+            return 0.0;
+        }
+        match &surface.coating {
+            Coating::None => coating::reflectance(n_in, n_out, &[], cos_in, nm),
+            Coating::Layers(layers) if forwards => {
+                coating::reflectance(n_in, n_out, layers, cos_in, nm)
+            }
+            Coating::Layers(layers) => {
+                let reversed: Vec<_> = layers.iter().rev().copied().collect();
+                coating::reflectance(n_in, n_out, &reversed, cos_in, nm)
+            }
+        }
+    }
+
+    /// The lens traced.
+    pub fn lens(&self) -> &Lens {
+        self.lens
+    }
+
+    /// z of surface `s`'s vertex, mm.
+    pub fn vertex(&self, s: usize) -> f64 {
+        self.vertices[s]
+    }
+}
+
+/// Where `ray` meets the surface of `curvature` whose vertex is at `z`,
+/// within `semi` of the axis: the intersection nearer the vertex (the
+/// sphere's other side is another surface), or `None`.
+fn hit(ray: &Ray, z: f64, curvature: f64, semi: f64) -> Option<Vector> {
+    // In the vertex's frame the surface is c(x² + y² + z²) − 2z = 0; along
+    // p + t d that is c t² − 2t(d_z − c p·d) + (c p·p − 2p_z) = 0, whose
+    // root near the vertex is written without the difference of nearly
+    // equal terms (Spencer and Murty).
+    let p = [ray.point[0], ray.point[1], ray.point[2] - z];
+    let d = ray.direction;
+    let b = d[2] - curvature * dot(p, d);
+    let c = curvature * dot(p, p) - 2.0 * p[2];
+    let discriminant = b * b - curvature * c;
+    if discriminant < 0.0 {
+        return None;
+    }
+    let root = b + b.signum() * discriminant.sqrt();
+    let t = if root != 0.0 { c / root } else { return None };
+    // Behind the ray: the surfaces overlap where it passes.
+    if !(t.is_finite() && t >= -1e-9) {
+        return None;
+    }
+    let at = add(ray.point, scale(d, t));
+    (at[0] * at[0] + at[1] * at[1] <= semi * semi).then_some(at)
+}
+
+/// The surface's unit normal at `point` (on it), +z at the vertex.
+fn normal(point: Vector, z: f64, curvature: f64) -> Vector {
+    let n = [
+        -curvature * point[0],
+        -curvature * point[1],
+        1.0 - curvature * (point[2] - z),
+    ];
+    scale(n, 1.0 / dot(n, n).sqrt())
+}
+
+/// Snell's law in vector form: `d` refracted at a surface of unit normal
+/// `normal` (along the ray, cos θ = `cos_in`) with index ratio `mu` =
+/// n_in / n_out; `None` beyond the critical angle.
+fn refract(d: Vector, normal: Vector, cos_in: f64, mu: f64) -> Option<Vector> {
+    let k = 1.0 - mu * mu * (1.0 - cos_in * cos_in);
+    if k < 0.0 {
+        return None;
+    }
+    Some(add(scale(d, mu), scale(normal, k.sqrt() - mu * cos_in)))
+}
+
+pub(crate) fn dot(a: Vector, b: Vector) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn add(a: Vector, b: Vector) -> Vector {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn scale(a: Vector, k: f64) -> Vector {
+    [a[0] * k, a[1] * k, a[2] * k]
+}
