@@ -207,3 +207,155 @@ fn every_ghost_of_a_stack_of_plates_carries_the_product_of_its_reflections() {
         );
     }
 }
+
+#[test]
+fn a_stack_of_plates_throws_ghosts_of_the_light_its_reflections_say() {
+    use aureole::lens::ghost::{add_ghost, direct_light, Sensor};
+    let lens = Lens::parse(PLATES, "plates").unwrap();
+    let layout = Layout::with_image(&lens, 24.0, (0.0, 10.0));
+    let sensor = Sensor {
+        width: 400,
+        height: 400,
+        pitch_mm: 0.1,
+    };
+    let field = [0.0, 0.0, 1.0];
+    let direct = direct_light(&layout, field, 550.0);
+    // Through the plates every ray of the bundle passes: the pupil's area
+    // less the cells the stop's rim cuts, times the four faces' T.
+    let t = |r: f64| 1.0 - r;
+    let coated = quarter_wave(1.0, 1.38, 1.7);
+    let through = t(0.04) * t(0.04) * t(coated) * t(coated);
+    let disc = std::f64::consts::PI * 100.0;
+    assert!((direct / (disc * through) - 1.0).abs() < 0.03, "{direct}");
+    let mut plane = vec![0.0; 400 * 400];
+    let path = Path::Ghost {
+        first: 1,
+        second: 3,
+    };
+    let added = add_ghost(
+        &layout,
+        path,
+        (field, 550.0),
+        (direct, 1.0),
+        &sensor,
+        &mut plane,
+    );
+    // Face 3 sends it back, face 1 forwards again: R₃ R₁, and face 2
+    // crossed twice more than the image's light crosses it.
+    let expected = coated * 0.04 * t(0.04) * t(0.04);
+    assert!((added / expected - 1.0).abs() < 1e-9, "{added} {expected}");
+    let sum: f64 = plane.iter().sum();
+    assert!((sum / expected - 1.0).abs() < 1e-9, "{sum}");
+}
+
+/// The centroid of a plane's light (mm on the image plane), its RMS
+/// radius about it (mm) and the light.
+fn centroid(plane: &[f64], sensor: &aureole::lens::ghost::Sensor) -> (f64, f64, f64, f64) {
+    let (mut sum, mut x, mut y, mut r2) = (0.0, 0.0, 0.0, 0.0);
+    for (k, v) in plane.iter().enumerate() {
+        let (col, row) = (
+            (k % sensor.width) as f64 + 0.5,
+            (k / sensor.width) as f64 + 0.5,
+        );
+        let (px, py) = (
+            (col - 0.5 * sensor.width as f64) * sensor.pitch_mm,
+            (0.5 * sensor.height as f64 - row) * sensor.pitch_mm,
+        );
+        sum += v;
+        x += v * px;
+        y += v * py;
+        r2 += v * (px * px + py * py);
+    }
+    let (x, y) = (x / sum, y / sum);
+    (x, y, (r2 / sum - x * x - y * y).max(0.0).sqrt(), sum)
+}
+
+#[test]
+fn ghosts_lie_on_the_line_through_their_source_and_the_centre() {
+    use aureole::lens::ghost::{add_ghost, direct_light, Sensor};
+    let lens = shipped("double-gauss-50mm-f1.4");
+    let layout = Layout::new(&lens).unwrap();
+    // Wide enough to hold every ghost whole: one cut by the frame's edge
+    // has its centroid off the line.
+    let sensor = Sensor {
+        width: 1000,
+        height: 1000,
+        pitch_mm: 0.5,
+    };
+    let paths = layout.ghosts();
+    assert_eq!(
+        paths.len(),
+        13 * 12 / 2,
+        "the 13 surfaces but the stop, in pairs"
+    );
+    let ghost = |field: [f64; 3], path| {
+        let direct = direct_light(&layout, field, 550.0);
+        let mut plane = vec![0.0; sensor.width * sensor.height];
+        add_ghost(
+            &layout,
+            path,
+            (field, 550.0),
+            (direct, 1.0),
+            &sensor,
+            &mut plane,
+        );
+        centroid(&plane, &sensor)
+    };
+    let angle = |degrees: f64| degrees.to_radians();
+    let towards = |ax: f64, ay: f64| {
+        let (x, y) = (libm::tan(angle(ax)), libm::tan(angle(ay)));
+        let norm = (x * x + y * y + 1.0).sqrt();
+        [x / norm, y / norm, 1.0 / norm]
+    };
+    for &path in paths.iter().step_by(7) {
+        // On the axis, centred on it.
+        let (x, y, _, light) = ghost([0.0, 0.0, 1.0], path);
+        assert!(
+            light > 0.0 && x.abs() < 1e-6 && y.abs() < 1e-6,
+            "{path:?}: {x} {y}"
+        );
+        // Off it, on the line through the source's image and the centre,
+        // and mirrored through the centre with the source.
+        let (x, y, size, _) = ghost(towards(6.0, 4.0), path);
+        let (image_x, image_y) = (libm::tan(angle(6.0)), libm::tan(angle(4.0)));
+        let across = (x * image_y - y * image_x) / libm::hypot(image_x, image_y);
+        assert!(
+            across.abs() < 1e-3 * size,
+            "{path:?}: ({x}, {y}) {across} mm off the line"
+        );
+        let (mx, my, _, _) = ghost(towards(-6.0, -4.0), path);
+        assert!((mx + x).abs() < 1e-6 && (my + y).abs() < 1e-6, "{path:?}");
+    }
+}
+
+#[test]
+fn a_hexagonal_stop_passes_the_light_of_a_hexagon() {
+    use aureole::lens::ghost::direct_light;
+    let lens = shipped("double-gauss-50mm-f1.4");
+    let layout = Layout::new(&lens).unwrap();
+    let stop = lens.surfaces[lens.stop()].semi_aperture;
+    let shaped = |blades: u32| {
+        let aperture = aureole::Aperture {
+            blades,
+            ..aureole::presets::find("camera-f8-7blade")
+                .unwrap()
+                .config()
+                .unwrap()
+                .effects
+                .iter()
+                .find_map(|e| match e {
+                    aureole::Effect::Aperture(a) => Some(a.clone()),
+                    _ => None,
+                })
+                .unwrap()
+        };
+        let layout = Layout::new(&lens)
+            .unwrap()
+            .with_stop(aperture.stop(stop), stop);
+        direct_light(&layout, [0.0, 0.0, 1.0], 550.0)
+    };
+    let ratio = shaped(6) / shaped(0);
+    let hexagon = 3.0 * 3f64.sqrt() / (2.0 * std::f64::consts::PI);
+    assert!((ratio / hexagon - 1.0).abs() < 0.01, "{ratio} {hexagon}");
+    drop(layout);
+}

@@ -30,6 +30,7 @@
 //! ```
 
 pub mod coating;
+pub mod ghost;
 pub mod paraxial;
 mod parse;
 pub mod trace;

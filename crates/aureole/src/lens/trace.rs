@@ -8,6 +8,7 @@
 //! again.
 
 use super::{coating, Coating, Lens};
+use crate::optics::aperture::pupil::Pupil;
 
 /// A point or a direction: x, y across the axis, z along it (mm, from the
 /// first surface's vertex, towards the image).
@@ -57,6 +58,9 @@ pub struct Layout<'a> {
     pub image: f64,
     /// The entrance pupil: z of its centre and its radius, mm.
     pub pupil: (f64, f64),
+    /// The stop's opening (mm, in its plane), where the camera shapes it:
+    /// else the stop's clear semi-aperture.
+    stop: Option<Pupil>,
 }
 
 impl<'a> Layout<'a> {
@@ -99,7 +103,18 @@ impl<'a> Layout<'a> {
             vertices,
             image,
             pupil,
+            stop: None,
         }
+    }
+
+    /// The same, its stop's opening `stop` (mm in the stop's plane: the
+    /// camera's blades at its f-number) instead of a circle; the entrance
+    /// pupil scaled to it.
+    pub fn with_stop(mut self, stop: Pupil, radius: f64) -> Layout<'a> {
+        let semi = self.lens.surfaces[self.lens.stop()].semi_aperture * self.lens.mm_per_unit;
+        self.pupil.1 *= radius / semi;
+        self.stop = Some(stop);
+        self
     }
 
     /// The ray of a distant source in direction `field` (a unit vector,
@@ -181,6 +196,11 @@ impl<'a> Layout<'a> {
                 .map_or(0.0, |r| 1.0 / (r * self.lens.mm_per_unit));
             let semi = surface.semi_aperture * self.lens.mm_per_unit;
             let point = hit(&ray, self.vertices[s], curvature, semi)?;
+            if let (true, Some(stop)) = (surface.stop, &self.stop) {
+                if stop.transmission([point[0], point[1]])[0] < 0.5 {
+                    return None;
+                }
+            }
             let (front, back) = (self.lens.medium_before(s), surface.medium);
             let (n_in, n_out) = if forwards {
                 (front.index_at(nm), back.index_at(nm))

@@ -641,12 +641,19 @@ impl Aperture {
         })
     }
 
-    /// The stop of circumradius `radius` mm, with obstruction, vanes and
-    /// dirt drawn from `seed`.
-    fn pupil(&self, radius: f64, seed: u64) -> Result<Pupil> {
+    /// The stop alone, of circumradius `radius` mm: its blades, their
+    /// rotation and roundness (what clips a lens's ghosts).
+    pub fn stop(&self, radius: f64) -> Pupil {
         let mut pupil = Pupil::new();
+        self.outline(&mut pupil, radius);
+        pupil
+    }
+
+    /// Adds the blades' opening of circumradius `radius` to `pupil`;
+    /// returns the radius of the circle it inscribes.
+    fn outline(&self, pupil: &mut Pupil, radius: f64) -> f64 {
         let rotation = self.rotation_deg.to_radians();
-        let inner_radius = if self.blades == 0 {
+        if self.blades == 0 {
             pupil.add_disc([0.0, 0.0], radius, true);
             radius
         } else {
@@ -670,7 +677,15 @@ impl Aperture {
             }
             pupil.add_sampled_polygon(&vertices, true, segments);
             (1.0 - self.roundness) * apothem + self.roundness * radius
-        };
+        }
+    }
+
+    /// The stop of circumradius `radius` mm, with obstruction, vanes and
+    /// dirt drawn from `seed`.
+    fn pupil(&self, radius: f64, seed: u64) -> Result<Pupil> {
+        let mut pupil = Pupil::new();
+        let rotation = self.rotation_deg.to_radians();
+        let inner_radius = self.outline(&mut pupil, radius);
         let obstruction = self.obstruction * radius;
         if obstruction > 0.0 {
             pupil.add_disc([0.0, 0.0], obstruction, false);

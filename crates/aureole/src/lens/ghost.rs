@@ -1,0 +1,231 @@
+//! A distant source's ghosts on the sensor, rasterised from a bundle of
+//! real rays (Hullin et al., SIGGRAPH 2011): a grid of rays over the
+//! entrance pupil is traced along a path; each cell of four neighbouring
+//! rays that all arrive carries the light of its patch of the pupil,
+//! times the mean of their weights, spread evenly over the quadrilateral
+//! they land on, so that the irradiance follows the bundle's compression
+//! and stretching (docs/physics.md §12). The light is in units of what
+//! the direct path brings to the source's own image: a ghost's pixels
+//! sum to its path's power over the image's.
+
+use super::trace::{Layout, Path, Vector};
+
+/// A sensor of `width`×`height` pixels of `pitch_mm`, the optical axis
+/// through its centre; rows run downwards, the image's y upwards.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sensor {
+    /// Pixels across.
+    pub width: usize,
+    /// Pixels down.
+    pub height: usize,
+    /// The pixel pitch, mm.
+    pub pitch_mm: f64,
+}
+
+impl Sensor {
+    /// (column, row) in pixels of a point of the image plane (mm), pixel
+    /// i spanning [i, i + 1).
+    fn pixel(&self, at: Vector) -> (f64, f64) {
+        (
+            0.5 * self.width as f64 + at[0] / self.pitch_mm,
+            0.5 * self.height as f64 - at[1] / self.pitch_mm,
+        )
+    }
+}
+
+/// Rays across the entrance pupil's diameter for one path: cells of
+/// 1/`GRID` of it.
+pub const GRID: usize = 96;
+
+/// The most pieces a cell is cut into along each side when it lands
+/// larger than a pixel.
+const MOST_PIECES: usize = 64;
+
+/// Cells the stop's rim (or another aperture's) crosses are cut into
+/// this many pieces along each side, traced anew: the rim's light is
+/// then counted to 1/`RIM` of a cell rather than to a whole one.
+const RIM: usize = 8;
+
+/// A bundle of rays from a distant source along one path: a grid over the
+/// square about the entrance pupil (a little wider: real rays aimed at
+/// the paraxial pupil are stopped by the stop, not by the grid).
+struct Bundle<'l, 'a> {
+    layout: &'l Layout<'a>,
+    path: Path,
+    field: Vector,
+    nm: f64,
+    /// The (GRID + 1)² rays, rows of constant pupil y.
+    rays: Vec<Option<(Vector, f64)>>,
+}
+
+/// The pupil square's half-side, in units of the pupil's radius.
+const REACH: f64 = 1.1;
+
+impl<'l, 'a> Bundle<'l, 'a> {
+    fn new(layout: &'l Layout<'a>, path: Path, field: Vector, nm: f64) -> Bundle<'l, 'a> {
+        let side = GRID + 1;
+        let mut bundle = Bundle {
+            layout,
+            path,
+            field,
+            nm,
+            rays: Vec::with_capacity(side * side),
+        };
+        for j in 0..side {
+            for i in 0..side {
+                let ray = bundle.ray(i as f64, j as f64);
+                bundle.rays.push(ray);
+            }
+        }
+        bundle
+    }
+
+    /// The ray at grid position (i, j), fractional within a cell.
+    fn ray(&self, i: f64, j: f64) -> Option<(Vector, f64)> {
+        let step = 2.0 * REACH / GRID as f64;
+        let pupil = (-REACH + i * step, -REACH + j * step);
+        self.layout.trace(
+            self.path,
+            self.layout.collimated(self.field, pupil),
+            self.nm,
+        )
+    }
+
+    /// The light through a cell of the grid, per unit of the source's
+    /// irradiance: its area across the beam (the pupil plane's area times
+    /// the cosine of the field angle).
+    fn cell_area(&self) -> f64 {
+        let step = 2.0 * REACH / GRID as f64 * self.layout.pupil.1;
+        step * step * self.field[2]
+    }
+
+    /// `visit(corners, area)` for every cell whose light arrives: a cell
+    /// all of whose corners arrive as it is, one the rim crosses as the
+    /// pieces of it that arrive ([`pieces`]).
+    fn for_each_cell(&self, mut visit: impl FnMut(&[(Vector, f64); 4], f64)) {
+        let side = GRID + 1;
+        let area = self.cell_area();
+        for j in 0..GRID {
+            for i in 0..GRID {
+                let at = |di: usize, dj: usize| self.rays[(j + dj) * side + i + di];
+                let corners = [at(0, 0), at(1, 0), at(1, 1), at(0, 1)];
+                match corners {
+                    [Some(a), Some(b), Some(c), Some(d)] => visit(&[a, b, c, d], area),
+                    [None, None, None, None] => {}
+                    _ => self.rim(i, j, area, &mut visit),
+                }
+            }
+        }
+    }
+
+    /// A cell the rim crosses, cut into RIM² pieces traced anew; a piece
+    /// still crossed carries the share of its corners that arrive, landing
+    /// on them (those stopped replaced by the mean of the others).
+    fn rim(&self, i: usize, j: usize, area: f64, visit: &mut impl FnMut(&[(Vector, f64); 4], f64)) {
+        let side = RIM + 1;
+        let mut rays = Vec::with_capacity(side * side);
+        for v in 0..side {
+            for u in 0..side {
+                let (x, y) = (
+                    i as f64 + u as f64 / RIM as f64,
+                    j as f64 + v as f64 / RIM as f64,
+                );
+                rays.push(self.ray(x, y));
+            }
+        }
+        let piece = area / (RIM * RIM) as f64;
+        for v in 0..RIM {
+            for u in 0..RIM {
+                let at = |du: usize, dv: usize| rays[(v + dv) * side + u + du];
+                let corners = [at(0, 0), at(1, 0), at(1, 1), at(0, 1)];
+                let alive: Vec<(Vector, f64)> = corners.iter().flatten().copied().collect();
+                if alive.is_empty() {
+                    continue;
+                }
+                let n = alive.len() as f64;
+                let mean = [0, 1, 2].map(|k| alive.iter().map(|c| c.0[k]).sum::<f64>() / n);
+                visit(&corners.map(|c| c.unwrap_or((mean, 0.0))), piece);
+            }
+        }
+    }
+}
+
+/// The light the direct path brings to the image from a source in
+/// direction `field`, per unit of its irradiance: what a ghost's light is
+/// counted against.
+pub fn direct_light(layout: &Layout, field: Vector, nm: f64) -> f64 {
+    let mut light = 0.0;
+    Bundle::new(layout, Path::Direct, field, nm)
+        .for_each_cell(|corners, area| light += area * mean_weight(corners));
+    light
+}
+
+fn mean_weight(corners: &[(Vector, f64); 4]) -> f64 {
+    corners.iter().map(|c| c.1).sum::<f64>() / 4.0
+}
+
+/// Adds to `plane` (the sensor's pixels, rows downwards) the ghost of
+/// `path` of a source in direction `field` at `nm`, scaled by `scale`
+/// over `direct` (the [`direct_light`] of that source): the pixels gain
+/// `scale` × the ghost's light / the image's. Returns the light added
+/// (including what falls outside the sensor, which is dropped).
+pub fn add_ghost(
+    layout: &Layout,
+    path: Path,
+    (field, nm): (Vector, f64),
+    (direct, scale): (f64, f64),
+    sensor: &Sensor,
+    plane: &mut [f64],
+) -> f64 {
+    let mut total = 0.0;
+    Bundle::new(layout, path, field, nm).for_each_cell(|corners, area| {
+        let light = scale * area * mean_weight(corners) / direct;
+        total += light;
+        spread(plane, sensor, corners, light);
+    });
+    total
+}
+
+/// `light` spread evenly over the quadrilateral the four `corners` land
+/// on: cut until each piece is smaller than a pixel, each piece's light
+/// going to the pixels about its centre, bilinearly.
+fn spread(plane: &mut [f64], sensor: &Sensor, corners: &[(Vector, f64); 4], light: f64) {
+    let px = corners.map(|c| sensor.pixel(c.0));
+    let longest = (0..4)
+        .map(|k| {
+            let (a, b) = (px[k], px[(k + 1) % 4]);
+            ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt()
+        })
+        .fold(0.0, f64::max);
+    let pieces = (longest.ceil() as usize).clamp(1, MOST_PIECES);
+    let share = light / (pieces * pieces) as f64;
+    for v in 0..pieces {
+        for u in 0..pieces {
+            let (s, t) = (
+                (u as f64 + 0.5) / pieces as f64,
+                (v as f64 + 0.5) / pieces as f64,
+            );
+            let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
+            let x = (0..4).map(|k| w[k] * px[k].0).sum();
+            let y = (0..4).map(|k| w[k] * px[k].1).sum();
+            deposit(plane, sensor, (x, y), share);
+        }
+    }
+}
+
+/// `light` at the point (column, row) shared bilinearly among the four
+/// pixels whose centres surround it; what falls beyond the sensor is
+/// dropped.
+fn deposit(plane: &mut [f64], sensor: &Sensor, (x, y): (f64, f64), light: f64) {
+    let (fx, fy) = (x - 0.5, y - 0.5);
+    let (x0, y0) = (fx.floor(), fy.floor());
+    let (ax, ay) = (fx - x0, fy - y0);
+    for (dx, wx) in [(0.0, 1.0 - ax), (1.0, ax)] {
+        for (dy, wy) in [(0.0, 1.0 - ay), (1.0, ay)] {
+            let (cx, cy) = (x0 + dx, y0 + dy);
+            if cx >= 0.0 && cy >= 0.0 && cx < sensor.width as f64 && cy < sensor.height as f64 {
+                plane[cy as usize * sensor.width + cx as usize] += light * wx * wy;
+            }
+        }
+    }
+}
