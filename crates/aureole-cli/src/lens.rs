@@ -24,6 +24,36 @@ pub struct Args {
     /// Print the first-order data as JSON (in the prescription's units) instead of the table
     #[arg(long)]
     json: bool,
+    /// Render the ghosts of one distant source into this linear image (.exr, .pfm): R, G and B, each pixel the light it gets over the light of the source's own image
+    #[arg(long, value_name = "OUT.exr")]
+    ghosts: Option<PathBuf>,
+    /// The source's direction, degrees right and up of the axis (for --ghosts)
+    #[arg(long, value_name = "X,Y", default_value = "6,4", value_parser = parse_direction)]
+    source: (f64, f64),
+    /// The stop's f-number (for --ghosts; default: the lens wide open)
+    #[arg(long, value_name = "N", value_parser = crate::values::parse_positive)]
+    f_number: Option<f64>,
+    /// Straight blades of the stop, 0 for a round one (for --ghosts)
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    blades: u32,
+    /// The picture's size in pixels over a 36 mm wide sensor (for --ghosts)
+    #[arg(long, value_name = "WxH", default_value = "1440x960", value_parser = crate::values::parse_size)]
+    size: (usize, usize),
+}
+
+/// "X,Y" in degrees, each within ±80.
+fn parse_direction(text: &str) -> Result<(f64, f64), String> {
+    let parts: Vec<f64> = text
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("{text:?} is not two angles in degrees, X,Y (e.g. 6,4)"))?;
+    match parts[..] {
+        [x, y] if x.abs() <= 80.0 && y.abs() <= 80.0 => Ok((x, y)),
+        _ => Err(format!(
+            "{text:?}: give two angles X,Y in degrees, each from -80 to 80"
+        )),
+    }
 }
 
 pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
@@ -48,6 +78,9 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
             return Err(aureole_io::Error::OverwritesInput { path: out.clone() }.into());
         }
         write_lens(out, &lens)?;
+    }
+    if let Some(out) = &args.ghosts {
+        ghosts(args, &lens, out, quiet)?;
     }
     let text = if args.json {
         json(&lens, &paraxial)
@@ -167,4 +200,79 @@ fn describe(lens: &Lens, p: &aureole::lens::Paraxial) -> String {
         );
     }
     out
+}
+
+/// `--ghosts`: every ghost of the source, rendered and written; the
+/// brightest listed.
+fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Result<(), Failure> {
+    use aureole::lens::ghost::{render, Sensor, RGB_NM};
+    use aureole::lens::trace::{Layout, Path};
+    let failed =
+        |e: aureole::Error| Failure::Usage(anyhow::anyhow!("{}: {e}", args.file.display()));
+    let layout = Layout::new(lens).map_err(failed)?;
+    let stop = &lens.surfaces[lens.stop()];
+    let open = stop.semi_aperture * lens.mm_per_unit;
+    let radius = match args.f_number {
+        Some(n) => {
+            let p = lens.paraxial().map_err(failed)?;
+            (open * p.f_number / n).min(open)
+        }
+        None => open,
+    };
+    let aperture = aureole::Aperture::with_blades(args.blades);
+    let layout = layout.with_stop(aperture.stop(radius), open);
+    let (width, height) = args.size;
+    let sensor = Sensor {
+        width,
+        height,
+        pitch_mm: 36.0 / width as f64,
+    };
+    let field = aureole::lens::ghost::direction(args.source.0, args.source.1);
+    let progress = crate::progress::Progress::new(quiet);
+    progress.stage("tracing ghosts");
+    let cancel = aureole::Cancel::new();
+    let mut report = |fraction| progress.set(fraction);
+    let rendered = render(
+        &layout,
+        field,
+        &sensor,
+        &RGB_NM,
+        &mut aureole::Control::new(&cancel, &mut report),
+    )?;
+    progress.finish();
+    let image = aureole::Image {
+        width,
+        height,
+        layout: aureole::Layout::Rgb,
+        planes: rendered
+            .planes
+            .into_iter()
+            .map(|p| p.into_iter().map(|v| v as f32).collect())
+            .collect(),
+        alpha: None,
+        white_luminance: None,
+        primaries: None,
+    };
+    crate::interrupt::writing(|| {
+        aureole_io::write::write_linear(out, &image, aureole_io::write::LinearOptions::default())
+    })?;
+    if !quiet {
+        let ranked = &rendered.ranked;
+        let total: f64 = ranked.iter().map(|r| r.1).sum();
+        say!(
+            "wrote {}: {} ghosts of a source at ({}°, {}°), f/{:.2}, together {:.3e} of its image's light; the brightest:",
+            out.display(),
+            ranked.len(),
+            args.source.0,
+            args.source.1,
+            args.f_number.unwrap_or_else(|| lens.paraxial().map_or(0.0, |p| p.f_number)),
+            total
+        );
+        for (path, light) in ranked.iter().take(5) {
+            if let Path::Ghost { first, second } = path {
+                say!("  surfaces {} and {}: {light:.3e}", first + 1, second + 1);
+            }
+        }
+    }
+    Ok(())
 }

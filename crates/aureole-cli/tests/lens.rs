@@ -166,3 +166,61 @@ fn a_bad_lens_is_refused_in_one_line_and_nothing_is_written() {
         );
     }
 }
+
+#[test]
+fn a_lens_renders_the_ghosts_of_a_source_the_same_on_any_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let lens = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../configs/lenses/double-gauss-50mm-f1.4.toml"
+    );
+    let render = |threads: &str, out: &str| {
+        let out = dir.path().join(out);
+        let done = aureole()
+            .args(["--threads", threads, "lens", lens, "--ghosts"])
+            .arg(&out)
+            .args([
+                "--source",
+                "8,5",
+                "--f-number",
+                "4",
+                "--blades",
+                "7",
+                "--size",
+                "180x120",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            done.status.success(),
+            "{}",
+            String::from_utf8_lossy(&done.stderr)
+        );
+        (
+            std::fs::read(&out).unwrap(),
+            String::from_utf8(done.stderr).unwrap(),
+        )
+    };
+    let (one, said) = render("1", "one.exr");
+    let (two, _) = render("2", "two.exr");
+    assert_eq!(one, two);
+    assert!(
+        said.contains("78 ghosts of a source at (8°, 5°), f/4.00"),
+        "{said}"
+    );
+    assert!(said.contains("  surfaces 2 and 5: "), "{said}");
+    // The ghosts hold a thousandth of the light or so, and at most the
+    // light of the image they come from.
+    let limits = aureole_io::limits::Limits::NONE;
+    let image = aureole_io::read::read_image(&dir.path().join("one.exr"), limits)
+        .unwrap()
+        .image;
+    let light: f64 = image
+        .planes
+        .iter()
+        .flatten()
+        .map(|&v| f64::from(v))
+        .sum::<f64>()
+        / 3.0;
+    assert!(light > 1e-4 && light < 1e-2, "{light}");
+}

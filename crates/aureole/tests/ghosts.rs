@@ -302,11 +302,7 @@ fn ghosts_lie_on_the_line_through_their_source_and_the_centre() {
         centroid(&plane, &sensor)
     };
     let angle = |degrees: f64| degrees.to_radians();
-    let towards = |ax: f64, ay: f64| {
-        let (x, y) = (libm::tan(angle(ax)), libm::tan(angle(ay)));
-        let norm = (x * x + y * y + 1.0).sqrt();
-        [x / norm, y / norm, 1.0 / norm]
-    };
+    let towards = aureole::lens::ghost::direction;
     for &path in paths.iter().step_by(7) {
         // On the axis, centred on it.
         let (x, y, _, light) = ghost([0.0, 0.0, 1.0], path);
@@ -335,20 +331,7 @@ fn a_hexagonal_stop_passes_the_light_of_a_hexagon() {
     let layout = Layout::new(&lens).unwrap();
     let stop = lens.surfaces[lens.stop()].semi_aperture;
     let shaped = |blades: u32| {
-        let aperture = aureole::Aperture {
-            blades,
-            ..aureole::presets::find("camera-f8-7blade")
-                .unwrap()
-                .config()
-                .unwrap()
-                .effects
-                .iter()
-                .find_map(|e| match e {
-                    aureole::Effect::Aperture(a) => Some(a.clone()),
-                    _ => None,
-                })
-                .unwrap()
-        };
+        let aperture = aureole::Aperture::with_blades(blades);
         let layout = Layout::new(&lens)
             .unwrap()
             .with_stop(aperture.stop(stop), stop);

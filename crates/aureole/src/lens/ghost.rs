@@ -229,3 +229,74 @@ fn deposit(plane: &mut [f64], sensor: &Sensor, (x, y): (f64, f64), light: f64) {
         }
     }
 }
+
+/// The unit direction of a distant source `x` degrees right of the axis
+/// and `y` degrees above it (as seen through the lens: tan x and tan y
+/// its image's offsets over the focal length), +z into the lens.
+pub fn direction(x: f64, y: f64) -> Vector {
+    let (tx, ty) = (libm::tan(x.to_radians()), libm::tan(y.to_radians()));
+    let norm = (tx * tx + ty * ty + 1.0).sqrt();
+    [tx / norm, ty / norm, 1.0 / norm]
+}
+
+/// The wavelengths a ghost is traced at for R, G and B, nm: the dominant
+/// wavelengths of Rec.709's primaries.
+pub const RGB_NM: [f64; 3] = [611.0, 549.0, 464.0];
+
+/// A source's ghosts on a sensor.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    /// One plane per wavelength, rows downwards: each pixel the light it
+    /// receives over the light the direct path brings to the source's
+    /// own image at that wavelength.
+    pub planes: Vec<Vec<f64>>,
+    /// Each path's light (the wavelengths' mean), the brightest first.
+    pub ranked: Vec<(Path, f64)>,
+}
+
+/// Every ghost of a distant source in direction `field`, on `sensor`, at
+/// each wavelength of `nms`. The paths are traced in parallel and added
+/// in their order: the same bits on any number of threads.
+pub fn render(
+    layout: &Layout,
+    field: Vector,
+    sensor: &Sensor,
+    nms: &[f64],
+    control: &mut crate::control::Control,
+) -> crate::Result<Rendered> {
+    use rayon::prelude::*;
+    let paths = layout.ghosts();
+    let pixels = sensor.width * sensor.height;
+    let mut planes = Vec::with_capacity(nms.len());
+    let mut light = vec![0.0; paths.len()];
+    for (w, &nm) in nms.iter().enumerate() {
+        control.check()?;
+        let direct = direct_light(layout, field, nm);
+        let mut plane = vec![0.0; pixels];
+        if direct > 0.0 {
+            // Paths a few at a time: each its own plane, added in order.
+            let size = rayon::current_num_threads().max(1) * 2;
+            for (c, chunk) in paths.chunks(size).enumerate() {
+                control.check()?;
+                let ghosts: Vec<(Vec<f64>, f64)> = chunk
+                    .par_iter()
+                    .map(|&path| {
+                        let mut own = vec![0.0; pixels];
+                        let added =
+                            add_ghost(layout, path, (field, nm), (direct, 1.0), sensor, &mut own);
+                        (own, added)
+                    })
+                    .collect();
+                for (k, (own, added)) in ghosts.into_iter().enumerate() {
+                    light[c * size + k] += added / nms.len() as f64;
+                    plane.iter_mut().zip(&own).for_each(|(p, o)| *p += o);
+                }
+            }
+        }
+        planes.push(plane);
+        control.report((w + 1) as f64 / nms.len() as f64);
+    }
+    let mut ranked: Vec<(Path, f64)> = paths.into_iter().zip(light).collect();
+    ranked.sort_by(|a, b| b.1.total_cmp(&a.1));
+    Ok(Rendered { planes, ranked })
+}
