@@ -342,3 +342,59 @@ fn a_hexagonal_stop_passes_the_light_of_a_hexagon() {
     assert!((ratio / hexagon - 1.0).abs() < 0.01, "{ratio} {hexagon}");
     drop(layout);
 }
+
+#[test]
+fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
+    use aureole::control::{Cancel, Control};
+    use aureole::lens::ghost::{direction, render, Sensor};
+    let lens = shipped("portrait-90mm-f2");
+    let layout = Layout::new(&lens).unwrap();
+    let stop = lens.surfaces[lens.stop()].semi_aperture;
+    let layout = layout.with_stop(aureole::Aperture::with_blades(6).stop(stop * 0.5), stop);
+    let picture = |width: usize| {
+        let sensor = Sensor {
+            width,
+            height: width * 2 / 3,
+            pitch_mm: 36.0 / width as f64,
+        };
+        let mut report = |_| {};
+        let cancel = Cancel::new();
+        let rendered = render(
+            &layout,
+            direction(5.0, 3.0),
+            &sensor,
+            &[550.0],
+            &mut Control::new(&cancel, &mut report),
+        )
+        .unwrap();
+        rendered.planes.into_iter().next().unwrap()
+    };
+    let (small, large) = (picture(240), picture(480));
+    // The light of each 6×6 block of the small picture against the 12×12
+    // of the large one it covers: the same, to 1 % of the picture's
+    // (relative L2), as tests/resolution.rs holds a lamp's glare ring by
+    // ring (each picture blurs its sharp edges by a pixel of its own).
+    let block = |picture: &[f64], width: usize, side: usize| {
+        let mut blocks = vec![0.0; (240 / 6) * (160 / 6)];
+        for (k, v) in picture.iter().enumerate() {
+            let (col, row) = ((k % width) / side, (k / width) / side);
+            if col < 40 && row < 26 {
+                blocks[row * 40 + col] += v;
+            }
+        }
+        blocks
+    };
+    let (coarse, fine) = (block(&small, 240, 6), block(&large, 480, 12));
+    let norm = |a: &[f64]| a.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let difference: Vec<f64> = coarse.iter().zip(&fine).map(|(a, b)| a - b).collect();
+    let relative = norm(&difference) / norm(&coarse);
+    assert!(relative < 0.01, "{relative}");
+    let mut reduced = vec![0.0; small.len()];
+    for (k, v) in large.iter().enumerate() {
+        reduced[(k / 480 / 2) * 240 + (k % 480) / 2] += v;
+    }
+    // The same light in all, but for the bilinear shares of the frame's
+    // outermost pixels, which fall beyond it at either resolution alike.
+    let (a, b): (f64, f64) = (small.iter().sum(), reduced.iter().sum());
+    assert!((a / b - 1.0).abs() < 1e-4, "{a} {b}");
+}

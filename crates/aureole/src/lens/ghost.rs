@@ -8,7 +8,7 @@
 //! the direct path brings to the source's own image: a ghost's pixels
 //! sum to its path's power over the image's.
 
-use super::trace::{Layout, Path, Vector};
+use super::trace::{Layout, Path, Route, Vector};
 
 /// A sensor of `width`×`height` pixels of `pitch_mm`, the optical axis
 /// through its centre; rows run downwards, the image's y upwards.
@@ -51,9 +51,8 @@ const RIM: usize = 8;
 /// the paraxial pupil are stopped by the stop, not by the grid).
 struct Bundle<'l, 'a> {
     layout: &'l Layout<'a>,
-    path: Path,
+    route: Route,
     field: Vector,
-    nm: f64,
     /// The (GRID + 1)² rays, rows of constant pupil y.
     rays: Vec<Option<(Vector, f64)>>,
 }
@@ -66,9 +65,8 @@ impl<'l, 'a> Bundle<'l, 'a> {
         let side = GRID + 1;
         let mut bundle = Bundle {
             layout,
-            path,
+            route: layout.route(path, nm),
             field,
-            nm,
             rays: Vec::with_capacity(side * side),
         };
         for j in 0..side {
@@ -84,11 +82,8 @@ impl<'l, 'a> Bundle<'l, 'a> {
     fn ray(&self, i: f64, j: f64) -> Option<(Vector, f64)> {
         let step = 2.0 * REACH / GRID as f64;
         let pupil = (-REACH + i * step, -REACH + j * step);
-        self.layout.trace(
-            self.path,
-            self.layout.collimated(self.field, pupil),
-            self.nm,
-        )
+        self.layout
+            .follow(&self.route, self.layout.collimated(self.field, pupil))
     }
 
     /// The light through a cell of the grid, per unit of the source's
@@ -177,20 +172,111 @@ pub fn add_ghost(
     sensor: &Sensor,
     plane: &mut [f64],
 ) -> f64 {
-    let mut total = 0.0;
+    let patch = draw(layout, path, (field, nm), (direct, scale), sensor);
+    patch.add_to(plane, sensor.width);
+    patch.light
+}
+
+/// A ghost drawn on the pixels of the box it covers.
+struct Patch {
+    /// The box's first column and row, and its width.
+    x0: usize,
+    y0: usize,
+    width: usize,
+    /// Its pixels, rows downwards.
+    values: Vec<f64>,
+    /// Its light, including what falls beyond the sensor.
+    light: f64,
+}
+
+impl Patch {
+    fn add_to(&self, plane: &mut [f64], width: usize) {
+        if self.width == 0 {
+            return;
+        }
+        for (r, row) in self.values.chunks(self.width).enumerate() {
+            let start = (self.y0 + r) * width + self.x0;
+            for (p, v) in plane[start..start + self.width].iter_mut().zip(row) {
+                *p += v;
+            }
+        }
+    }
+}
+
+/// As [`add_ghost`], onto a patch of the box of pixels the ghost covers:
+/// a small ghost takes a small patch, not a whole frame.
+fn draw(
+    layout: &Layout,
+    path: Path,
+    (field, nm): (Vector, f64),
+    (direct, scale): (f64, f64),
+    sensor: &Sensor,
+) -> Patch {
+    let mut quads = Vec::new();
+    let mut light = 0.0;
     Bundle::new(layout, path, field, nm).for_each_cell(|corners, area| {
-        let light = scale * area * mean_weight(corners) / direct;
-        total += light;
-        spread(plane, sensor, corners, light);
+        let share = scale * area * mean_weight(corners) / direct;
+        light += share;
+        quads.push((*corners, share));
     });
-    total
+    // The pixels the quads' corners reach, and the one beyond each side
+    // that the bilinear shares touch, within the sensor.
+    let (mut lo, mut hi) = (
+        (f64::INFINITY, f64::INFINITY),
+        (f64::NEG_INFINITY, f64::NEG_INFINITY),
+    );
+    for (corners, _) in &quads {
+        for c in corners {
+            let (x, y) = sensor.pixel(c.0);
+            lo = (lo.0.min(x), lo.1.min(y));
+            hi = (hi.0.max(x), hi.1.max(y));
+        }
+    }
+    let clip = |v: f64, n: usize| v.clamp(0.0, n as f64) as usize;
+    let (x0, y0) = (
+        clip(lo.0.floor() - 1.0, sensor.width),
+        clip(lo.1.floor() - 1.0, sensor.height),
+    );
+    let (x1, y1) = (
+        clip(hi.0.ceil() + 1.0, sensor.width),
+        clip(hi.1.ceil() + 1.0, sensor.height),
+    );
+    let (width, height) = (x1.saturating_sub(x0), y1.saturating_sub(y0));
+    let mut values = vec![0.0; width * height];
+    let area = Sensor {
+        width,
+        height,
+        pitch_mm: sensor.pitch_mm,
+    };
+    for (corners, share) in &quads {
+        spread_at(&mut values, &area, sensor, (x0, y0), corners, *share);
+    }
+    Patch {
+        x0,
+        y0,
+        width,
+        values,
+        light,
+    }
 }
 
 /// `light` spread evenly over the quadrilateral the four `corners` land
 /// on: cut until each piece is smaller than a pixel, each piece's light
-/// going to the pixels about its centre, bilinearly.
-fn spread(plane: &mut [f64], sensor: &Sensor, corners: &[(Vector, f64); 4], light: f64) {
-    let px = corners.map(|c| sensor.pixel(c.0));
+/// going to the pixels about its centre, bilinearly (which keeps its
+/// centroid); into `plane`, the pixels of `area` whose first is the
+/// sensor's `origin`.
+fn spread_at(
+    plane: &mut [f64],
+    area: &Sensor,
+    sensor: &Sensor,
+    origin: (usize, usize),
+    corners: &[(Vector, f64); 4],
+    light: f64,
+) {
+    let px = corners.map(|c| {
+        let (x, y) = sensor.pixel(c.0);
+        (x - origin.0 as f64, y - origin.1 as f64)
+    });
     let longest = (0..4)
         .map(|k| {
             let (a, b) = (px[k], px[(k + 1) % 4]);
@@ -208,7 +294,7 @@ fn spread(plane: &mut [f64], sensor: &Sensor, corners: &[(Vector, f64); 4], ligh
             let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
             let x = (0..4).map(|k| w[k] * px[k].0).sum();
             let y = (0..4).map(|k| w[k] * px[k].1).sum();
-            deposit(plane, sensor, (x, y), share);
+            deposit(plane, area, (x, y), share);
         }
     }
 }
@@ -274,22 +360,18 @@ pub fn render(
         let direct = direct_light(layout, field, nm);
         let mut plane = vec![0.0; pixels];
         if direct > 0.0 {
-            // Paths a few at a time: each its own plane, added in order.
+            // Paths a few at a time: each drawn on its own patch, the
+            // patches added in the paths' order.
             let size = rayon::current_num_threads().max(1) * 2;
             for (c, chunk) in paths.chunks(size).enumerate() {
                 control.check()?;
-                let ghosts: Vec<(Vec<f64>, f64)> = chunk
+                let patches: Vec<Patch> = chunk
                     .par_iter()
-                    .map(|&path| {
-                        let mut own = vec![0.0; pixels];
-                        let added =
-                            add_ghost(layout, path, (field, nm), (direct, 1.0), sensor, &mut own);
-                        (own, added)
-                    })
+                    .map(|&path| draw(layout, path, (field, nm), (direct, 1.0), sensor))
                     .collect();
-                for (k, (own, added)) in ghosts.into_iter().enumerate() {
-                    light[c * size + k] += added / nms.len() as f64;
-                    plane.iter_mut().zip(&own).for_each(|(p, o)| *p += o);
+                for (k, patch) in patches.into_iter().enumerate() {
+                    light[c * size + k] += patch.light / nms.len() as f64;
+                    patch.add_to(&mut plane, sensor.width);
                 }
             }
         }

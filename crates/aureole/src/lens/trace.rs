@@ -48,6 +48,34 @@ enum Event {
     Reflect { s: usize, forwards: bool },
 }
 
+/// A path worked out at one wavelength: the surfaces it meets in order,
+/// each with what a ray needs there.
+#[derive(Debug, Clone)]
+pub struct Route {
+    steps: Vec<Step>,
+    nm: f64,
+}
+
+/// One surface met on a [`Route`].
+#[derive(Debug, Clone)]
+struct Step {
+    /// Its vertex, mm.
+    z: f64,
+    /// 1/R, mm⁻¹; 0 for a plane.
+    curvature: f64,
+    /// Its clear semi-aperture, mm.
+    semi: f64,
+    /// Whether it is the stop, whose opening may be the camera's blades.
+    stop: bool,
+    /// The indices the light comes from and goes into.
+    indices: (f64, f64),
+    /// Its coating's layers as the light meets them; `None`: it reflects
+    /// nothing (the stop).
+    layers: Option<Vec<super::Layer>>,
+    /// Whether the light is reflected here rather than refracted.
+    reflect: bool,
+}
+
 /// A lens set out for tracing: each surface's vertex on the axis, in mm.
 #[derive(Debug, Clone)]
 pub struct Layout<'a> {
@@ -183,38 +211,70 @@ impl<'a> Layout<'a> {
     /// the image plane: where it lands and the share of its light that
     /// arrives there, or `None` where a surface's aperture stops it, it
     /// misses a surface, or it is reflected wholly where it should pass.
-    pub fn trace(&self, path: Path, mut ray: Ray, nm: f64) -> Option<(Vector, f64)> {
+    pub fn trace(&self, path: Path, ray: Ray, nm: f64) -> Option<(Vector, f64)> {
+        self.follow(&self.route(path, nm), ray)
+    }
+
+    /// What `path` meets at `nm`, worked out once for every ray along it.
+    pub fn route(&self, path: Path, nm: f64) -> Route {
+        let mm = self.lens.mm_per_unit;
+        let steps = self
+            .events(path)
+            .into_iter()
+            .map(|event| {
+                let (s, forwards, reflect) = match event {
+                    Event::Through { s, forwards } => (s, forwards, false),
+                    Event::Reflect { s, forwards } => (s, forwards, true),
+                };
+                let surface = &self.lens.surfaces[s];
+                let (front, back) = (self.lens.medium_before(s), surface.medium);
+                let (n_in, n_out) = if forwards {
+                    (front.index_at(nm), back.index_at(nm))
+                } else {
+                    (back.index_at(nm), front.index_at(nm))
+                };
+                // The layers as the light meets them, from its side in.
+                let layers = match &surface.coating {
+                    _ if surface.stop => None,
+                    Coating::None => Some(Vec::new()),
+                    Coating::Layers(layers) if forwards => Some(layers.clone()),
+                    Coating::Layers(layers) => Some(layers.iter().rev().copied().collect()),
+                };
+                Step {
+                    z: self.vertices[s],
+                    curvature: surface.radius.map_or(0.0, |r| 1.0 / (r * mm)),
+                    semi: surface.semi_aperture * mm,
+                    stop: surface.stop,
+                    indices: (n_in, n_out),
+                    layers,
+                    reflect,
+                }
+            })
+            .collect();
+        Route { steps, nm }
+    }
+
+    /// `ray` along a [`Route`], as [`Layout::trace`].
+    pub fn follow(&self, route: &Route, mut ray: Ray) -> Option<(Vector, f64)> {
         let mut weight = 1.0;
-        for event in self.events(path) {
-            let (s, forwards, reflect) = match event {
-                Event::Through { s, forwards } => (s, forwards, false),
-                Event::Reflect { s, forwards } => (s, forwards, true),
-            };
-            let surface = &self.lens.surfaces[s];
-            let curvature = surface
-                .radius
-                .map_or(0.0, |r| 1.0 / (r * self.lens.mm_per_unit));
-            let semi = surface.semi_aperture * self.lens.mm_per_unit;
-            let point = hit(&ray, self.vertices[s], curvature, semi)?;
-            if let (true, Some(stop)) = (surface.stop, &self.stop) {
+        for step in &route.steps {
+            let point = hit(&ray, step.z, step.curvature, step.semi)?;
+            if let (true, Some(stop)) = (step.stop, &self.stop) {
                 if stop.transmission([point[0], point[1]])[0] < 0.5 {
                     return None;
                 }
             }
-            let (front, back) = (self.lens.medium_before(s), surface.medium);
-            let (n_in, n_out) = if forwards {
-                (front.index_at(nm), back.index_at(nm))
-            } else {
-                (back.index_at(nm), front.index_at(nm))
-            };
+            let (n_in, n_out) = step.indices;
             // The normal, turned to point along the ray.
-            let mut normal = normal(point, self.vertices[s], curvature);
+            let mut normal = normal(point, step.z, step.curvature);
             if dot(normal, ray.direction) < 0.0 {
                 normal = scale(normal, -1.0);
             }
             let cos_in = dot(normal, ray.direction);
-            let r = self.reflectance(s, forwards, (n_in, n_out), cos_in, nm);
-            ray = if reflect {
+            let r = step.layers.as_ref().map_or(0.0, |layers| {
+                coating::reflectance(n_in, n_out, layers, cos_in, route.nm)
+            });
+            ray = if step.reflect {
                 weight *= r;
                 Ray {
                     point,
@@ -234,32 +294,6 @@ impl<'a> Layout<'a> {
             return None;
         }
         Some((add(ray.point, scale(ray.direction, t)), weight))
-    }
-
-    /// Surface `s`'s reflectance for light arriving forwards (from its
-    /// front medium) or backwards, at `cos_in` from its normal.
-    fn reflectance(
-        &self,
-        s: usize,
-        forwards: bool,
-        (n_in, n_out): (f64, f64),
-        cos_in: f64,
-        nm: f64,
-    ) -> f64 {
-        let surface = &self.lens.surfaces[s];
-        if surface.stop {
-            return 0.0;
-        }
-        match &surface.coating {
-            Coating::None => coating::reflectance(n_in, n_out, &[], cos_in, nm),
-            Coating::Layers(layers) if forwards => {
-                coating::reflectance(n_in, n_out, layers, cos_in, nm)
-            }
-            Coating::Layers(layers) => {
-                let reversed: Vec<_> = layers.iter().rev().copied().collect();
-                coating::reflectance(n_in, n_out, &reversed, cos_in, nm)
-            }
-        }
     }
 
     /// The lens traced.
