@@ -838,10 +838,18 @@ fn docs_say_where_the_sample_images_come_from() {
             }
         }
     }
-    for entry in std::fs::read_dir(root.join("configs")).unwrap() {
-        let path = entry.unwrap().path();
-        let text = std::fs::read_to_string(&path).unwrap();
-        assert!(!text.contains("../shared"), "{}", path.display());
+    // The configs and the lenses under them.
+    let mut folders = vec![root.join("configs")];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(folder).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            assert!(!text.contains("../shared"), "{}", path.display());
+        }
     }
 }
 
