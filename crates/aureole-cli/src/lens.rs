@@ -36,6 +36,9 @@ pub struct Args {
     /// Straight blades of the stop, 0 for a round one (for --ghosts)
     #[arg(long, value_name = "N", default_value_t = 0)]
     blades: u32,
+    /// Trace the ghosts at 17 wavelengths from 380 to 780 nm instead of one per channel (for --ghosts)
+    #[arg(long)]
+    spectral: bool,
     /// The picture's size in pixels over a 36 mm wide sensor (for --ghosts)
     #[arg(long, value_name = "WxH", default_value = "1440x960", value_parser = crate::values::parse_size)]
     size: (usize, usize),
@@ -205,7 +208,7 @@ fn describe(lens: &Lens, p: &aureole::lens::Paraxial) -> String {
 /// `--ghosts`: every ghost of the source, rendered and written; the
 /// brightest listed.
 fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Result<(), Failure> {
-    use aureole::lens::ghost::{render, Sensor, RGB_NM};
+    use aureole::lens::ghost::{light, render, Sensor};
     use aureole::lens::trace::{Layout, Path};
     let failed =
         |e: aureole::Error| Failure::Usage(anyhow::anyhow!("{}: {e}", args.file.display()));
@@ -236,7 +239,7 @@ fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Resul
         &layout,
         field,
         &sensor,
-        &RGB_NM,
+        &light(args.spectral),
         &mut aureole::Control::new(&cancel, &mut report),
     )?;
     progress.finish();

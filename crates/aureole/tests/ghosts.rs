@@ -363,7 +363,7 @@ fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
             &layout,
             direction(5.0, 3.0),
             &sensor,
-            &[550.0],
+            &[(550.0, vec![1.0])],
             &mut Control::new(&cancel, &mut report),
         )
         .unwrap();
@@ -397,4 +397,56 @@ fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
     // outermost pixels, which fall beyond it at either resolution alike.
     let (a, b): (f64, f64) = (small.iter().sum(), reduced.iter().sum());
     assert!((a / b - 1.0).abs() < 1e-4, "{a} {b}");
+}
+
+#[test]
+fn ghosts_take_their_colour_from_the_coatings_and_the_glass_dispersion_alone() {
+    use aureole::control::{Cancel, Control};
+    use aureole::lens::ghost::{direction, light, render, Sensor};
+    use aureole::lens::Coating;
+    let sensor = Sensor {
+        width: 120,
+        height: 80,
+        pitch_mm: 0.3,
+    };
+    let picture = |lens: &Lens, spectral: bool| {
+        let layout = Layout::with_image(lens, 24.0, (0.0, 10.0));
+        let mut report = |_| {};
+        let cancel = Cancel::new();
+        let mut control = Control::new(&cancel, &mut report);
+        render(
+            &layout,
+            direction(4.0, 2.0),
+            &sensor,
+            &light(spectral),
+            &mut control,
+        )
+        .unwrap()
+    };
+    // Bare plates of one index at every wavelength (no v_d): grey ghosts,
+    // in three wavelengths or seventeen.
+    let mut grey = Lens::parse(PLATES, "plates").unwrap();
+    for s in &mut grey.surfaces {
+        s.coating = Coating::None;
+    }
+    for spectral in [false, true] {
+        let planes = picture(&grey, spectral).planes;
+        assert!(planes[0].iter().sum::<f64>() > 0.0);
+        for plane in &planes[1..] {
+            for (a, b) in plane.iter().zip(&planes[0]) {
+                assert!((a - b).abs() <= 1e-12 * b.abs().max(1e-20), "{a} {b}");
+            }
+        }
+    }
+    // MgF₂ a quarter wave at 550 nm on the second plate reflects the blue
+    // and the red more than the green: purple ghosts.
+    let coated = picture(&Lens::parse(PLATES, "plates").unwrap(), true);
+    let sum = |c: usize| coated.planes[c].iter().sum::<f64>();
+    assert!(
+        sum(0) > sum(1) && sum(2) > sum(1),
+        "{} {} {}",
+        sum(0),
+        sum(1),
+        sum(2)
+    );
 }

@@ -191,13 +191,17 @@ struct Patch {
 
 impl Patch {
     fn add_to(&self, plane: &mut [f64], width: usize) {
+        self.add_scaled(plane, width, 1.0);
+    }
+
+    fn add_scaled(&self, plane: &mut [f64], width: usize, scale: f64) {
         if self.width == 0 {
             return;
         }
         for (r, row) in self.values.chunks(self.width).enumerate() {
             let start = (self.y0 + r) * width + self.x0;
             for (p, v) in plane[start..start + self.width].iter_mut().zip(row) {
-                *p += v;
+                *p += scale * v;
             }
         }
     }
@@ -325,40 +329,66 @@ pub fn direction(x: f64, y: f64) -> Vector {
     [tx / norm, ty / norm, 1.0 / norm]
 }
 
-/// The wavelengths a ghost is traced at for R, G and B, nm: the dominant
-/// wavelengths of Rec.709's primaries.
-pub const RGB_NM: [f64; 3] = [611.0, 549.0, 464.0];
+/// The light a ghost is traced in: three wavelengths, each channel's
+/// sensitivity-weighted mean (R, G, B), or 17 from 380 to 780 nm, each
+/// with its weight in R, G and B (the spectral apertures' light,
+/// docs/physics.md §6).
+pub fn light(spectral: bool) -> Vec<(f64, Vec<f64>)> {
+    use crate::optics::aperture::spectrum;
+    if spectral {
+        spectrum::Light::Spectral.wavelengths()
+    } else {
+        spectrum::mean_wavelengths()
+            .iter()
+            .enumerate()
+            .map(|(c, &nm)| {
+                let mut weights = vec![0.0; 3];
+                weights[c] = 1.0;
+                (nm, weights)
+            })
+            .collect()
+    }
+}
 
 /// A source's ghosts on a sensor.
 #[derive(Debug, Clone)]
 pub struct Rendered {
-    /// One plane per wavelength, rows downwards: each pixel the light it
-    /// receives over the light the direct path brings to the source's
-    /// own image at that wavelength.
+    /// One plane per channel of the light, rows downwards: each pixel the
+    /// light it receives over the light of the source's own image in that
+    /// channel (a source of even spectral power: white light).
     pub planes: Vec<Vec<f64>>,
-    /// Each path's light (the wavelengths' mean), the brightest first.
+    /// Each path's light over the image's (the channels' mean), the
+    /// brightest first.
     pub ranked: Vec<(Path, f64)>,
 }
 
-/// Every ghost of a distant source in direction `field`, on `sensor`, at
-/// each wavelength of `nms`. The paths are traced in parallel and added
-/// in their order: the same bits on any number of threads.
+/// Every ghost of a distant source in direction `field`, on `sensor`, in
+/// `light` (its wavelengths, each with its weight in every channel, as
+/// [`light`] gives). The paths are traced in parallel and added in their
+/// order: the same bits on any number of threads.
 pub fn render(
     layout: &Layout,
     field: Vector,
     sensor: &Sensor,
-    nms: &[f64],
+    light: &[(f64, Vec<f64>)],
     control: &mut crate::control::Control,
 ) -> crate::Result<Rendered> {
     use rayon::prelude::*;
     let paths = layout.ghosts();
+    let channels = light.first().map_or(0, |(_, w)| w.len());
     let pixels = sensor.width * sensor.height;
-    let mut planes = Vec::with_capacity(nms.len());
-    let mut light = vec![0.0; paths.len()];
-    for (w, &nm) in nms.iter().enumerate() {
+    // Each channel's image: its weights times the direct path's light.
+    let directs: Vec<f64> = light
+        .iter()
+        .map(|&(nm, _)| direct_light(layout, field, nm))
+        .collect();
+    let images: Vec<f64> = (0..channels)
+        .map(|c| light.iter().zip(&directs).map(|((_, w), d)| w[c] * d).sum())
+        .collect();
+    let mut planes = vec![vec![0.0; pixels]; channels];
+    let mut ranked = vec![0.0; paths.len()];
+    for (k, ((nm, weights), &direct)) in light.iter().zip(&directs).enumerate() {
         control.check()?;
-        let direct = direct_light(layout, field, nm);
-        let mut plane = vec![0.0; pixels];
         if direct > 0.0 {
             // Paths a few at a time: each drawn on its own patch, the
             // patches added in the paths' order.
@@ -367,18 +397,22 @@ pub fn render(
                 control.check()?;
                 let patches: Vec<Patch> = chunk
                     .par_iter()
-                    .map(|&path| draw(layout, path, (field, nm), (direct, 1.0), sensor))
+                    .map(|&path| draw(layout, path, (field, *nm), (1.0, 1.0), sensor))
                     .collect();
-                for (k, patch) in patches.into_iter().enumerate() {
-                    light[c * size + k] += patch.light / nms.len() as f64;
-                    patch.add_to(&mut plane, sensor.width);
+                for (p, patch) in patches.into_iter().enumerate() {
+                    for (channel, plane) in planes.iter_mut().enumerate() {
+                        let share = weights[channel] / images[channel];
+                        if share > 0.0 && images[channel] > 0.0 {
+                            ranked[c * size + p] += share * patch.light / channels as f64;
+                            patch.add_scaled(plane, sensor.width, share);
+                        }
+                    }
                 }
             }
         }
-        planes.push(plane);
-        control.report((w + 1) as f64 / nms.len() as f64);
+        control.report((k + 1) as f64 / light.len() as f64);
     }
-    let mut ranked: Vec<(Path, f64)> = paths.into_iter().zip(light).collect();
+    let mut ranked: Vec<(Path, f64)> = paths.into_iter().zip(ranked).collect();
     ranked.sort_by(|a, b| b.1.total_cmp(&a.1));
     Ok(Rendered { planes, ranked })
 }
