@@ -222,7 +222,7 @@ fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Resul
         }
         None => open,
     };
-    let aperture = aureole::Aperture::with_blades(args.blades);
+    let aperture = aureole::Aperture::new(args.blades);
     let layout = layout.with_stop(aperture.stop(radius), open);
     let (width, height) = args.size;
     let sensor = Sensor {

@@ -331,7 +331,7 @@ fn a_hexagonal_stop_passes_the_light_of_a_hexagon() {
     let layout = Layout::new(&lens).unwrap();
     let stop = lens.surfaces[lens.stop()].semi_aperture;
     let shaped = |blades: u32| {
-        let aperture = aureole::Aperture::with_blades(blades);
+        let aperture = aureole::Aperture::new(blades);
         let layout = Layout::new(&lens)
             .unwrap()
             .with_stop(aperture.stop(stop), stop);
@@ -350,7 +350,7 @@ fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
     let lens = shipped("portrait-90mm-f2");
     let layout = Layout::new(&lens).unwrap();
     let stop = lens.surfaces[lens.stop()].semi_aperture;
-    let layout = layout.with_stop(aureole::Aperture::with_blades(6).stop(stop * 0.5), stop);
+    let layout = layout.with_stop(aureole::Aperture::new(6).stop(stop * 0.5), stop);
     let picture = |width: usize| {
         let sensor = Sensor {
             width,

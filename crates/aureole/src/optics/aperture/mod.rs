@@ -641,33 +641,6 @@ impl Aperture {
         })
     }
 
-    /// A stop of `blades` straight blades (0: round), unrotated, clean,
-    /// every other key at its default.
-    pub fn with_blades(blades: u32) -> Aperture {
-        Aperture {
-            blades,
-            rotation_deg: 0.0,
-            roundness: 0.0,
-            spectral: yes(),
-            wavelength_nm: green(),
-            obstruction: 0.0,
-            vanes: 0,
-            vane_width: vane_width(),
-            dust: 0,
-            dust_min_um: dust_min(),
-            dust_max_um: dust_max(),
-            scratches: 0,
-            scratch_length_mm: scratch_length(),
-            scratch_width_um: scratch_width(),
-            scratch_angle_deg: 0.0,
-            scratch_spread_deg: scratch_spread(),
-            grease: 0.0,
-            grease_transmission: grease_transmission(),
-            grease_phase_deg: grease_phase(),
-            filters: Vec::new(),
-        }
-    }
-
     /// The stop alone, of circumradius `radius` mm: its blades, their
     /// rotation and roundness (what clips a lens's ghosts).
     pub fn stop(&self, radius: f64) -> Pupil {
