@@ -308,13 +308,19 @@ fn spread_at(
 /// dropped.
 fn deposit(plane: &mut [f64], sensor: &Sensor, (x, y): (f64, f64), light: f64) {
     let (fx, fy) = (x - 0.5, y - 0.5);
-    let (x0, y0) = (fx.floor(), fy.floor());
-    let (ax, ay) = (fx - x0, fy - y0);
-    for (dx, wx) in [(0.0, 1.0 - ax), (1.0, ax)] {
-        for (dy, wy) in [(0.0, 1.0 - ay), (1.0, ay)] {
+    // Wholly beyond the sensor (or not a number): nothing to share.
+    if !(fx >= -1.0 && fy >= -1.0 && fx < sensor.width as f64 && fy < sensor.height as f64) {
+        return;
+    }
+    // ⌊f⌋ by truncating f + 1 ≥ 0: a conversion, not a call to `floor`.
+    let (x0, y0) = ((fx + 1.0) as i64 - 1, (fy + 1.0) as i64 - 1);
+    let (ax, ay) = (fx - x0 as f64, fy - y0 as f64);
+    let (w, h) = (sensor.width as i64, sensor.height as i64);
+    for (dx, wx) in [(0, 1.0 - ax), (1, ax)] {
+        for (dy, wy) in [(0, 1.0 - ay), (1, ay)] {
             let (cx, cy) = (x0 + dx, y0 + dy);
-            if cx >= 0.0 && cy >= 0.0 && cx < sensor.width as f64 && cy < sensor.height as f64 {
-                plane[cy as usize * sensor.width + cx as usize] += light * wx * wy;
+            if cx >= 0 && cy >= 0 && cx < w && cy < h {
+                plane[(cy * w + cx) as usize] += light * wx * wy;
             }
         }
     }
