@@ -22,33 +22,30 @@ pub fn reflectance(n_in: f64, n_out: f64, layers: &[Layer], cos_in: f64, nm: f64
     let invariant = n_in * n_in * sin2;
     let cos_of = |n: f64| root(1.0 - invariant / (n * n));
     let (cos_sub, cos_0) = (cos_of(n_out), Complex64::new(cos_in, 0.0));
-    let mut total = 0.0;
-    for p_polarised in [false, true] {
-        // The tilted admittances: n cos θ for s light, n / cos θ for p.
-        let admittance = |n: f64, cos: Complex64| {
-            if p_polarised {
-                Complex64::new(n, 0.0) / cos
-            } else {
-                cos * n
-            }
-        };
-        let (mut b, mut c) = (Complex64::new(1.0, 0.0), admittance(n_out, cos_sub));
-        // [B, C] = M₁ M₂ … M_q [1, η_sub], the innermost layer applied first.
-        for layer in layers.iter().rev() {
-            let cos = cos_of(layer.index);
-            let eta = admittance(layer.index, cos);
-            let delta = cos * (2.0 * PI * layer.index * layer.thickness_nm / nm);
-            let (sin_d, cos_d) = sin_cos(delta);
-            let i = Complex64::new(0.0, 1.0);
-            (b, c) = (
-                cos_d * b + i * sin_d / eta * c,
-                i * eta * sin_d * b + cos_d * c,
+    // The tilted admittances: n cos θ for s light, n / cos θ for p.
+    let admittances = |n: f64, cos: Complex64| [cos * n, Complex64::new(n, 0.0) / cos];
+    let sub = admittances(n_out, cos_sub);
+    let one = Complex64::new(1.0, 0.0);
+    // [B, C] = M₁ M₂ … M_q [1, η_sub] for s and p light at once, the
+    // innermost layer applied first: a layer's phase thickness δ is the
+    // same for both, its sine and cosine taken once.
+    let (mut b, mut c) = ([one, one], sub);
+    for layer in layers.iter().rev() {
+        let cos = cos_of(layer.index);
+        let delta = cos * (2.0 * PI * layer.index * layer.thickness_nm / nm);
+        let (sin_d, cos_d) = sin_cos(delta);
+        let i = Complex64::new(0.0, 1.0);
+        for (k, eta) in admittances(layer.index, cos).into_iter().enumerate() {
+            (b[k], c[k]) = (
+                cos_d * b[k] + i * sin_d / eta * c[k],
+                i * eta * sin_d * b[k] + cos_d * c[k],
             );
         }
-        let eta_0 = admittance(n_in, cos_0);
-        let r = (eta_0 * b - c) / (eta_0 * b + c);
-        total += r.norm_sqr();
     }
+    let eta_0 = admittances(n_in, cos_0);
+    let total: f64 = (0..2)
+        .map(|k| ((eta_0[k] * b[k] - c[k]) / (eta_0[k] * b[k] + c[k])).norm_sqr())
+        .sum();
     (0.5 * total).clamp(0.0, 1.0)
 }
 
@@ -64,7 +61,11 @@ fn root(x: f64) -> Complex64 {
 /// sin z and cos z through `libm`, the same bits on every machine (the
 /// complex type's own call the platform's maths library).
 fn sin_cos(z: Complex64) -> (Complex64, Complex64) {
-    let (sin, cos) = (libm::sin(z.re), libm::cos(z.re));
+    let (sin, cos) = libm::sincos(z.re);
+    // A layer the light crosses (a real phase): no hyperbolic part.
+    if z.im == 0.0 {
+        return (Complex64::new(sin, 0.0), Complex64::new(cos, 0.0));
+    }
     let (sinh, cosh) = (libm::sinh(z.im), libm::cosh(z.im));
     (
         Complex64::new(sin * cosh, cos * sinh),
