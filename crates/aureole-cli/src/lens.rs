@@ -33,8 +33,8 @@ pub struct Args {
     /// The stop's f-number (for --ghosts; default: the lens wide open)
     #[arg(long, value_name = "N", value_parser = crate::values::parse_positive)]
     f_number: Option<f64>,
-    /// Straight blades of the stop, 0 for a round one (for --ghosts)
-    #[arg(long, value_name = "N", default_value_t = 0)]
+    /// Straight blades of the stop, 3 to 64, or 0 for a round one (for --ghosts)
+    #[arg(long, value_name = "N", default_value_t = 0, value_parser = parse_blades)]
     blades: u32,
     /// Trace the ghosts at 17 wavelengths from 380 to 780 nm instead of one per channel (for --ghosts)
     #[arg(long)]
@@ -42,6 +42,16 @@ pub struct Args {
     /// The picture's size in pixels over a 36 mm wide sensor (for --ghosts)
     #[arg(long, value_name = "WxH", default_value = "1440x960", value_parser = crate::values::parse_size)]
     size: (usize, usize),
+}
+
+/// A stop's blade count: 0 (round) or 3 to 64.
+fn parse_blades(text: &str) -> Result<u32, String> {
+    match text.parse::<u32>() {
+        Ok(n) if n == 0 || (3..=aureole::optics::aperture::MAX_BLADES).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "{text:?} is not a blade count: 0 for a round stop, or 3 to 64"
+        )),
+    }
 }
 
 /// "X,Y" in degrees, each within ±80.
@@ -218,6 +228,13 @@ fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Resul
     let radius = match args.f_number {
         Some(n) => {
             let p = lens.paraxial().map_err(failed)?;
+            if n < p.f_number && !quiet {
+                say!(
+                    "aureole: note: {}: f/{n} is wider than the lens opens: its ghosts are traced at f/{:.2}, wide open",
+                    args.file.display(),
+                    p.f_number
+                );
+            }
             (open * p.f_number / n).min(open)
         }
         None => open,

@@ -69,7 +69,7 @@ enum Command {
     Demo(demo::Args),
     /// Describe an image: size, channels, luminance range, bright pixels.
     Info(info::Args),
-    /// Describe a lens prescription (aureole's TOML, pbrt's .dat, lentil's JSON): focal length, back focus, pupil, surfaces; -o writes it as TOML.
+    /// Describe a lens prescription (aureole's TOML, pbrt's .dat, lentil's JSON, an Optical Bench .txt): focal length, back focus, pupil, surfaces; -o writes it as TOML, --ghosts renders one source's ghosts.
     Lens(lens::Args),
     /// Write the camera's PSF as a convolution kernel (PFM, EXR or a PNG picture).
     Psf(psf::Args),
