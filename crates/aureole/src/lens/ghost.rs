@@ -33,8 +33,8 @@ impl Sensor {
     }
 }
 
-/// Rays across the entrance pupil's diameter for one path: cells of
-/// 1/`GRID` of it.
+/// Cells across the square about the entrance pupil that a path's
+/// bundle is traced over (each side 1.1 of the pupil's diameter).
 pub const GRID: usize = 96;
 
 /// The most pieces a cell is cut into along each side when it lands
