@@ -85,6 +85,77 @@ fn real_rays_land_where_optiland_lands_them() {
     assert!(worst < 2e-6, "{worst}");
 }
 
+/// Where optiland lands rays along ghost paths (the same script): the
+/// path unfolded into mirrors, the rays started on the lines aureole
+/// starts them on. Lens, pupil diameter, (first, second) reflecting
+/// surfaces, field angle along y, pupil point, landing point.
+type GhostLanding = (
+    &'static str,
+    f64,
+    (usize, usize),
+    f64,
+    (f64, f64),
+    (f64, f64),
+);
+
+#[rustfmt::skip]
+const OPTILAND_GHOSTS: &[GhostLanding] = &[
+    ("double-gauss-50mm-f1.4", 20.0, (1, 4), 0.0, (0.0, 0.0), (0.0, 0.0)),
+    ("double-gauss-50mm-f1.4", 20.0, (1, 4), 0.0, (0.0, 0.5), (0.0, -1.60399608)),
+    ("double-gauss-50mm-f1.4", 20.0, (1, 4), 0.0, (0.4, 0.0), (-1.25452234, 0.0)),
+    ("double-gauss-50mm-f1.4", 20.0, (1, 4), 0.0, (-0.3, 0.2), (0.933886063, -0.622590709)),
+    ("double-gauss-50mm-f1.4", 20.0, (1, 4), 5.0, (0.0, 0.0), (0.0, 5.40304638)),
+    ("double-gauss-50mm-f1.4", 20.0, (1, 4), 5.0, (0.0, 0.5), (0.0, 3.84328889)),
+    ("double-gauss-50mm-f1.4", 20.0, (1, 4), 5.0, (0.4, 0.0), (-1.29062561, 5.41540539)),
+    ("double-gauss-50mm-f1.4", 20.0, (1, 4), 5.0, (-0.3, 0.2), (0.945093891, 4.78426925)),
+    ("double-gauss-50mm-f1.4", 20.0, (4, 5), 0.0, (0.0, 0.0), (0.0, 0.0)),
+    ("double-gauss-50mm-f1.4", 20.0, (4, 5), 0.0, (0.0, 0.5), (0.0, 24.3470121)),
+    ("double-gauss-50mm-f1.4", 20.0, (4, 5), 0.0, (0.4, 0.0), (18.5598314, 0.0)),
+    ("double-gauss-50mm-f1.4", 20.0, (4, 5), 0.0, (-0.3, 0.2), (-13.7419363, 9.16129087)),
+    ("double-gauss-50mm-f1.4", 20.0, (4, 5), 5.0, (0.0, 0.0), (0.0, -0.519318845)),
+    ("double-gauss-50mm-f1.4", 20.0, (4, 5), 5.0, (0.0, 0.5), (0.0, 23.0843566)),
+    ("double-gauss-50mm-f1.4", 20.0, (4, 5), 5.0, (0.4, 0.0), (18.5205865, -0.45721089)),
+    ("double-gauss-50mm-f1.4", 20.0, (4, 5), 5.0, (-0.3, 0.2), (-13.6075632, 8.56755219)),
+    ("double-gauss-50mm-f1.4", 20.0, (0, 8), 0.0, (0.0, 0.0), (0.0, 0.0)),
+    ("double-gauss-50mm-f1.4", 20.0, (0, 8), 0.0, (0.0, 0.5), (0.0, -18.6103927)),
+    ("double-gauss-50mm-f1.4", 20.0, (0, 8), 0.0, (0.4, 0.0), (-14.60904, 0.0)),
+    ("double-gauss-50mm-f1.4", 20.0, (0, 8), 0.0, (-0.3, 0.2), (10.8909775, -7.26065168)),
+    ("double-gauss-50mm-f1.4", 20.0, (0, 8), 5.0, (0.0, 0.0), (0.0, -12.0626404)),
+    ("double-gauss-50mm-f1.4", 20.0, (0, 8), 5.0, (0.0, 0.5), (0.0, -34.120852)),
+    ("double-gauss-50mm-f1.4", 20.0, (0, 8), 5.0, (0.4, 0.0), (-15.0652356, -12.1305299)),
+    ("double-gauss-50mm-f1.4", 20.0, (0, 8), 5.0, (-0.3, 0.2), (11.5625305, -20.0431805)),
+];
+
+#[test]
+fn rays_along_ghost_paths_land_where_optiland_lands_them() {
+    // optiland clips no ray, and follows some where no real lens lets
+    // them go (out through the barrel, beyond a sphere's rim): the rays
+    // the lens's own apertures pass are compared.
+    let (mut compared, mut worst) = (0, 0.0f64);
+    for &(name, diameter, (first, second), degrees, pupil, (x, y)) in OPTILAND_GHOSTS {
+        let lens = shipped(name);
+        let focus = Layout::new(&lens).unwrap();
+        let layout = Layout::with_image(&lens, focus.image, (focus.pupil.0, diameter / 2.0));
+        let angle = degrees.to_radians();
+        let field = [0.0, libm::sin(angle), libm::cos(angle)];
+        let path = Path::Ghost { first, second };
+        let ray = layout.collimated(field, pupil);
+        let Some((at, _)) = layout.trace(path, ray, aureole::lens::D_LINE_NM) else {
+            continue;
+        };
+        let error = ((at[0] - x).powi(2) + (at[1] - y).powi(2)).sqrt();
+        assert!(
+            error < 1e-4,
+            "{path:?} {degrees}° {pupil:?}: {at:?} against ({x}, {y})"
+        );
+        compared += 1;
+        worst = worst.max(error);
+    }
+    assert!(compared >= 12, "{compared}");
+    // Their printed digits, not the tracers, set this.
+    assert!(worst < 2e-6, "{worst}");
+}
+
 /// Two plates behind a stop: one bare (n = 1.5), one coated on both
 /// sides with a quarter wave of MgF₂ at 550 nm (n = 1.7).
 const PLATES: &str = r#"
