@@ -93,7 +93,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         write_lens(out, &lens)?;
     }
     if let Some(out) = &args.ghosts {
-        ghosts(args, &lens, out, quiet)?;
+        ghosts(args, (&lens, &paraxial), out, quiet)?;
     }
     let text = if args.json {
         json(&lens, &paraxial)
@@ -217,7 +217,12 @@ fn describe(lens: &Lens, p: &aureole::lens::Paraxial) -> String {
 
 /// `--ghosts`: every ghost of the source, rendered and written; the
 /// brightest listed.
-fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Result<(), Failure> {
+fn ghosts(
+    args: &Args,
+    (lens, p): (&Lens, &aureole::lens::Paraxial),
+    out: &std::path::Path,
+    quiet: bool,
+) -> Result<(), Failure> {
     use aureole::lens::ghost::{light, render, Sensor};
     use aureole::lens::trace::{Layout, Path};
     let failed =
@@ -225,20 +230,17 @@ fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Resul
     let layout = Layout::new(lens).map_err(failed)?;
     let stop = &lens.surfaces[lens.stop()];
     let open = stop.semi_aperture * lens.mm_per_unit;
-    let radius = match args.f_number {
-        Some(n) => {
-            let p = lens.paraxial().map_err(failed)?;
-            if n < p.f_number && !quiet {
-                say!(
-                    "aureole: note: {}: f/{n} is wider than the lens opens: its ghosts are traced at f/{:.2}, wide open",
-                    args.file.display(),
-                    p.f_number
-                );
-            }
-            (open * p.f_number / n).min(open)
-        }
-        None => open,
-    };
+    // The stop's opening scales with the f-number asked, no wider than
+    // the lens opens.
+    let f_number = args.f_number.map_or(p.f_number, |n| n.max(p.f_number));
+    if let Some(n) = args.f_number.filter(|&n| n < p.f_number && !quiet) {
+        say!(
+            "aureole: note: {}: f/{n} is wider than the lens opens: its ghosts are traced at f/{:.2}, wide open",
+            args.file.display(),
+            p.f_number
+        );
+    }
+    let radius = open * p.f_number / f_number;
     let aperture = aureole::Aperture::new(args.blades);
     let layout = layout.with_stop(aperture.stop(radius), open);
     let (width, height) = args.size;
@@ -285,7 +287,7 @@ fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Resul
             ranked.len(),
             args.source.0,
             args.source.1,
-            args.f_number.unwrap_or_else(|| lens.paraxial().map_or(0.0, |p| p.f_number)),
+            f_number,
             total
         );
         for (path, light) in ranked.iter().take(5) {

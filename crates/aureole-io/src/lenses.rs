@@ -108,14 +108,10 @@ pub fn write_lens(path: &Path, lens: &Lens) -> Result<()> {
     })
 }
 
-/// A coating for an imported air–glass surface: neither format gives one,
-/// so the usual single layer of MgF₂; cemented surfaces and the stop none.
+/// An imported surface's coating: neither format gives one, so the usual
+/// single layer of MgF₂ where it separates air from glass.
 fn imported_coating(before: Medium, after: Medium) -> Coating {
-    if before.is_glass() != after.is_glass() {
-        Coating::magnesium_fluoride()
-    } else {
-        Coating::None
-    }
+    Coating::unless_given(before, after, &Coating::magnesium_fluoride())
 }
 
 /// A pbrt `.dat` table: its first comment line as the name (else `stem`)
@@ -154,12 +150,10 @@ fn pbrt(text: &str, stem: &str) -> std::result::Result<(String, Vec<Surface>), S
             ));
         };
         let stop = radius == 0.0;
-        let medium = if stop || n == 0.0 || n == 1.0 {
-            if stop {
-                before
-            } else {
-                Medium::Air
-            }
+        let medium = if stop {
+            before
+        } else if n == 0.0 || n == 1.0 {
+            Medium::Air
         } else {
             Medium::Glass { n_d: n, v_d: None }
         };

@@ -414,10 +414,22 @@ fn a_hexagonal_stop_passes_the_light_of_a_hexagon() {
     drop(layout);
 }
 
+/// Every ghost of a source in direction `field` on `sensor`, in `light`,
+/// without progress or cancellation.
+fn rendered(
+    layout: &Layout,
+    field: [f64; 3],
+    sensor: &aureole::lens::ghost::Sensor,
+    light: &[(f64, Vec<f64>)],
+) -> aureole::lens::ghost::Rendered {
+    let cancel = aureole::control::Cancel::new();
+    let mut control = aureole::control::Control::quiet(&cancel);
+    aureole::lens::ghost::render(layout, field, sensor, light, &mut control).unwrap()
+}
+
 #[test]
 fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
-    use aureole::control::{Cancel, Control};
-    use aureole::lens::ghost::{direction, render, Sensor};
+    use aureole::lens::ghost::{direction, Sensor};
     let lens = shipped("portrait-90mm-f2");
     let layout = Layout::new(&lens).unwrap();
     let stop = lens.surfaces[lens.stop()].semi_aperture;
@@ -428,16 +440,7 @@ fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
             height: width * 2 / 3,
             pitch_mm: 36.0 / width as f64,
         };
-        let mut report = |_| {};
-        let cancel = Cancel::new();
-        let rendered = render(
-            &layout,
-            direction(5.0, 3.0),
-            &sensor,
-            &[(550.0, vec![1.0])],
-            &mut Control::new(&cancel, &mut report),
-        )
-        .unwrap();
+        let rendered = rendered(&layout, direction(5.0, 3.0), &sensor, &[(550.0, vec![1.0])]);
         rendered.planes.into_iter().next().unwrap()
     };
     let (small, large) = (picture(240), picture(480));
@@ -472,8 +475,7 @@ fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
 
 #[test]
 fn ghosts_take_their_colour_from_the_coatings_and_the_glass_dispersion_alone() {
-    use aureole::control::{Cancel, Control};
-    use aureole::lens::ghost::{direction, light, render, Sensor};
+    use aureole::lens::ghost::{direction, light, Sensor};
     use aureole::lens::Coating;
     let sensor = Sensor {
         width: 120,
@@ -482,17 +484,7 @@ fn ghosts_take_their_colour_from_the_coatings_and_the_glass_dispersion_alone() {
     };
     let picture = |lens: &Lens, spectral: bool| {
         let layout = Layout::with_image(lens, 24.0, (0.0, 10.0));
-        let mut report = |_| {};
-        let cancel = Cancel::new();
-        let mut control = Control::new(&cancel, &mut report);
-        render(
-            &layout,
-            direction(4.0, 2.0),
-            &sensor,
-            &light(spectral),
-            &mut control,
-        )
-        .unwrap()
+        rendered(&layout, direction(4.0, 2.0), &sensor, &light(spectral))
     };
     // Bare plates of one index at every wavelength (no v_d): grey ghosts,
     // in three wavelengths or seventeen.

@@ -247,13 +247,15 @@ fn draw(
     );
     let (width, height) = (x1.saturating_sub(x0), y1.saturating_sub(y0));
     let mut values = vec![0.0; width * height];
-    let area = Sensor {
-        width,
-        height,
-        pitch_mm: sensor.pitch_mm,
-    };
     for (corners, share) in &quads {
-        spread_at(&mut values, &area, sensor, (x0, y0), corners, *share);
+        spread_at(
+            &mut values,
+            (width, height),
+            sensor,
+            (x0, y0),
+            corners,
+            *share,
+        );
     }
     Patch {
         x0,
@@ -267,11 +269,11 @@ fn draw(
 /// `light` spread evenly over the quadrilateral the four `corners` land
 /// on: cut until each piece is smaller than a pixel, each piece's light
 /// going to the pixels about its centre, bilinearly (which keeps its
-/// centroid); into `plane`, the pixels of `area` whose first is the
+/// centroid); into `plane`, a box of `size` pixels whose first is the
 /// sensor's `origin`.
 fn spread_at(
     plane: &mut [f64],
-    area: &Sensor,
+    size: (usize, usize),
     sensor: &Sensor,
     origin: (usize, usize),
     corners: &[(Vector, f64); 4],
@@ -298,24 +300,24 @@ fn spread_at(
             let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
             let x = (0..4).map(|k| w[k] * px[k].0).sum();
             let y = (0..4).map(|k| w[k] * px[k].1).sum();
-            deposit(plane, area, (x, y), share);
+            deposit(plane, size, (x, y), share);
         }
     }
 }
 
 /// `light` at the point (column, row) shared bilinearly among the four
-/// pixels whose centres surround it; what falls beyond the sensor is
-/// dropped.
-fn deposit(plane: &mut [f64], sensor: &Sensor, (x, y): (f64, f64), light: f64) {
+/// pixels whose centres surround it, in a plane of `width`×`height`;
+/// what falls beyond it is dropped.
+fn deposit(plane: &mut [f64], (width, height): (usize, usize), (x, y): (f64, f64), light: f64) {
     let (fx, fy) = (x - 0.5, y - 0.5);
-    // Wholly beyond the sensor (or not a number): nothing to share.
-    if !(fx >= -1.0 && fy >= -1.0 && fx < sensor.width as f64 && fy < sensor.height as f64) {
+    // Wholly beyond the plane (or not a number): nothing to share.
+    if !(fx >= -1.0 && fy >= -1.0 && fx < width as f64 && fy < height as f64) {
         return;
     }
     // ⌊f⌋ by truncating f + 1 ≥ 0: a conversion, not a call to `floor`.
     let (x0, y0) = ((fx + 1.0) as i64 - 1, (fy + 1.0) as i64 - 1);
     let (ax, ay) = (fx - x0 as f64, fy - y0 as f64);
-    let (w, h) = (sensor.width as i64, sensor.height as i64);
+    let (w, h) = (width as i64, height as i64);
     for (dx, wx) in [(0, 1.0 - ax), (1, ax)] {
         for (dy, wy) in [(0, 1.0 - ay), (1, ay)] {
             let (cx, cy) = (x0 + dx, y0 + dy);
@@ -407,8 +409,8 @@ pub fn render(
                     .collect();
                 for (p, patch) in patches.into_iter().enumerate() {
                     for (channel, plane) in planes.iter_mut().enumerate() {
-                        let share = weights[channel] / images[channel];
-                        if share > 0.0 && images[channel] > 0.0 {
+                        if weights[channel] > 0.0 && images[channel] > 0.0 {
+                            let share = weights[channel] / images[channel];
                             ranked[c * size + p] += share * patch.light / channels as f64;
                             patch.add_scaled(plane, sensor.width, share);
                         }

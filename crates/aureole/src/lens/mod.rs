@@ -132,14 +132,6 @@ impl Medium {
         }
     }
 
-    /// n_d.
-    pub fn n_d(&self) -> f64 {
-        match *self {
-            Medium::Air => 1.0,
-            Medium::Glass { n_d, .. } => n_d,
-        }
-    }
-
     /// Whether this is glass.
     pub fn is_glass(&self) -> bool {
         matches!(self, Medium::Glass { .. })
@@ -168,6 +160,18 @@ impl Coating {
     /// The usual single layer: MgF₂, a quarter wave at 550 nm.
     pub fn magnesium_fluoride() -> Coating {
         Coating::quarter_wave(MGF2_INDEX, DESIGN_NM)
+    }
+
+    /// The coating a surface between `before` and `after` takes when its
+    /// prescription gives none: `usual` where it separates air from
+    /// glass; none where it is cemented (glass on both sides) or between
+    /// airs (the stop).
+    pub fn unless_given(before: Medium, after: Medium, usual: &Coating) -> Coating {
+        if before.is_glass() != after.is_glass() {
+            usual.clone()
+        } else {
+            Coating::None
+        }
     }
 }
 

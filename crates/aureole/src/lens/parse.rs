@@ -88,8 +88,7 @@ pub(super) fn lens(text: &str, source_name: &str) -> Result<Lens> {
         let coating = match &s.coating {
             Some(value) => coating(value.get_ref())
                 .map_err(|m| place(value.span(), format!("surface {}: {m}", i + 1)))?,
-            None if before.is_glass() != medium.is_glass() => default.clone(),
-            None => Coating::None,
+            None => Coating::unless_given(before, medium, &default),
         };
         surfaces.push(Surface {
             radius,

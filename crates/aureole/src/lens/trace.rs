@@ -89,6 +89,9 @@ pub struct Layout<'a> {
     /// The stop's opening (mm, in its plane), where the camera shapes it:
     /// else the stop's clear semi-aperture.
     stop: Option<Pupil>,
+    /// z in front of every surface, mm, where rays start: none bulges
+    /// forwards by more than its clear semi-aperture.
+    front: f64,
 }
 
 impl<'a> Layout<'a> {
@@ -96,19 +99,13 @@ impl<'a> Layout<'a> {
     pub fn new(lens: &'a Lens) -> crate::Result<Layout<'a>> {
         let paraxial = lens.paraxial()?;
         let mm = lens.mm_per_unit;
-        let last: f64 = lens.surfaces[..lens.surfaces.len() - 1]
-            .iter()
-            .map(|s| s.thickness * mm)
-            .sum();
         let pupil = (
             paraxial.entrance_pupil * mm,
             paraxial.entrance_pupil_radius * mm,
         );
-        Ok(Layout::with_image(
-            lens,
-            last + paraxial.back_focus * mm,
-            pupil,
-        ))
+        let mut layout = Layout::with_image(lens, 0.0, pupil);
+        layout.image = layout.vertices.last().copied().unwrap_or(0.0) + paraxial.back_focus * mm;
+        Ok(layout)
     }
 
     /// `lens` in mm with its image plane at z = `image` (mm) and the
@@ -126,12 +123,18 @@ impl<'a> Layout<'a> {
                 here
             })
             .collect::<Vec<f64>>();
+        let widest = lens
+            .surfaces
+            .iter()
+            .map(|s| s.semi_aperture * mm)
+            .fold(0.0, f64::max);
         Layout {
             lens,
             vertices,
             image,
             pupil,
             stop: None,
+            front: -(widest + 1.0),
         }
     }
 
@@ -151,15 +154,7 @@ impl<'a> Layout<'a> {
     pub fn collimated(&self, field: Vector, (px, py): (f64, f64)) -> Ray {
         let (z, radius) = self.pupil;
         let at_pupil = [px * radius, py * radius, z];
-        // Back along the ray to in front of every surface: none bulges
-        // forwards by more than its clear semi-aperture.
-        let widest = self
-            .lens
-            .surfaces
-            .iter()
-            .map(|s| s.semi_aperture * self.lens.mm_per_unit)
-            .fold(0.0, f64::max);
-        let back = (z + widest + 1.0) / field[2];
+        let back = (z - self.front) / field[2];
         Ray {
             point: add(at_pupil, scale(field, -back)),
             direction: field,
@@ -294,16 +289,6 @@ impl<'a> Layout<'a> {
             return None;
         }
         Some((add(ray.point, scale(ray.direction, t)), weight))
-    }
-
-    /// The lens traced.
-    pub fn lens(&self) -> &Lens {
-        self.lens
-    }
-
-    /// z of surface `s`'s vertex, mm.
-    pub fn vertex(&self, s: usize) -> f64 {
-        self.vertices[s]
     }
 }
 
