@@ -484,28 +484,33 @@ impl Run<'_> {
             } else {
                 "-".to_string()
             };
+            let spread = match (applied.method, applied.arithmetic) {
+                (Method::Splat, _) => "splatted on the CPU".to_string(),
+                (_, Arithmetic::Lamps(lamps)) => format!(
+                    "FFT on {}, the near light of the {lamps} brightest px added exactly",
+                    applied.device
+                ),
+                (_, Arithmetic::Double) => format!(
+                    "FFT in f64 on {}: the scene's range is beyond f32",
+                    applied.device
+                ),
+                (_, Arithmetic::Single) => format!("FFT on {}", applied.device),
+            };
+            // A chain of ghosts alone spreads nothing.
+            let spread = if kernel == (0, 0) {
+                "no kernel".to_string()
+            } else {
+                format!(
+                    "kernel {}x{}, {} px above {} cd/m² ({spread})",
+                    kernel.0, kernel.1, applied.spread_pixels, applied.threshold
+                )
+            };
             self.progress.println(&format!(
-                "wrote {}: {}x{} {:?}, kernel {}x{}, {} px above {} cd/m² ({}), energy in {:.6e} out {:.6e} ({ratio}){}; read {:.2} s, camera {:.2} s, write {:.2} s",
+                "wrote {}: {}x{} {:?}, {spread}, energy in {:.6e} out {:.6e} ({ratio}){}; read {:.2} s, camera {:.2} s, write {:.2} s",
                 job.output.display(),
                 image.width,
                 image.height,
                 image.layout,
-                kernel.0,
-                kernel.1,
-                applied.spread_pixels,
-                applied.threshold,
-                match (applied.method, applied.arithmetic) {
-                    (Method::Splat, _) => "splatted on the CPU".to_string(),
-                    (_, Arithmetic::Lamps(lamps)) => format!(
-                        "FFT on {}, the near light of the {lamps} brightest px added exactly",
-                        applied.device
-                    ),
-                    (_, Arithmetic::Double) => format!(
-                        "FFT in f64 on {}: the scene's range is beyond f32",
-                        applied.device
-                    ),
-                    (_, Arithmetic::Single) => format!("FFT on {}", applied.device),
-                },
                 applied.energy_in,
                 applied.energy_out,
                 shown.map(|s| format!(", {s}")).unwrap_or_default(),
@@ -513,6 +518,12 @@ impl Run<'_> {
                 convolving,
                 start.elapsed().as_secs_f64()
             ));
+            if let Some(ghosts) = &applied.ghosts {
+                self.progress.println(&format!(
+                    "  ghosts: {} of {} sources traced through {} paths at f/{:.2}, together {:.3e} of their light",
+                    ghosts.traced, ghosts.found, ghosts.paths, ghosts.f_number, ghosts.light
+                ));
+            }
         }
         Ok(done.applied.image.planes)
     }

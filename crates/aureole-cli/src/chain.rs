@@ -82,7 +82,7 @@ impl ChainArgs {
         if defaulted {
             config.merge(presets::find(presets::DEFAULT_PRESET)?.config()?);
         }
-        if config.effects.is_empty() {
+        if config.effects.is_empty() && config.ghosts.is_none() {
             return Err(aureole::Error::NoEffect.into());
         }
         Ok((config, defaulted))

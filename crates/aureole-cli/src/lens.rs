@@ -244,11 +244,7 @@ fn ghosts(
     let aperture = aureole::Aperture::new(args.blades);
     let layout = layout.with_stop(aperture.stop(radius), open);
     let (width, height) = args.size;
-    let sensor = Sensor {
-        width,
-        height,
-        pitch_mm: 36.0 / width as f64,
-    };
+    let sensor = Sensor::centred(width, height, 36.0 / width as f64);
     let field = aureole::lens::ghost::direction(args.source.0, args.source.1);
     let progress = crate::progress::Progress::new(quiet);
     progress.stage("tracing ghosts");

@@ -172,7 +172,7 @@ fn a_lens_renders_the_ghosts_of_a_source_the_same_on_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     let lens = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../configs/lenses/double-gauss-50mm-f1.4.toml"
+        "/../aureole/lenses/double-gauss-50mm-f1.4.toml"
     );
     let render = |threads: &str, out: &str| {
         let out = dir.path().join(out);

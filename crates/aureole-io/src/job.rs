@@ -175,6 +175,10 @@ pub fn input(path: &Path, mut loaded: Loaded, options: &FrameOptions) -> Result<
         path: path.to_path_buf(),
         error,
     })?;
+    let frame = match original.display_window() {
+        Some(window) => frame.with_display_window(window),
+        None => frame,
+    };
     Ok(Input {
         frame,
         original,
@@ -227,9 +231,12 @@ impl Input {
             input_scale: Some(self.frame.scale()),
             ..self.options
         };
+        // A view's pixels are the frame's own window's.
+        let window = self.frame.display_window();
         for (image, glare) in self.original.views_mut() {
             let empty = Image::filled(0, 0, image.layout, 0.0);
-            let frame = Frame::new(std::mem::replace(image, empty), &views)?;
+            let frame =
+                Frame::new(std::mem::replace(image, empty), &views)?.with_display_window(window);
             *image = if layers {
                 let (applied, view_layers) = session.apply_layers(&frame, options, report)?;
                 *glare = view_layers;

@@ -52,7 +52,8 @@ impl Camera {
     /// The camera `text` describes; the measured PSFs it names are read
     /// now, relative paths from `folder`.
     fn parse(text: &str, source_name: &str, folder: &std::path::Path) -> PyResult<Camera> {
-        let mut file = ConfigFile::parse(text, source_name).map_err(value_error)?;
+        let mut file =
+            ConfigFile::parse_in(text, source_name, Some(folder)).map_err(value_error)?;
         aureole_io::measured::resolve(&mut file, folder);
         let warnings = aureole_io::measured::load(&mut file.effects, Limits::default_for_machine())
             .map_err(file_error)?;
@@ -477,6 +478,19 @@ impl Camera {
         report.set_item("device", &applied.device)?;
         report.set_item("scale", scale)?;
         report.set_item("notes", notes)?;
+        let ghosts = match applied.ghosts {
+            Some(g) => {
+                let summary = PyDict::new(py);
+                summary.set_item("found", g.found)?;
+                summary.set_item("traced", g.traced)?;
+                summary.set_item("paths", g.paths)?;
+                summary.set_item("f_number", g.f_number)?;
+                summary.set_item("light", g.light)?;
+                summary.into_any()
+            }
+            None => py.None().into_bound(py),
+        };
+        report.set_item("ghosts", ghosts)?;
         Ok(report)
     }
 

@@ -19,10 +19,21 @@ fn presets() -> Vec<(&'static str, String)> {
         .collect()
 }
 
+/// The shipped lenses a camera's ghosts may name: (name, what the lens
+/// is) pairs.
+#[pyfunction]
+fn lenses() -> Vec<(&'static str, String)> {
+    aureole::lens::shipped::LENSES
+        .iter()
+        .map(|l| (l.name, l.lens().map(|lens| lens.name).unwrap_or_default()))
+        .collect()
+}
+
 #[pymodule]
 fn _aureole(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<camera::Camera>()?;
     module.add_function(wrap_pyfunction!(presets, module)?)?;
+    module.add_function(wrap_pyfunction!(lenses, module)?)?;
     module.add_function(wrap_pyfunction!(files::read, module)?)?;
     module.add_function(wrap_pyfunction!(files::write, module)?)?;
     module.add_function(wrap_pyfunction!(files::render, module)?)?;

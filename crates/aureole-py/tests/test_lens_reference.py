@@ -1,4 +1,4 @@
-"""The paraxial data of every shipped lens (configs/lenses/) against
+"""The paraxial data of every shipped lens (crates/aureole/lenses/) against
 optiland, an optical design library nobody here wrote, tracing the same
 prescription: `aureole lens --json` and optiland's paraxial focal length,
 back focus and entrance pupil agree to 1e-9 of the focal length."""
@@ -15,7 +15,7 @@ from conftest import ROOT
 optic = pytest.importorskip("optiland.optic")
 materials = pytest.importorskip("optiland.materials")
 
-LENSES = sorted((ROOT / "configs" / "lenses").glob("*.toml"))
+LENSES = sorted((ROOT / "crates" / "aureole" / "lenses").glob("*.toml"))
 D_LINE_UM = 0.5875618
 
 

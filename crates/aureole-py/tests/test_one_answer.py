@@ -27,6 +27,24 @@ rays = 6
 length = "20px"
 """
 
+# Lens ghosts traced through a shipped lens before a bloom: a stage of its
+# own, which every front end runs the same way.
+GHOSTS = """threshold = 300.0
+[camera]
+sensor_width_mm = 36.0
+focal_length_mm = 50.0
+f_number = 8.0
+[[effect]]
+type = "ghosts"
+lens = "double-gauss-50mm-f1.4"
+sources = 1
+[[effect]]
+type = "bloom"
+epsilon = 0.05
+beta = 2.0
+radius = "2px"
+"""
+
 # name: (output extension, threshold, knee, glare only, layers), and
 # whether every front end writes it. JSON has no NaN or infinity, so those
 # thresholds are compared between the command line and Python alone
@@ -63,9 +81,9 @@ def studio(cli, street):
         process.wait(timeout=10)
 
 
-def answer_of_cli(cli, exr, output, request):
+def answer_of_cli(cli, exr, output, request, camera="camera.toml"):
     _, threshold, knee, glare_only, layers = request
-    args = [cli, "-q", "apply", str(exr), "-o", str(output), "--config", str(exr.parent / "camera.toml")]
+    args = [cli, "-q", "apply", str(exr), "-o", str(output), "--config", str(exr.parent / camera)]
     if threshold is not None:
         args.append(f"--threshold={threshold}")
     args.append(f"--knee={knee}")
@@ -77,10 +95,10 @@ def answer_of_cli(cli, exr, output, request):
     return ("written", output.read_bytes())
 
 
-def answer_of_studio(studio, exr, output, request):
+def answer_of_studio(studio, exr, output, request, config=CONFIG):
     address, token = studio
     _, threshold, knee, glare_only, layers = request
-    body = {"image": str(exr), "config": CONFIG, "output": str(output), "knee": knee,
+    body = {"image": str(exr), "config": config, "output": str(output), "knee": knee,
             "view": "glare" if glare_only else "result", "layers": layers}
     if threshold is not None:
         body["threshold"] = threshold
@@ -109,9 +127,9 @@ def answer_of_studio(studio, exr, output, request):
     return ("written", output.read_bytes())
 
 
-def answer_of_python(exr, output, request):
+def answer_of_python(exr, output, request, config=CONFIG):
     _, threshold, knee, glare_only, layers = request
-    camera = aureole.Camera.from_toml(CONFIG)
+    camera = aureole.Camera.from_toml(config)
     try:
         camera.apply_file(exr, output, threshold=threshold, knee=knee, glare_only=glare_only,
                           layers=layers)
@@ -125,6 +143,7 @@ def scene(street, tmp_path_factory):
     """The street and the camera's TOML beside it, in the studio's root."""
     exr = street[0]
     (exr.parent / "camera.toml").write_text(CONFIG)
+    (exr.parent / "ghosts.toml").write_text(GHOSTS)
     return exr, tmp_path_factory.mktemp("answers")
 
 
@@ -163,3 +182,32 @@ def test_numbers_json_cannot_carry_are_refused_alike(cli, scene, threshold):
     assert cli_answer[0] == python_answer[0] == "refused"
     assert cli_answer[1] == python_answer[1], (cli_answer, python_answer)
     assert cli_answer[1].startswith("apply: threshold = ")
+
+
+def test_lens_ghosts_get_the_same_bytes_from_every_front_end(cli, studio, scene):
+    exr, _ = scene
+    request = ("exr", None, 0.0, False, True)
+    outputs = {end: exr.parent / f"ghosts.{end}.exr" for end in ("cli", "studio", "python")}
+    answers = {
+        "cli": answer_of_cli(cli, exr, outputs["cli"], request, camera="ghosts.toml"),
+        "studio": answer_of_studio(studio, exr, outputs["studio"], request, config=GHOSTS),
+        "python": answer_of_python(exr, outputs["python"], request, config=GHOSTS),
+    }
+    assert {kind for kind, _ in answers.values()} == {"written"}, answers
+    assert answers["studio"][1] == answers["cli"][1], "the studio wrote other bytes"
+    assert answers["python"][1] == answers["cli"][1], "Python wrote other bytes"
+    ghosts, _ = aureole.read(outputs["cli"], layer="glare.ghosts")
+    assert ghosts.max() > 0
+
+
+def test_lens_ghosts_in_memory_have_their_layer_and_their_figures(scene, tmp_path):
+    exr, _ = scene
+    assert "double-gauss-50mm-f1.4" in dict(aureole.lenses())
+    image, _ = aureole.read(exr)
+    camera = aureole.Camera.from_toml(GHOSTS)
+    result, layers = camera.apply(image, layers=True)
+    assert list(layers) == ["glare.ghosts", "glare.bloom", "glare"]
+    assert layers["glare.ghosts"].max() > 0
+    report = camera.apply_file(exr, tmp_path / "out.exr")
+    assert report["ghosts"]["traced"] == 1 and report["ghosts"]["paths"] == 78
+    assert 0 < report["ghosts"]["light"] < 1e-2

@@ -33,10 +33,18 @@ function control(parameter, table, changed) {
   label.dataset.param = parameter.name;
   const name = document.createElement("span");
   name.textContent = parameter.name;
-  const input = document.createElement("input");
   const value = table[parameter.name];
   const fallback = parameter.default === null ? "required" : String(parameter.default);
-  if (parameter.kind === "flag") {
+  let input = document.createElement("input");
+  if (parameter.choices) {
+    // A choice among names the server knows (a ghosts' shipped lens).
+    input = document.createElement("select");
+    for (const choice of parameter.choices) input.append(new Option(choice, choice));
+    // A lens written inline in the TOML is kept until another is chosen.
+    if (value !== undefined && typeof value !== "string") input.append(new Option("(inline)", ""));
+    input.value = value === undefined ? parameter.choices[0] : typeof value === "string" ? value : "";
+    input.addEventListener("change", () => { table[parameter.name] = input.value; changed(); });
+  } else if (parameter.kind === "flag") {
     input.type = "checkbox";
     input.checked = value === undefined ? Boolean(parameter.default) : value;
     input.addEventListener("change", () => { table[parameter.name] = input.checked; changed(); });

@@ -61,7 +61,30 @@ pub fn schema() -> Value {
         .collect();
     json!({
         "camera": CAMERA.iter().map(parameter).collect::<Vec<_>>(),
-        "effects": effects,
+        "effects": effects.into_iter().chain([ghosts()]).collect::<Vec<_>>(),
+    })
+}
+
+/// The lens ghosts' panel: its lens one of the shipped ones (the studio
+/// reads no lens files), the first to start from.
+fn ghosts() -> Value {
+    use aureole::lens::{effect, shipped};
+    let names: Vec<&str> = shipped::LENSES.iter().map(|l| l.name).collect();
+    let parameters: Vec<Value> = effect::PARAMETERS
+        .iter()
+        .map(|p| {
+            let mut shown = parameter(p);
+            if p.name == "lens" {
+                shown["choices"] = json!(names);
+            }
+            shown
+        })
+        .collect();
+    json!({
+        "type": effect::KIND,
+        "parameters": parameters,
+        "tables": {},
+        "example": { "type": effect::KIND, "lens": "double-gauss-50mm-f1.4" },
     })
 }
 

@@ -603,13 +603,22 @@ fn the_camera_panels_come_from_the_library_schema_and_round_trip_the_toml() {
         .iter()
         .map(|e| e["type"].as_str().unwrap())
         .collect();
-    // Every effect but a measured PSF, whose file the studio does not read.
+    // Every effect but a measured PSF, whose file the studio does not
+    // read, and the lens ghosts, their lens one of the shipped ones.
     let offered: Vec<&str> = aureole::optics::EFFECT_TYPES
         .iter()
         .copied()
         .filter(|t| *t != aureole::optics::measured::KIND)
+        .chain([aureole::lens::effect::KIND])
         .collect();
     assert_eq!(types, offered);
+    let ghosts = effects.iter().find(|e| e["type"] == "ghosts").unwrap();
+    let lens = &ghosts["parameters"][0];
+    assert_eq!(lens["name"], "lens");
+    assert_eq!(
+        lens["choices"].as_array().unwrap().len(),
+        aureole::lens::shipped::LENSES.len()
+    );
     let aperture = effects.iter().find(|e| e["type"] == "aperture").unwrap();
     let blades = aperture["parameters"]
         .as_array()
@@ -672,6 +681,26 @@ fn the_camera_panels_come_from_the_library_schema_and_round_trip_the_toml() {
         "{}",
         measured.error()
     );
+    // Nor a ghosts' lens file: a shipped lens, or one written inline.
+    let lens = http(
+        addr,
+        "POST",
+        "/api/config/read",
+        "[[effect]]\ntype = \"ghosts\"\nlens = \"../../etc/secret.toml\"\n",
+    );
+    assert_eq!(lens.status, 400);
+    assert!(
+        lens.error().contains("no lens files are read"),
+        "{}",
+        lens.error()
+    );
+    let shipped = http(
+        addr,
+        "POST",
+        "/api/config/read",
+        "[[effect]]\ntype = \"ghosts\"\nlens = \"portrait-90mm-f2\"\n",
+    );
+    assert_eq!(shipped.status, 200);
 }
 
 #[test]

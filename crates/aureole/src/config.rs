@@ -7,6 +7,7 @@
 
 use std::path::Path;
 
+use serde::de::Error as _;
 use serde::Deserialize;
 
 use crate::camera::CameraGeometry;
@@ -15,6 +16,7 @@ use crate::control::{Cancel, Control};
 use crate::convolve::Composing;
 use crate::error::{Error, Result};
 use crate::kernel::{self, Extent, Kernel};
+use crate::lens::effect::{self as ghosts, Ghosts};
 use crate::optics::Effect;
 
 /// What one config file or preset says; unset keys stay `None` so that
@@ -31,6 +33,9 @@ pub struct ConfigFile {
     pub camera: Option<CameraGeometry>,
     /// The `[[effect]]` tables, in order.
     pub effects: Vec<Effect>,
+    /// The lens ghosts, if an `[[effect]]` table of `type = "ghosts"`
+    /// asks for them: a stage of their own, before the kernel's chain.
+    pub ghosts: Option<Ghosts>,
 }
 
 #[derive(Deserialize)]
@@ -47,7 +52,15 @@ struct RawFile {
 impl ConfigFile {
     /// Parses and checks a config text; `source_name` (a file name, or
     /// `preset NAME`) starts every error message, with the line and column.
+    /// A ghosts' lens file is read from where its path leads.
     pub fn parse(text: &str, source_name: &str) -> Result<ConfigFile> {
+        ConfigFile::parse_in(text, source_name, Some(Path::new("")))
+    }
+
+    /// [`ConfigFile::parse`], a ghosts' lens file read from `folder` (the
+    /// config file's) when its path is relative; with no folder, a lens
+    /// file is refused (a server reads no files but those it is given).
+    pub fn parse_in(text: &str, source_name: &str, folder: Option<&Path>) -> Result<ConfigFile> {
         let place = |span: std::ops::Range<usize>, message: String, incomplete: Option<String>| {
             let before = &text[..span.start.min(text.len())];
             let line = before.matches('\n').count() + 1;
@@ -89,6 +102,7 @@ impl ConfigFile {
                 .map_err(|e| located(camera.span(), e.to_string()))?;
         }
         let mut effects = Vec::with_capacity(raw.effect.len());
+        let mut ghosts: Option<Ghosts> = None;
         for (index, table) in raw.effect.into_iter().enumerate() {
             let span = table.span();
             let context = |kind: &str| format!("effect {} ({kind})", index + 1);
@@ -103,7 +117,7 @@ impl ConfigFile {
                 );
             let table = table.into_inner();
             let keys = table.clone();
-            let effect = Effect::from_table(table).map_err(|e| {
+            let refused = |e: toml::de::Error| {
                 let message = match key_holding(&keys, e.message()) {
                     Some(key) if is_type_error(e.message()) => {
                         format!("`{key}`: {}", plain_types(e.message()))
@@ -116,7 +130,45 @@ impl ConfigFile {
                     format!("{}: {message}", context(&kind)),
                     incomplete,
                 )
-            })?;
+            };
+            if kind == ghosts::KIND {
+                let mut table = table;
+                table.remove("type");
+                let read = ghosts::Table::deserialize(toml::Value::Table(table))
+                    .map_err(refused)?
+                    .resolve(folder)
+                    .map_err(|e| {
+                        let key = match &e {
+                            Error::Parameter { name, .. } => format!("`{name}`"),
+                            _ => "`lens`".to_string(),
+                        };
+                        located(
+                            key_span(text, &span, &key),
+                            format!("{}: {e}", context(ghosts::KIND)),
+                        )
+                    })?;
+                if ghosts.replace(read).is_some() {
+                    return Err(located(
+                        span,
+                        format!(
+                            "{}: a camera has one lens: write one [[effect]] of type = \"ghosts\"",
+                            context(ghosts::KIND)
+                        ),
+                    ));
+                }
+                continue;
+            }
+            if !crate::optics::EFFECT_TYPES.contains(&kind.as_str()) && keys.contains_key("type") {
+                // The ghosts are read apart (they are no kernel): a
+                // misspelt type hears of them too.
+                let types = crate::optics::EFFECT_TYPES.iter().chain([&ghosts::KIND]);
+                let listed: Vec<String> = types.map(|t| format!("`{t}`")).collect();
+                return Err(refused(toml::de::Error::custom(format!(
+                    "unknown variant `{kind}`, expected one of {}",
+                    listed.join(", ")
+                ))));
+            }
+            let effect = Effect::from_table(table).map_err(refused)?;
             // A wavelength the spectral kernel would ignore is a mistake:
             // the user meant an achromatic one.
             let spectral = keys.get("spectral").and_then(toml::Value::as_bool) != Some(false);
@@ -144,13 +196,14 @@ impl ConfigFile {
             threshold: raw.threshold.map(toml::Spanned::into_inner),
             camera: raw.camera.map(toml::Spanned::into_inner),
             effects,
+            ghosts,
         })
     }
 
     /// Reads and parses a config file.
     pub fn load(path: &Path) -> Result<ConfigFile> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        ConfigFile::parse(&text, &path.display().to_string())
+        ConfigFile::parse_in(&text, &path.display().to_string(), path.parent())
     }
 
     /// `later` on top of this file, as the command line composes files:
@@ -168,6 +221,7 @@ impl ConfigFile {
             (ours, theirs) => theirs.or(ours),
         };
         self.effects.extend(later.effects);
+        self.ghosts = later.ghosts.or(self.ghosts);
         self
     }
 
@@ -199,8 +253,12 @@ impl ConfigFile {
                 .and_then(|camera| toml::Table::try_from(camera).ok())
                 .map(toml::Value::Table),
         );
-        if !self.effects.is_empty() {
-            let effects = self.effects.iter().map(Effect::to_table);
+        if !self.effects.is_empty() || self.ghosts.is_some() {
+            let effects = self
+                .ghosts
+                .iter()
+                .map(Ghosts::to_table)
+                .chain(self.effects.iter().map(Effect::to_table));
             set(
                 "effect",
                 Some(toml::Value::Array(
@@ -336,6 +394,8 @@ pub struct Config {
     pub camera: CameraGeometry,
     /// The optical chain, in order.
     pub effects: Vec<Effect>,
+    /// The lens ghosts, traced before the chain spreads the scene.
+    pub ghosts: Option<Ghosts>,
 }
 
 impl Default for Config {
@@ -345,6 +405,7 @@ impl Default for Config {
             threshold: 0.0,
             camera: CameraGeometry::default(),
             effects: Vec::new(),
+            ghosts: None,
         }
     }
 }
@@ -379,6 +440,9 @@ impl Config {
             self.camera.merge(camera);
         }
         self.effects.extend(file.effects);
+        if file.ghosts.is_some() {
+            self.ghosts = file.ghosts;
+        }
     }
 
     /// The kernel of the whole optical chain at `extent`.

@@ -79,6 +79,17 @@ pub enum Error {
         available: String,
     },
 
+    /// A ghosts' lens that is neither shipped nor a lens file.
+    #[error("lens = {name:?} is neither a shipped lens{} nor a .toml lens file; the shipped lenses are: {available}", suggestion.map(|s| format!(" (did you mean {s:?}?)")).unwrap_or_default())]
+    UnknownLens {
+        /// The name asked for.
+        name: String,
+        /// A shipped name close to it.
+        suggestion: Option<&'static str>,
+        /// The shipped names, comma separated.
+        available: String,
+    },
+
     /// A kernel size that is zero or too large to allocate.
     #[error("kernel size {width}x{height} is not allowed: {allowed}")]
     KernelSize {

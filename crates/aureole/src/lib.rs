@@ -97,7 +97,7 @@ pub use image::{Image, Layout, Shape};
 pub use kernel::{Extent, Kernel, Sending};
 pub use optics::{Aperture, Bloom, Corona, Effect, Filter, Halation, Measured, Vos};
 pub use pipeline::{
-    Applied, ApplyOptions, Arithmetic, Frame, FrameOptions, GlareLayer, Method, Plan, ScaleSource,
-    Session, Stage,
+    Applied, ApplyOptions, Arithmetic, DisplayWindow, Frame, FrameOptions, GhostSummary,
+    GlareLayer, Method, Plan, ScaleSource, Session, Stage,
 };
 pub use units::{Length, Unit};

@@ -33,6 +33,7 @@ pub const PRESETS: &[Preset] = presets!(
     "paper-fig6d",
     "human-eye-vos",
     "camera-f8-7blade",
+    "camera-f8-7blade-ghosts",
     "camera-f11-6blade",
     "camera-f16-9blade",
     "star-filter-4pt",

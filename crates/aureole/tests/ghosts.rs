@@ -7,10 +7,7 @@ use aureole::lens::trace::{Layout, Path, Ray};
 use aureole::lens::Lens;
 
 fn shipped(name: &str) -> Lens {
-    let path = format!(
-        "{}/../../configs/lenses/{name}.toml",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let path = format!("{}/lenses/{name}.toml", env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(&path).unwrap();
     Lens::parse(&text, &path).unwrap()
 }
@@ -284,11 +281,7 @@ fn a_stack_of_plates_throws_ghosts_of_the_light_its_reflections_say() {
     use aureole::lens::ghost::{add_ghost, direct_light, Sensor};
     let lens = Lens::parse(PLATES, "plates").unwrap();
     let layout = Layout::with_image(&lens, 24.0, (0.0, 10.0));
-    let sensor = Sensor {
-        width: 400,
-        height: 400,
-        pitch_mm: 0.1,
-    };
+    let sensor = Sensor::centred(400, 400, 0.1);
     let field = [0.0, 0.0, 1.0];
     let direct = direct_light(&layout, field, 550.0);
     // Through the plates every ray of the bundle passes: the pupil's area
@@ -348,11 +341,7 @@ fn ghosts_lie_on_the_line_through_their_source_and_the_centre() {
     let layout = Layout::new(&lens).unwrap();
     // Wide enough to hold every ghost whole: one cut by the frame's edge
     // has its centroid off the line.
-    let sensor = Sensor {
-        width: 1000,
-        height: 1000,
-        pitch_mm: 0.5,
-    };
+    let sensor = Sensor::centred(1000, 1000, 0.5);
     let paths = layout.ghosts();
     assert_eq!(
         paths.len(),
@@ -435,11 +424,7 @@ fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
     let stop = lens.surfaces[lens.stop()].semi_aperture;
     let layout = layout.with_stop(aureole::Aperture::new(6).stop(stop * 0.5), stop);
     let picture = |width: usize| {
-        let sensor = Sensor {
-            width,
-            height: width * 2 / 3,
-            pitch_mm: 36.0 / width as f64,
-        };
+        let sensor = Sensor::centred(width, width * 2 / 3, 36.0 / width as f64);
         let rendered = rendered(&layout, direction(5.0, 3.0), &sensor, &[(550.0, vec![1.0])]);
         rendered.planes.into_iter().next().unwrap()
     };
@@ -477,11 +462,7 @@ fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
 fn ghosts_take_their_colour_from_the_coatings_and_the_glass_dispersion_alone() {
     use aureole::lens::ghost::{direction, light, Sensor};
     use aureole::lens::Coating;
-    let sensor = Sensor {
-        width: 120,
-        height: 80,
-        pitch_mm: 0.3,
-    };
+    let sensor = Sensor::centred(120, 80, 0.3);
     let picture = |lens: &Lens, spectral: bool| {
         let layout = Layout::with_image(lens, 24.0, (0.0, 10.0));
         rendered(&layout, direction(4.0, 2.0), &sensor, &light(spectral))

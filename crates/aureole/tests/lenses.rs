@@ -1,4 +1,4 @@
-//! The lenses in `configs/lenses/`, each written from a patent's example:
+//! The lenses in `crates/aureole/lenses/`, each written from a patent's example:
 //! they parse, name their patent and example, and their paraxial focal
 //! length and back focus are the patent's within 0.5 %.
 
@@ -7,9 +7,9 @@ use std::path::PathBuf;
 use aureole::lens::{Lens, Medium};
 
 fn lenses() -> Vec<(PathBuf, Lens)> {
-    let folder = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../configs/lenses");
+    let folder = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("lenses");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&folder)
-        .expect("configs/lenses/ is part of the repository")
+        .expect("crates/aureole/lenses/ is part of the repository")
         .map(|entry| entry.unwrap().path())
         .filter(|path| path.extension().is_some_and(|e| e == "toml"))
         .collect();
@@ -103,9 +103,10 @@ fn the_example_of_docs_lenses_md_is_a_lens_of_its_stated_focal_length() {
     let page = std::fs::read_to_string(path).unwrap();
     let example = page
         .split("```toml\n")
-        .nth(1)
-        .and_then(|rest| rest.split("```").next())
-        .expect("docs/lenses.md has a TOML example");
+        .skip(1)
+        .filter_map(|rest| rest.split("```").next())
+        .find(|block| block.contains("[[surface]]"))
+        .expect("docs/lenses.md has a lens file's example");
     let lens = Lens::parse(example, "docs/lenses.md").unwrap_or_else(|e| panic!("{e}"));
     let p = lens.paraxial().unwrap();
     assert!((p.focal_length * lens.mm_per_unit - 100.0).abs() < 1e-9);

@@ -59,8 +59,16 @@ def _effect_items():
     return items
 
 
+def _ghost_items():
+    items = [("NONE", "None", "No lens ghosts")]
+    if aureole is not None:
+        items += [(name, name, about) for name, about in aureole.lenses()]
+    return items
+
+
 # Blender keeps the strings of enum items only while Python references them.
 EFFECT_ITEMS = _effect_items()
+GHOST_ITEMS = _ghost_items()
 
 
 class AureoleSettings(bpy.types.PropertyGroup):
@@ -79,6 +87,11 @@ class AureoleSettings(bpy.types.PropertyGroup):
         description="More of a camera: a preset or a TOML file (bloom, film halation, dirt, "
                     "glare), after the stop; the scene camera's sensor, lens and f-stop replace "
                     "theirs")
+    ghosts: EnumProperty(
+        name="Lens ghosts", items=GHOST_ITEMS,
+        description="The ghosts a real lens throws of the brightest lamps: every path of two "
+                    "reflections through a shipped lens's prescription, at the scene camera's "
+                    "focal length and f-stop, shaped by its blades")
     config: StringProperty(name="TOML", subtype="FILE_PATH",
                            description="An aureole config file (aureole presets NAME > my.toml)")
     threshold: FloatProperty(
@@ -167,8 +180,11 @@ def build_camera(scene):
         scene_lens = lens_of(scene)
         parts.append(aureole.Camera.from_toml(scene_lens.toml(), "the scene camera"))
         notes += scene_lens.notes()
+    if s.ghosts != "NONE":
+        parts.append(aureole.Camera.from_toml(lens.ghosts_toml(s.ghosts), "the lens ghosts"))
     if not parts:
-        raise lens.LensError("nothing to add: choose the stop from the scene camera or effects")
+        raise lens.LensError(
+            "nothing to add: choose the stop from the scene camera, effects or lens ghosts")
     return aureole.Camera.compose(*parts), notes
 
 
@@ -425,6 +441,7 @@ class AUREOLE_PT_panel(bpy.types.Panel):
         layout.prop(s, "effects")
         if s.effects == "TOML":
             layout.prop(s, "config")
+        layout.prop(s, "ghosts")
         layout.prop(s, "threshold")
         layout.prop(s, "scale")
         layout.prop(s, "layers")

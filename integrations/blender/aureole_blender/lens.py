@@ -100,3 +100,10 @@ class Lens:
             f"blades = {int(self.blades)}\n"
             f"rotation_deg = {self.rotation_deg()!r}\n"
         )
+
+
+def ghosts_toml(name):
+    """The ghosts of the shipped lens `name` (aureole.lenses()), as a
+    config: traced at the camera's focal length and f-stop, which the scene
+    camera or the effects give."""
+    return f'[[effect]]\ntype = "ghosts"\nlens = "{name}"\n'

@@ -94,3 +94,9 @@ assert bpy.ops.aureole.apply_render() == {"FINISHED"}
 camera_data.dof.aperture_blades = 6
 settings.output_dir = str(out / "six")
 assert bpy.ops.aureole.apply_frames() == {"FINISHED"}
+
+# The lens's ghosts, chosen in the panel, in a layer of their own.
+settings.ghosts = "double-gauss-50mm-f1.4"
+settings.layers = True
+settings.output_dir = str(out / "ghosts")
+assert bpy.ops.aureole.apply_frames() == {"FINISHED"}

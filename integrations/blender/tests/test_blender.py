@@ -198,6 +198,20 @@ def test_the_add_on_gives_the_bytes_of_the_cli(rendered, tmp_path, cli, folder, 
     assert (out / folder / "render.0001.exr").read_bytes() == expected.read_bytes()
 
 
+def test_the_lens_ghosts_chosen_in_the_panel_give_the_bytes_of_the_cli(rendered, tmp_path, cli):
+    out, _ = rendered
+    config = tmp_path / "camera.toml"
+    config.write_text(equivalent_toml(6)
+                      + '[[effect]]\ntype = "ghosts"\nlens = "double-gauss-50mm-f1.4"\n')
+    expected = tmp_path / "cli.exr"
+    subprocess.run([cli, "-q", "apply", out / "render.0001.exr", "-o", expected,
+                    "--config", config, "--threshold", "0", "--input-scale", str(UNIT_CD_M2),
+                    "--device", "cpu", "--layers"], check=True)
+    assert (out / "ghosts" / "render.0001.exr").read_bytes() == expected.read_bytes()
+    ghosts, _ = aureole.read(expected, layer="ViewLayer.glare.ghosts")
+    assert ghosts.max() > 0
+
+
 def test_the_other_passes_are_kept(rendered):
     out, _ = rendered
     openexr = pytest.importorskip("OpenEXR")
@@ -217,7 +231,7 @@ def test_each_render_is_applied_once(rendered):
     _, said = rendered
     written = [line.split()[2] for line in said.splitlines() if line.startswith("aureole: wrote")]
     assert [pathlib.Path(p.rstrip(":")).parent.name for p in written] == [
-        "aureole", "after-still", "still", "six"], said[-3000:]
+        "aureole", "after-still", "still", "six", "ghosts"], said[-3000:]
 
 
 @pytest.mark.parametrize("folder", ["after-still", "still"])

@@ -115,6 +115,12 @@ impl Original {
         self.exr.as_ref().map(|k| k.describe()).unwrap_or_default()
     }
 
+    /// Where an EXR's display window lies in the frame's pixels (its
+    /// data window); `None` for a format without one.
+    pub fn display_window(&self) -> Option<aureole::DisplayWindow> {
+        self.exr.as_ref().and_then(|k| k.display_window())
+    }
+
     /// The images of a multi-view file's other views (an EXR's second eye),
     /// each with its glare layers: each front end puts every one through
     /// the camera, and an EXR result holds whatever they hold when written,

@@ -19,6 +19,10 @@ Path = Union[str, PathLike[str]]
 def presets() -> list[tuple[str, str]]:
     """The built-in presets: (name, one-line description) pairs."""
 
+def lenses() -> list[tuple[str, str]]:
+    """The shipped lenses a config's ghosts name (`lens = "..."`): (name,
+    what the lens is) pairs."""
+
 class Camera:
     """A camera: the optical chain of presets and config files composed in
     order (later settings replace earlier ones, effects are appended)."""
@@ -109,7 +113,9 @@ class Camera:
         an EXR result keeps the input's layers, parts and attributes, and
         with `layers=True` holds the glare of each effect beside it
         (`aureole apply --layers`). Returns energy_in, energy_out,
-        spread_pixels, threshold, scale and notes."""
+        spread_pixels, threshold, scale, notes and ghosts (None, or the
+        lens ghosts' found and traced sources, paths, f_number and light:
+        their share of the traced sources' light)."""
 
 def read(
     path: Path, layer: Optional[str] = None, part: Optional[str] = None

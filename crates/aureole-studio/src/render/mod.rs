@@ -497,10 +497,12 @@ impl Renderer {
 
 /// The camera a TOML text describes, on top of the defaults.
 pub fn parse_config(text: &str) -> Result<Config, StudioError> {
-    let file = ConfigFile::parse(text, "config")?;
+    // The studio reads only the image the user opened: a ghosts' lens is
+    // a shipped one or written inline, never a file.
+    let file = ConfigFile::parse_in(text, "config", None)?;
     let mut config = Config::default();
     config.merge(file);
-    if config.effects.is_empty() {
+    if config.effects.is_empty() && config.ghosts.is_none() {
         return Err(aureole::Error::NoEffect.into());
     }
     // The studio reads only the image the user opened; a measured PSF's

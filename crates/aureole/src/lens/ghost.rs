@@ -11,7 +11,8 @@
 use super::trace::{Layout, Path, Route, Vector};
 
 /// A sensor of `width`×`height` pixels of `pitch_mm`, the optical axis
-/// through its centre; rows run downwards, the image's y upwards.
+/// through `centre` (the display window's centre: a frame's overscan lies
+/// beyond it); rows run downwards, the image's y upwards.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sensor {
     /// Pixels across.
@@ -20,15 +21,28 @@ pub struct Sensor {
     pub height: usize,
     /// The pixel pitch, mm.
     pub pitch_mm: f64,
+    /// Where the axis meets it: (column, row), pixel i spanning [i, i + 1).
+    pub centre: (f64, f64),
 }
 
 impl Sensor {
+    /// A sensor of `width`×`height` pixels of `pitch_mm`, the axis through
+    /// its centre.
+    pub fn centred(width: usize, height: usize, pitch_mm: f64) -> Sensor {
+        Sensor {
+            width,
+            height,
+            pitch_mm,
+            centre: (0.5 * width as f64, 0.5 * height as f64),
+        }
+    }
+
     /// (column, row) in pixels of a point of the image plane (mm), pixel
     /// i spanning [i, i + 1).
     fn pixel(&self, at: Vector) -> (f64, f64) {
         (
-            0.5 * self.width as f64 + at[0] / self.pitch_mm,
-            0.5 * self.height as f64 - at[1] / self.pitch_mm,
+            self.centre.0 + at[0] / self.pitch_mm,
+            self.centre.1 - at[1] / self.pitch_mm,
         )
     }
 }
@@ -365,6 +379,9 @@ pub struct Rendered {
     /// light it receives over the light of the source's own image in that
     /// channel (a source of even spectral power: white light).
     pub planes: Vec<Vec<f64>>,
+    /// Each channel's ghost light over its image's, including what falls
+    /// beyond the sensor.
+    pub light: Vec<f64>,
     /// Each path's light over the image's (the channels' mean), the
     /// brightest first.
     pub ranked: Vec<(Path, f64)>,
@@ -395,6 +412,7 @@ pub fn render(
         .collect();
     let mut planes = vec![vec![0.0; pixels]; channels];
     let mut ranked = vec![0.0; paths.len()];
+    let mut totals = vec![0.0; channels];
     for (k, ((nm, weights), &direct)) in light.iter().zip(&directs).enumerate() {
         control.check()?;
         if direct > 0.0 {
@@ -412,6 +430,7 @@ pub fn render(
                         if weights[channel] > 0.0 && images[channel] > 0.0 {
                             let share = weights[channel] / images[channel];
                             ranked[c * size + p] += share * patch.light / channels as f64;
+                            totals[channel] += share * patch.light;
                             patch.add_scaled(plane, sensor.width, share);
                         }
                     }
@@ -422,5 +441,9 @@ pub fn render(
     }
     let mut ranked: Vec<(Path, f64)> = paths.into_iter().zip(ranked).collect();
     ranked.sort_by(|a, b| b.1.total_cmp(&a.1));
-    Ok(Rendered { planes, ranked })
+    Ok(Rendered {
+        planes,
+        light: totals,
+        ranked,
+    })
 }

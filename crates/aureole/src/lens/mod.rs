@@ -30,9 +30,11 @@
 //! ```
 
 pub mod coating;
+pub mod effect;
 pub mod ghost;
 pub mod paraxial;
 mod parse;
+pub mod shipped;
 pub mod trace;
 
 pub use paraxial::Paraxial;

@@ -6,6 +6,9 @@
 //! chain before it gives, O₁..ᵢ − O₁..ᵢ₋₁ (O₀ the input): the layers sum,
 //! telescoping, to the total glare O − I, and each holds the light its
 //! effect moved, negative where it took light away (the lamps' cores).
+//! Lens ghosts, traced before the chain, come first: `glare.ghosts` is the
+//! scene with its ghosts less the input, and the chain's layers spread
+//! that scene.
 
 use rayon::prelude::*;
 
@@ -88,26 +91,40 @@ impl Session {
                 .collect::<Result<_>>()?;
         }
         let mut layers = Vec::new();
+        let ghosted = self.trace_ghosts(frame, progress)?;
+        let scene = ghosted.as_ref().map_or(frame, |(scene, _)| scene);
+        if ghosted.is_some() {
+            layers.push(GlareLayer {
+                name: "glare.ghosts".to_string(),
+                image: difference(scene.image(), frame.image()),
+            });
+        }
         let mut before: Option<Image> = None;
         for (prefix, name) in chain.iter_mut().zip(&names) {
             prefix.set_cancel_token(self.cancel_token());
-            let after = prefix.apply(frame, &whole, progress)?.image;
-            let base = before.as_ref().unwrap_or(frame.image());
+            let after = prefix.apply(scene, &whole, progress)?.image;
+            let base = before.as_ref().unwrap_or(scene.image());
             layers.push(GlareLayer {
                 name: name.clone(),
                 image: difference(&after, base),
             });
             before = Some(after);
         }
-        let mut applied = self.apply(frame, &whole, progress)?;
+        // The last effect's layer is counted from the chain before it, or
+        // from the scene the chain spreads.
+        let base = match (before, names.last()) {
+            (Some(image), _) => Some(image),
+            (None, Some(_)) => Some(scene.image().clone()),
+            (None, None) => None,
+        };
+        let mut applied = self.apply_after_ghosts(frame, ghosted, &whole, progress)?;
         if self.holds_layer_chains(crate::image::Shape::of(frame.image())) {
             self.layer_chain = chain;
         }
-        if let Some(name) = names.last() {
-            let base = before.as_ref().unwrap_or(frame.image());
+        if let (Some(name), Some(base)) = (names.last(), base) {
             layers.push(GlareLayer {
                 name: name.clone(),
-                image: difference(&applied.image, base),
+                image: difference(&applied.image, &base),
             });
         }
         layers.push(GlareLayer {

@@ -4,6 +4,7 @@
 //! them.
 
 mod cost;
+mod ghosts;
 mod layers;
 mod options;
 mod plan;
@@ -12,6 +13,7 @@ mod session;
 mod splat;
 mod threshold;
 
+pub use ghosts::{DisplayWindow, GhostSummary};
 pub use layers::GlareLayer;
 pub use options::{Applied, ApplyOptions, Arithmetic, Method};
 pub use plan::Plan;

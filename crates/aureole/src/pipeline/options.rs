@@ -106,6 +106,26 @@ pub struct Applied {
     /// Where the light was spread, in words (the GPU's name, or the CPU
     /// and why).
     pub device: String,
+    /// The lens ghosts, when the config traces them.
+    pub ghosts: Option<super::GhostSummary>,
+}
+
+impl Applied {
+    /// `image` as it is: a chain that spreads nothing (ghosts alone).
+    pub(crate) fn unspread(image: Image, threshold: f64) -> Applied {
+        let energy = image.total_luminance();
+        Applied {
+            image,
+            energy_in: energy,
+            energy_out: energy,
+            spread_pixels: 0,
+            threshold,
+            method: Method::Fft,
+            arithmetic: Arithmetic::Single,
+            device: "the CPU".to_string(),
+            ghosts: None,
+        }
+    }
 }
 
 /// The arithmetic an application used (docs/physics.md §8): f32 unless its

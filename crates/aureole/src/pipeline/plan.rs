@@ -337,6 +337,7 @@ impl Plan {
                 Route::Lamps { lamps, .. } => Arithmetic::Lamps(lamps.len()),
                 Route::Double => Arithmetic::Double,
             },
+            ghosts: None,
         })
     }
 

@@ -4,6 +4,7 @@
 //! so that every front end gives the same bytes.
 
 use super::cost::Estimate;
+use super::ghosts::{self, DisplayWindow, GhostSummary};
 use super::options::{Applied, ApplyOptions};
 use super::plan::{DoubleRefused, Plan};
 use super::threshold::Threshold;
@@ -47,6 +48,7 @@ pub struct Frame {
     scale_source: ScaleSource,
     replaced: usize,
     negatives: usize,
+    window: Option<DisplayWindow>,
 }
 
 impl Frame {
@@ -87,7 +89,35 @@ impl Frame {
             scale_source,
             replaced,
             negatives,
+            window: None,
         })
+    }
+
+    /// The frame, its display window `window` (an EXR's, when its data
+    /// window holds overscan): the optical axis is the display window's
+    /// centre, and the sensor as wide as it.
+    pub fn with_display_window(mut self, window: DisplayWindow) -> Frame {
+        self.window = Some(window);
+        self
+    }
+
+    /// The display window: the whole frame unless one was given.
+    pub fn display_window(&self) -> DisplayWindow {
+        self.window
+            .unwrap_or_else(|| DisplayWindow::whole(self.image.width, self.image.height))
+    }
+
+    /// This frame's scale and window around another image (the scene with
+    /// its ghosts).
+    fn around(&self, image: Image) -> Frame {
+        Frame {
+            image,
+            scale: self.scale,
+            scale_source: self.scale_source,
+            replaced: self.replaced,
+            negatives: self.negatives,
+            window: self.window,
+        }
     }
 
     /// The image, in its file's units.
@@ -148,6 +178,8 @@ pub enum Stage {
     BuildingKernel,
     /// Spreading the light of an image.
     Convolving,
+    /// Tracing the lens ghosts of an image's bright sources.
+    TracingGhosts,
 }
 
 impl Stage {
@@ -156,6 +188,7 @@ impl Stage {
         match self {
             Stage::BuildingKernel => "building kernel",
             Stage::Convolving => "convolving",
+            Stage::TracingGhosts => "tracing ghosts",
         }
     }
 }
@@ -164,7 +197,7 @@ impl Stage {
 /// image size, or a kernel built before.
 #[derive(Debug)]
 enum Lens {
-    Config(Config),
+    Config(Box<Config>),
     /// `None` while the plan holds it.
     Kernel(Option<Kernel>),
 }
@@ -216,7 +249,7 @@ pub struct Session {
 impl Session {
     /// A session that builds the kernel of `config`.
     pub fn new(config: Config) -> Session {
-        Session::of(Lens::Config(config))
+        Session::of(Lens::Config(Box::new(config)))
     }
 
     /// A session that applies `kernel`, built before.
@@ -339,8 +372,93 @@ impl Session {
         progress: &mut dyn FnMut(Stage, f64),
     ) -> Result<Applied> {
         options.check()?;
-        let image = frame.image();
         self.cancel.check()?;
+        let ghosted = self.trace_ghosts(frame, progress)?;
+        self.apply_after_ghosts(frame, ghosted, options, progress)
+    }
+
+    /// The scene of `frame` with its lens ghosts, when the config traces
+    /// them: the frame the kernel's chain spreads.
+    pub(super) fn trace_ghosts(
+        &self,
+        frame: &Frame,
+        progress: &mut dyn FnMut(Stage, f64),
+    ) -> Result<Option<(Frame, GhostSummary)>> {
+        let Some(config) = self.config() else {
+            return Ok(None);
+        };
+        let Some(traced) = &config.ghosts else {
+            return Ok(None);
+        };
+        let window = frame.display_window();
+        let aperture = config.effects.iter().find_map(|e| match e {
+            crate::Effect::Aperture(a) => Some(a),
+            _ => None,
+        });
+        let optics = traced.optics(&config.camera, aperture, window.width)?;
+        let mut report = |f| progress(Stage::TracingGhosts, f);
+        let mut control = Control::new(&self.cancel, &mut report);
+        let (scene, summary) = ghosts::add_ghosts(
+            frame.image(),
+            (frame.scale(), window),
+            traced,
+            &optics,
+            &mut control,
+        )?;
+        Ok(Some((frame.around(scene), summary)))
+    }
+
+    /// Applies the kernel's chain to the scene `ghosted` holds (else to
+    /// `frame`'s); the light in and the glare are counted from `frame`.
+    pub(super) fn apply_after_ghosts(
+        &mut self,
+        frame: &Frame,
+        ghosted: Option<(Frame, GhostSummary)>,
+        options: &ApplyOptions,
+        progress: &mut dyn FnMut(Stage, f64),
+    ) -> Result<Applied> {
+        let Some((scene, summary)) = ghosted else {
+            return self.spread(frame, options, progress);
+        };
+        let whole = ApplyOptions {
+            glare_only: false,
+            ..*options
+        };
+        let mut applied = if self.config().is_some_and(|c| c.effects.is_empty()) {
+            Applied::unspread(
+                scene.into_image(),
+                options.threshold.unwrap_or(self.threshold()),
+            )
+        } else {
+            self.spread(&scene, &whole, progress)?
+        };
+        let input = frame.image();
+        applied.energy_in = input.total_luminance();
+        if options.glare_only {
+            for (out, plane) in applied.image.planes.iter_mut().zip(&input.planes) {
+                for (o, i) in out.iter_mut().zip(plane) {
+                    *o -= i;
+                }
+            }
+        }
+        applied.ghosts = Some(summary);
+        Ok(applied)
+    }
+
+    /// The configuration's threshold, cd/m² (0 for a kernel given).
+    fn threshold(&self) -> f64 {
+        self.config().map_or(0.0, |c| c.threshold)
+    }
+
+    /// `frame` spread by the kernel's chain, its plan built for the frame's
+    /// size when the last was for another.
+    fn spread(
+        &mut self,
+        frame: &Frame,
+        options: &ApplyOptions,
+        progress: &mut dyn FnMut(Stage, f64),
+    ) -> Result<Applied> {
+        let image = frame.image();
         let size = (image.width, image.height);
         if self.plan.as_ref().is_some_and(|p| p.size() != size) {
             self.release_plan();
@@ -362,9 +480,11 @@ impl Session {
         let Lens::Config(config) = &self.lens else {
             return Err(Error::NoEffect);
         };
+        // The chain's layers spread the scene with its ghosts, traced once.
         let mut prefix = Session::new(Config {
             effects: config.effects[..effects.min(config.effects.len())].to_vec(),
-            ..config.clone()
+            ghosts: None,
+            ..Config::clone(config)
         })
         .with_max_extent(self.max_extent)
         .with_device(self.device)
@@ -511,7 +631,14 @@ impl Session {
         } else {
             GPU_DRIVERS
         };
-        needed.bytes += in_flight + drivers;
+        // Ghosts hold the scene they are added to, and a source's ghosts
+        // in f64 for each of three channels.
+        let ghosts = if self.config().is_some_and(|c| c.ghosts.is_some()) {
+            (image.width * image.height) as u64 * (3 * 8 + 4 * planes as u64)
+        } else {
+            0
+        };
+        needed.bytes += in_flight + drivers + ghosts;
         // What is left for the run once the frames in flight and the
         // drivers are held.
         let limit_left = limit.saturating_sub(in_flight + drivers);

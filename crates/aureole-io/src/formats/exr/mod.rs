@@ -88,6 +88,20 @@ struct Taken {
 }
 
 impl Kept {
+    /// Where the file's display window lies in the chosen part's pixels
+    /// (its data window): the frame's optical axis, and its overscan.
+    pub(crate) fn display_window(&self) -> Option<aureole::DisplayWindow> {
+        let layer = self.image.layer_data.get(self.part)?;
+        let display = self.image.attributes.display_window;
+        let origin = layer.attributes.layer_position;
+        Some(aureole::DisplayWindow {
+            x: i64::from(display.position.0) - i64::from(origin.0),
+            y: i64::from(display.position.1) - i64::from(origin.1),
+            width: display.size.0,
+            height: display.size.1,
+        })
+    }
+
     /// The other views' images, to be replaced by results, each with the
     /// glare layers to write beside it.
     pub(crate) fn views_mut(

@@ -1,0 +1,264 @@
+//! The ghost stage (docs/physics.md §12): lens ghosts move with their
+//! source, so they are no kernel. The scene's bright sources (touching
+//! pixels above the ghosts' threshold, one source each, the brightest
+//! first) are each traced through every two-reflection path of the lens;
+//! their ghosts are added to the scene and their light taken from the
+//! source, before the kernel's chain spreads the whole.
+
+use std::collections::VecDeque;
+
+use crate::control::Control;
+use crate::error::Result;
+use crate::image::{Image, Layout as Planes, PixelLuminance};
+use crate::lens::effect::{GhostOptics, Ghosts};
+use crate::lens::ghost::{render, Sensor};
+use crate::lens::trace::{Layout, Path, Vector};
+
+/// Where a frame's display window lies in its pixels: a frame with
+/// overscan holds pixels beyond it, whose sources throw ghosts too, while
+/// the optical axis and the sensor's width are the display window's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DisplayWindow {
+    /// Its first column, in the frame's pixels (negative when it starts
+    /// left of the frame).
+    pub x: i64,
+    /// Its first row.
+    pub y: i64,
+    /// Its width in pixels.
+    pub width: usize,
+    /// Its height in pixels.
+    pub height: usize,
+}
+
+impl DisplayWindow {
+    /// The whole of a `width`×`height` frame.
+    pub fn whole(width: usize, height: usize) -> DisplayWindow {
+        DisplayWindow {
+            x: 0,
+            y: 0,
+            width,
+            height,
+        }
+    }
+
+    /// Where the optical axis meets the frame: (column, row).
+    fn centre(&self) -> (f64, f64) {
+        (
+            self.x as f64 + 0.5 * self.width as f64,
+            self.y as f64 + 0.5 * self.height as f64,
+        )
+    }
+}
+
+/// What a frame's ghosts were.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GhostSummary {
+    /// Sources above the threshold.
+    pub found: usize,
+    /// Of those, the ones traced (the brightest, up to the config's count).
+    pub traced: usize,
+    /// Paths of two reflections per source.
+    pub paths: usize,
+    /// The f-number traced at.
+    pub f_number: f64,
+    /// The ghosts' light over the traced sources' (luminance).
+    pub light: f64,
+}
+
+/// A bright source: touching pixels above the threshold.
+#[derive(Debug, Clone)]
+struct Source {
+    /// Its pixels.
+    pixels: Vec<usize>,
+    /// Its luminance-weighted centre, (column, row), pixel i spanning
+    /// [i, i + 1).
+    centre: (f64, f64),
+    /// Σ luminance over its pixels (file units).
+    luminance: f64,
+}
+
+/// The sources of `image`: 8-connected pixels whose luminance is above
+/// `level` (file units), the brightest first.
+fn sources(image: &Image, level: f64) -> Vec<Source> {
+    let (width, height) = (image.width, image.height);
+    let luminance = PixelLuminance::of(image);
+    let bright = |i: usize| f64::from(luminance.at(i)) > level;
+    let mut seen = vec![false; width * height];
+    let mut found = Vec::new();
+    let mut queue = VecDeque::new();
+    for start in 0..width * height {
+        if seen[start] || !bright(start) {
+            continue;
+        }
+        seen[start] = true;
+        queue.push_back(start);
+        let mut source = Source {
+            pixels: Vec::new(),
+            centre: (0.0, 0.0),
+            luminance: 0.0,
+        };
+        let (mut sx, mut sy) = (0.0, 0.0);
+        while let Some(i) = queue.pop_front() {
+            let y = f64::from(luminance.at(i));
+            let (col, row) = (i % width, i / width);
+            source.pixels.push(i);
+            source.luminance += y;
+            sx += y * (col as f64 + 0.5);
+            sy += y * (row as f64 + 0.5);
+            for dr in -1i64..=1 {
+                for dc in -1i64..=1 {
+                    let (c, r) = (col as i64 + dc, row as i64 + dr);
+                    if c < 0 || r < 0 || c >= width as i64 || r >= height as i64 {
+                        continue;
+                    }
+                    let j = r as usize * width + c as usize;
+                    if !seen[j] && bright(j) {
+                        seen[j] = true;
+                        queue.push_back(j);
+                    }
+                }
+            }
+        }
+        source.centre = (sx / source.luminance, sy / source.luminance);
+        found.push(source);
+    }
+    // Ties keep their order in the frame: the same sources every run.
+    found.sort_by(|a, b| b.luminance.total_cmp(&a.luminance));
+    found
+}
+
+/// The direction of a distant source whose image the lens forms at
+/// `target` (mm on the sensor, y upwards): the chief ray aimed by a few
+/// Newton steps from the paraxial guess, so that the ghosts line up with
+/// the source's own image whatever the lens's distortion.
+fn aim(layout: &Layout, focal_mm: f64, target: (f64, f64), nm: f64) -> Vector {
+    let direction = |(a, b): (f64, f64)| {
+        let norm = (a * a + b * b + 1.0).sqrt();
+        [a / norm, b / norm, 1.0 / norm]
+    };
+    let lands = |t: (f64, f64)| {
+        layout
+            .trace(
+                Path::Direct,
+                layout.collimated(direction(t), (0.0, 0.0)),
+                nm,
+            )
+            .map(|(at, _)| (at[0], at[1]))
+    };
+    // The image is upright in the frame as the camera shows it: a source
+    // right of the axis is seen through the lens from the right.
+    let mut t = (target.0 / focal_mm, target.1 / focal_mm);
+    for _ in 0..6 {
+        let Some(at) = lands(t) else { break };
+        let step = ((target.0 - at.0) / focal_mm, (target.1 - at.1) / focal_mm);
+        t = (t.0 + step.0, t.1 + step.1);
+        if step.0.abs().max(step.1.abs()) < 1e-9 {
+            break;
+        }
+    }
+    direction(t)
+}
+
+/// `image` with the ghosts of its brightest sources, traced through
+/// `optics`: each source's ghosts add its light times each path's share,
+/// and the source keeps the rest, so that no light is made (what falls
+/// beyond the frame leaves it). `scale` is cd/m² per file unit.
+pub(crate) fn add_ghosts(
+    image: &Image,
+    (scale, window): (f64, DisplayWindow),
+    ghosts: &Ghosts,
+    optics: &GhostOptics,
+    control: &mut Control,
+) -> Result<(Image, GhostSummary)> {
+    let layout = optics.layout()?;
+    let sensor: Sensor = optics.sensor((image.width, image.height), window.centre());
+    let found = sources(image, ghosts.threshold / scale);
+    let traced = found.len().min(ghosts.sources as usize);
+    let focal_mm = optics.lens.paraxial()?.focal_length * optics.lens.mm_per_unit;
+    let green = optics.light[optics.light.len() / 2].0;
+    let weights = image.luminance_weights().map(f64::from);
+    let mut scene = image.clone();
+    let (mut ghost_light, mut source_light) = (0.0, 0.0);
+    for (k, source) in found.iter().take(traced).enumerate() {
+        control.check()?;
+        let target = (
+            (source.centre.0 - sensor.centre.0) * sensor.pitch_mm,
+            (sensor.centre.1 - source.centre.1) * sensor.pitch_mm,
+        );
+        let field = aim(&layout, focal_mm, target, green);
+        let start = k as f64 / traced as f64;
+        let mut part = control.part(start, start + 1.0 / traced as f64);
+        let rendered = render(&layout, field, &sensor, &optics.light, &mut part)?;
+        // Each channel's share of the source: the input is what the lens
+        // brought from it, its own image and its ghosts together.
+        let shares: Vec<f64> = match image.layout {
+            Planes::Rgb => rendered.light.clone(),
+            Planes::Luminance => vec![weights
+                .iter()
+                .zip(&rendered.light)
+                .map(|(w, g)| w * g)
+                .sum()],
+        };
+        for (c, plane) in scene.planes.iter_mut().enumerate() {
+            let g = shares[c];
+            let power: f64 = source
+                .pixels
+                .iter()
+                .map(|&i| f64::from(image.planes[c][i]))
+                .sum();
+            let direct = power / (1.0 + g);
+            for &i in &source.pixels {
+                plane[i] -= (f64::from(image.planes[c][i]) * g / (1.0 + g)) as f32;
+            }
+            let ghost = |p: usize| match image.layout {
+                Planes::Rgb => rendered.planes[c][p],
+                Planes::Luminance => (0..3).map(|k| weights[k] * rendered.planes[k][p]).sum(),
+            };
+            for (p, value) in plane.iter_mut().enumerate() {
+                *value += (direct * ghost(p)) as f32;
+            }
+        }
+        let y_share: f64 = weights
+            .iter()
+            .zip(&rendered.light)
+            .map(|(w, g)| w * g)
+            .sum();
+        ghost_light += source.luminance * y_share / (1.0 + y_share);
+        source_light += source.luminance;
+    }
+    control.report(1.0);
+    Ok((
+        scene,
+        GhostSummary {
+            found: found.len(),
+            traced,
+            paths: layout.ghosts().len(),
+            f_number: optics.f_number,
+            light: if source_light > 0.0 {
+                ghost_light / source_light
+            } else {
+                0.0
+            },
+        },
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::image::Layout as Planes;
+
+    #[test]
+    fn touching_pixels_make_one_source_and_the_brightest_comes_first() {
+        let mut image = Image::filled(20, 10, Planes::Luminance, 1.0);
+        for (i, value) in [(22, 50.0), (23, 50.0), (43, 100.0), (57, 80.0)] {
+            image.planes[0][i] = value;
+        }
+        let found = sources(&image, 10.0);
+        assert_eq!(found.len(), 2);
+        assert_eq!(found[0].pixels.len(), 3);
+        assert_eq!(found[0].luminance, 200.0);
+        assert_eq!(found[1].pixels, [57]);
+        assert_eq!(found[1].centre, (17.5, 2.5));
+    }
+}
