@@ -242,7 +242,7 @@ fn ghosts(
     }
     let radius = open * p.f_number / f_number;
     let aperture = aureole::Aperture::new(args.blades);
-    let layout = layout.with_stop(aperture.stop(radius), open);
+    let layout = layout.with_stop(aperture.stop(radius), radius);
     let (width, height) = args.size;
     let sensor = Sensor::centred(width, height, 36.0 / width as f64);
     let field = aureole::lens::ghost::direction(args.source.0, args.source.1);

@@ -389,7 +389,11 @@ fn a_hexagonal_stop_passes_the_light_of_a_hexagon() {
     use aureole::lens::ghost::direct_light;
     let lens = shipped("double-gauss-50mm-f1.4");
     let layout = Layout::new(&lens).unwrap();
-    let stop = lens.surfaces[lens.stop()].semi_aperture;
+    // Stopped down to half its clear aperture (f/2.9), where the front
+    // group images the stop into the pupil as a scaled copy: wide open,
+    // its pupil aberration stretches the rim, and a hexagon touching the
+    // rim passes 1 % less than its area says.
+    let stop = 0.5 * lens.surfaces[lens.stop()].semi_aperture;
     let shaped = |blades: u32| {
         let aperture = aureole::Aperture::new(blades);
         let layout = Layout::new(&lens)
@@ -399,7 +403,7 @@ fn a_hexagonal_stop_passes_the_light_of_a_hexagon() {
     };
     let ratio = shaped(6) / shaped(0);
     let hexagon = 3.0 * 3f64.sqrt() / (2.0 * std::f64::consts::PI);
-    assert!((ratio / hexagon - 1.0).abs() < 0.01, "{ratio} {hexagon}");
+    assert!((ratio / hexagon - 1.0).abs() < 0.002, "{ratio} {hexagon}");
     drop(layout);
 }
 
@@ -422,7 +426,7 @@ fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
     let lens = shipped("portrait-90mm-f2");
     let layout = Layout::new(&lens).unwrap();
     let stop = lens.surfaces[lens.stop()].semi_aperture;
-    let layout = layout.with_stop(aureole::Aperture::new(6).stop(stop * 0.5), stop);
+    let layout = layout.with_stop(aureole::Aperture::new(6).stop(stop * 0.5), stop * 0.5);
     let picture = |width: usize| {
         let sensor = Sensor::centred(width, width * 2 / 3, 36.0 / width as f64);
         let rendered = rendered(&layout, direction(5.0, 3.0), &sensor, &[(550.0, vec![1.0])]);

@@ -16,6 +16,60 @@ use super::Layer;
 /// it at `cos_in`, the cosine of its angle from the normal in `n_in`.
 pub fn reflectance(n_in: f64, n_out: f64, layers: &[Layer], cos_in: f64, nm: f64) -> f64 {
     let sin2 = (1.0 - cos_in * cos_in).max(0.0);
+    let invariant = n_in * n_in * sin2;
+    // Bare glass and a single layer the light crosses (the surfaces of a
+    // camera lens, all but beyond the critical angle) in real arithmetic:
+    // the same reflectance as the matrices', in a fraction of the time.
+    let real_cos = |n: f64| {
+        let c2 = 1.0 - invariant / (n * n);
+        (c2 > 0.0).then(|| c2.sqrt())
+    };
+    if let Some(cos_sub) = real_cos(n_out) {
+        match layers {
+            [] => return bare(n_in, n_out, cos_in, cos_sub),
+            [layer] => {
+                if let Some(cos_layer) = real_cos(layer.index) {
+                    let media = [(n_in, cos_in), (layer.index, cos_layer), (n_out, cos_sub)];
+                    let phase = 4.0 * PI * layer.index * layer.thickness_nm * cos_layer / nm;
+                    return single_layer(media, libm::cos(phase));
+                }
+            }
+            _ => {}
+        }
+    }
+    stack(n_in, n_out, layers, cos_in, nm)
+}
+
+/// Fresnel's reflectance of an interface between two media, unpolarised,
+/// from the cosines on either side.
+fn bare(n_in: f64, n_out: f64, cos_in: f64, cos_out: f64) -> f64 {
+    let rs = (n_in * cos_in - n_out * cos_out) / (n_in * cos_in + n_out * cos_out);
+    let rp = (n_out * cos_in - n_in * cos_out) / (n_out * cos_in + n_in * cos_out);
+    (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0)
+}
+
+/// One lossless layer between two media, each (index, cosine of the
+/// angle in it), its round-trip phase's cosine given (Airy's sum of the
+/// layer's reflections): for each polarisation, with the interfaces'
+/// amplitudes r₁ and r₂ from the tilted admittances,
+/// R = (r₁² + r₂² + 2r₁r₂ cos 2δ) / (1 + r₁²r₂² + 2r₁r₂ cos 2δ).
+fn single_layer(media: [(f64, f64); 3], cos_phase: f64) -> f64 {
+    let [(n0, c0), (n1, c1), (n2, c2)] = media;
+    let amplitude = |a: f64, b: f64| (a - b) / (a + b);
+    let polarised = |eta: [f64; 3]| {
+        let (r1, r2) = (amplitude(eta[0], eta[1]), amplitude(eta[1], eta[2]));
+        let cross = 2.0 * r1 * r2 * cos_phase;
+        (r1 * r1 + r2 * r2 + cross) / (1.0 + r1 * r1 * r2 * r2 + cross)
+    };
+    let s = polarised([n0 * c0, n1 * c1, n2 * c2]);
+    let p = polarised([n0 / c0, n1 / c1, n2 / c2]);
+    (0.5 * (s + p)).clamp(0.0, 1.0)
+}
+
+/// [`reflectance`] by the characteristic matrices of any stack, the light
+/// evanescent in a layer or the medium beyond included.
+fn stack(n_in: f64, n_out: f64, layers: &[Layer], cos_in: f64, nm: f64) -> f64 {
+    let sin2 = (1.0 - cos_in * cos_in).max(0.0);
     // n sin θ is kept through every layer (Snell); cos θ in a layer is
     // imaginary where the light cannot propagate there (beyond the
     // critical angle), with a positive part so that the field decays.
@@ -76,6 +130,43 @@ fn sin_cos(z: Complex64) -> (Complex64, Complex64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn real_arithmetic_reflects_as_the_matrices_do() {
+        // Bare and single-layer surfaces take the short way; the matrices
+        // of the general stack are the reference, over angles, indices
+        // and wavelengths.
+        let mut worst: f64 = 0.0;
+        for (n_in, n_out) in [
+            (1.0, 1.52),
+            (1.52, 1.0),
+            (1.0, 1.9),
+            (1.75, 1.0),
+            (1.6, 1.7),
+        ] {
+            for layers in [
+                vec![],
+                vec![Layer {
+                    index: 1.38,
+                    thickness_nm: 99.6,
+                }],
+                vec![Layer {
+                    index: 2.1,
+                    thickness_nm: 180.0,
+                }],
+            ] {
+                for k in 0..=40 {
+                    let cos_in = 0.02 + 0.98 * f64::from(k) / 40.0;
+                    for nm in [400.0, 550.0, 700.0] {
+                        let fast = reflectance(n_in, n_out, &layers, cos_in, nm);
+                        let matrices = stack(n_in, n_out, &layers, cos_in, nm);
+                        worst = worst.max((fast - matrices).abs());
+                    }
+                }
+            }
+        }
+        assert!(worst < 1e-14, "{worst}");
+    }
 
     #[test]
     fn bare_glass_reflects_as_fresnel_says() {

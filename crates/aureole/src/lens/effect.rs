@@ -245,7 +245,7 @@ impl Ghosts {
         Ok(GhostOptics {
             lens,
             stop: pupil,
-            open,
+            radius,
             f_number,
             pitch_mm,
             light: ghost::light(self.spectral),
@@ -260,8 +260,8 @@ pub struct GhostOptics {
     pub lens: Lens,
     /// The stop's opening, mm in its plane.
     stop: Pupil,
-    /// The stop's clear semi-aperture, mm.
-    open: f64,
+    /// The radius of the circle about the stop's opening, mm.
+    radius: f64,
     /// The f-number traced at.
     pub f_number: f64,
     /// The pixel pitch, mm.
@@ -273,7 +273,7 @@ pub struct GhostOptics {
 impl GhostOptics {
     /// The lens set out for tracing, its stop the camera's.
     pub fn layout(&self) -> Result<Layout<'_>> {
-        Ok(Layout::new(&self.lens)?.with_stop(self.stop.clone(), self.open))
+        Ok(Layout::new(&self.lens)?.with_stop(self.stop.clone(), self.radius))
     }
 
     /// A sensor of `width`×`height` pixels of this pitch, the axis at

@@ -8,7 +8,7 @@
 //! the direct path brings to the source's own image: a ghost's pixels
 //! sum to its path's power over the image's.
 
-use super::trace::{Layout, Path, Route, Vector};
+use super::trace::{Arrival, Layout, Path, Route, Vector};
 
 /// A sensor of `width`×`height` pixels of `pitch_mm`, the optical axis
 /// through `centre` (the display window's centre: a frame's overscan lies
@@ -47,89 +47,265 @@ impl Sensor {
     }
 }
 
-/// Cells across the square about the entrance pupil that a path's
-/// bundle is traced over (each side 1.1 of the pupil's diameter).
-pub const GRID: usize = 96;
+/// Cells across the square of the pupil a path's light passes, where
+/// its bundle is traced.
+pub const GRID: usize = 64;
+
+/// Cells across the whole entrance (the first surface's clear aperture
+/// as the source sees it), where each path's light is first looked for.
+const COARSE: usize = 40;
 
 /// The most pieces a cell is cut into along each side when it lands
 /// larger than a pixel.
 const MOST_PIECES: usize = 64;
 
-/// Cells the stop's rim (or another aperture's) crosses are cut into
-/// this many pieces along each side, traced anew: the rim's light is
-/// then counted to 1/`RIM` of a cell rather than to a whole one.
+/// Cells a rim crosses are cut into this many pieces along each side:
+/// the rim's light is then counted to 1/`RIM` of a cell rather than to a
+/// whole one.
 const RIM: usize = 8;
 
+/// A square of the entrance pupil's plane, in units of the pupil's
+/// radius.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Square {
+    centre: (f64, f64),
+    half: f64,
+}
+
+impl Square {
+    /// The pupil point at grid position (i, j) of `cells` across,
+    /// fractional within a cell.
+    fn point(&self, cells: usize, i: f64, j: f64) -> (f64, f64) {
+        let step = 2.0 * self.half / cells as f64;
+        (
+            self.centre.0 - self.half + i * step,
+            self.centre.1 - self.half + j * step,
+        )
+    }
+
+    /// The square every ray that enters the lens from direction `field`
+    /// comes through: the first surface's clear aperture, seen from the
+    /// entrance pupil's plane along the field.
+    fn entrance(layout: &Layout, field: Vector) -> Square {
+        let (z_pupil, radius) = layout.pupil;
+        let (z_first, semi) = layout.entrance();
+        let back = (z_pupil - z_first) / field[2];
+        Square {
+            centre: (back * field[0] / radius, back * field[1] / radius),
+            half: semi / radius,
+        }
+    }
+}
+
+/// Where in the pupil the light of `route` passes, looked for on a coarse
+/// grid over the whole entrance: the square about the cells whose rays
+/// may pass between them ([`may_pass`]), a coarse cell wider each way;
+/// `None` where no light passes.
+pub fn search(layout: &Layout, route: &Route, field: Vector) -> Option<Square> {
+    let entrance = Square::entrance(layout, field);
+    let side = COARSE + 1;
+    let rays: Vec<Option<Arrival>> = (0..side * side)
+        .map(|k| {
+            let (px, py) = entrance.point(COARSE, (k % side) as f64, (k / side) as f64);
+            layout.follow_unclipped(route, layout.collimated(field, (px, py)))
+        })
+        .collect();
+    let (mut lo, mut hi) = ((usize::MAX, usize::MAX), (0, 0));
+    for j in 0..COARSE {
+        for i in 0..COARSE {
+            let corners =
+                [(0, 0), (1, 0), (1, 1), (0, 1)].map(|(di, dj)| rays[(j + dj) * side + i + di]);
+            if may_pass(layout, &corners) {
+                lo = (lo.0.min(i), lo.1.min(j));
+                hi = (hi.0.max(i + 1), hi.1.max(j + 1));
+            }
+        }
+    }
+    if lo.0 > hi.0 {
+        return None;
+    }
+    let step = 2.0 * entrance.half / COARSE as f64;
+    let (a, b) = (
+        entrance.point(COARSE, lo.0 as f64 - 1.0, lo.1 as f64 - 1.0),
+        entrance.point(COARSE, hi.0 as f64 + 1.0, hi.1 as f64 + 1.0),
+    );
+    Some(Square {
+        centre: (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1)),
+        half: 0.5 * (b.0 - a.0).max(b.1 - a.1).max(step),
+    })
+}
+
+/// Whether light may pass between the rays of a cell's corners that
+/// arrive: their margins within the apertures, stretched by a quarter of
+/// their spread, reach 0, and at each of the path's crossings of the
+/// stop's plane the box of their crossings, a quarter wider, meets the
+/// circle about the opening.
+fn may_pass(layout: &Layout, corners: &[Option<Arrival>; 4]) -> bool {
+    let alive: Vec<&Arrival> = corners.iter().flatten().collect();
+    let Some(first) = alive.first() else {
+        return false;
+    };
+    let (low, high) = alive
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), a| {
+            (l.min(a.margin), h.max(a.margin))
+        });
+    if high + 0.25 * (high - low) < 0.0 {
+        return false;
+    }
+    let radius = layout.opening;
+    (0..first.stop.points().len()).all(|k| {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for a in &alive {
+            let p = a.stop.points()[k];
+            lo = [lo[0].min(p[0]), lo[1].min(p[1])];
+            hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+        }
+        let grow = [0.125 * (hi[0] - lo[0]), 0.125 * (hi[1] - lo[1])];
+        let nearest = [
+            0.0f64.clamp(lo[0] - grow[0], hi[0] + grow[0]),
+            0.0f64.clamp(lo[1] - grow[1], hi[1] + grow[1]),
+        ];
+        nearest[0] * nearest[0] + nearest[1] * nearest[1] <= radius * radius
+    })
+}
+
+/// Bilinear interpolation between a cell's corners (0, 0), (1, 0), (1, 1)
+/// and (0, 1), at (s, t).
+fn bilinear<const N: usize>(corners: [[f64; N]; 4], (s, t): (f64, f64)) -> [f64; N] {
+    let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
+    std::array::from_fn(|n| (0..4).map(|k| w[k] * corners[k][n]).sum())
+}
+
 /// A bundle of rays from a distant source along one path: a grid over the
-/// square about the entrance pupil (a little wider: real rays aimed at
-/// the paraxial pupil are stopped by the stop, not by the grid).
+/// square of the pupil its light passes.
 struct Bundle<'l, 'a> {
     layout: &'l Layout<'a>,
     route: Route,
     field: Vector,
-    /// The (GRID + 1)² rays, rows of constant pupil y.
-    rays: Vec<Option<(Vector, f64)>>,
+    square: Square,
+    /// The (GRID + 1)² rays, rows of constant pupil y, not stopped by the
+    /// stop's opening (the cells clip it between them).
+    rays: Vec<Option<Arrival>>,
 }
 
-/// The pupil square's half-side, in units of the pupil's radius.
-const REACH: f64 = 1.1;
-
 impl<'l, 'a> Bundle<'l, 'a> {
-    fn new(layout: &'l Layout<'a>, path: Path, field: Vector, nm: f64) -> Bundle<'l, 'a> {
+    fn new(layout: &'l Layout<'a>, route: Route, field: Vector, square: Square) -> Bundle<'l, 'a> {
         let side = GRID + 1;
         let mut bundle = Bundle {
             layout,
-            route: layout.route(path, nm),
+            route,
             field,
+            square,
             rays: Vec::with_capacity(side * side),
         };
         for j in 0..side {
             for i in 0..side {
-                let ray = bundle.ray(i as f64, j as f64);
-                bundle.rays.push(ray);
+                let ray = bundle.collimated(i as f64, j as f64);
+                bundle
+                    .rays
+                    .push(layout.follow_unclipped(&bundle.route, ray));
             }
         }
         bundle
     }
 
     /// The ray at grid position (i, j), fractional within a cell.
-    fn ray(&self, i: f64, j: f64) -> Option<(Vector, f64)> {
-        let step = 2.0 * REACH / GRID as f64;
-        let pupil = (-REACH + i * step, -REACH + j * step);
-        self.layout
-            .follow(&self.route, self.layout.collimated(self.field, pupil))
+    fn collimated(&self, i: f64, j: f64) -> super::trace::Ray {
+        let pupil = self.square.point(GRID, i, j);
+        self.layout.collimated(self.field, pupil)
     }
 
     /// The light through a cell of the grid, per unit of the source's
     /// irradiance: its area across the beam (the pupil plane's area times
     /// the cosine of the field angle).
     fn cell_area(&self) -> f64 {
-        let step = 2.0 * REACH / GRID as f64 * self.layout.pupil.1;
+        let step = 2.0 * self.square.half / GRID as f64 * self.layout.pupil.1;
         step * step * self.field[2]
     }
 
+    /// Whether every aperture passes a ray, the stop's opening at every
+    /// crossing.
+    fn passes(&self, arrival: &Arrival) -> bool {
+        arrival.margin >= 0.0 && arrival.stop.points().iter().all(|&p| self.layout.opens(p))
+    }
+
     /// `visit(corners, area)` for every cell whose light arrives: a cell
-    /// all of whose corners arrive as it is, one the rim crosses as the
-    /// pieces of it that arrive ([`pieces`]).
+    /// whose corners all pass every aperture as it is; one an aperture's
+    /// rim crosses as the pieces of it whose centres pass, between its
+    /// corners ([`Bundle::between`]); one some of whose corners miss a
+    /// surface altogether as the pieces of it that arrive, traced anew
+    /// ([`Bundle::rim`]).
     fn for_each_cell(&self, mut visit: impl FnMut(&[(Vector, f64); 4], f64)) {
         let side = GRID + 1;
         let area = self.cell_area();
         for j in 0..GRID {
             for i in 0..GRID {
                 let at = |di: usize, dj: usize| self.rays[(j + dj) * side + i + di];
-                let corners = [at(0, 0), at(1, 0), at(1, 1), at(0, 1)];
-                match corners {
-                    [Some(a), Some(b), Some(c), Some(d)] => visit(&[a, b, c, d], area),
+                match [at(0, 0), at(1, 0), at(1, 1), at(0, 1)] {
+                    [Some(a), Some(b), Some(c), Some(d)] => {
+                        let corners = [a, b, c, d];
+                        if corners.iter().all(|c| self.passes(c)) {
+                            visit(&corners.map(|c| (c.at, c.weight)), area);
+                        } else if may_pass(self.layout, &corners.map(Some)) {
+                            self.between(&corners, area, &mut visit);
+                        }
+                    }
                     [None, None, None, None] => {}
-                    _ => self.rim(i, j, area, &mut visit),
+                    // A rim beyond which rays miss a surface, where light
+                    // may pass about it.
+                    corners => {
+                        if may_pass(self.layout, &corners) {
+                            self.rim(i, j, area, &mut visit);
+                        }
+                    }
                 }
             }
         }
     }
 
-    /// A cell the rim crosses, cut into RIM² pieces traced anew; a piece
-    /// still crossed carries the share of its corners that arrive, landing
-    /// on them (those stopped replaced by the mean of the others).
+    /// A cell an aperture's rim crosses, its corners all arriving: cut
+    /// into RIM² pieces, each landing between the corners, kept where its
+    /// centre's margin and crossings of the stop's plane, between the
+    /// corners', pass. The rims are then as sharp as the pieces, with no
+    /// ray traced anew.
+    fn between(
+        &self,
+        corners: &[Arrival; 4],
+        area: f64,
+        visit: &mut impl FnMut(&[(Vector, f64); 4], f64),
+    ) {
+        let crossings = corners[0].stop.points().len();
+        let landing = corners.map(|c| [c.at[0], c.at[1], c.at[2], c.weight]);
+        let piece = area / (RIM * RIM) as f64;
+        let at = |u: usize, v: usize| {
+            let l = bilinear(landing, (u as f64 / RIM as f64, v as f64 / RIM as f64));
+            ([l[0], l[1], l[2]], l[3])
+        };
+        for v in 0..RIM {
+            for u in 0..RIM {
+                let centre = ((u as f64 + 0.5) / RIM as f64, (v as f64 + 0.5) / RIM as f64);
+                let margin = bilinear(corners.map(|c| [c.margin]), centre)[0];
+                let passes = margin >= 0.0
+                    && (0..crossings).all(|k| {
+                        let xy = bilinear(corners.map(|c| c.stop.points()[k]), centre);
+                        self.layout.opens(xy)
+                    });
+                if passes {
+                    visit(
+                        &[at(u, v), at(u + 1, v), at(u + 1, v + 1), at(u, v + 1)],
+                        piece,
+                    );
+                }
+            }
+        }
+    }
+
+    /// A cell beyond some of whose corners rays miss a surface (or are
+    /// reflected wholly), cut into RIM² pieces traced anew, clipped by
+    /// every aperture; a piece still crossed
+    /// carries the share of its corners that arrive, landing on them
+    /// (those stopped replaced by the mean of the others).
     fn rim(&self, i: usize, j: usize, area: f64, visit: &mut impl FnMut(&[(Vector, f64); 4], f64)) {
         let side = RIM + 1;
         let mut rays = Vec::with_capacity(side * side);
@@ -139,7 +315,7 @@ impl<'l, 'a> Bundle<'l, 'a> {
                     i as f64 + u as f64 / RIM as f64,
                     j as f64 + v as f64 / RIM as f64,
                 );
-                rays.push(self.ray(x, y));
+                rays.push(self.layout.follow(&self.route, self.collimated(x, y)));
             }
         }
         let piece = area / (RIM * RIM) as f64;
@@ -163,8 +339,12 @@ impl<'l, 'a> Bundle<'l, 'a> {
 /// direction `field`, per unit of its irradiance: what a ghost's light is
 /// counted against.
 pub fn direct_light(layout: &Layout, field: Vector, nm: f64) -> f64 {
+    let route = layout.route(Path::Direct, nm);
+    let Some(square) = search(layout, &route, field) else {
+        return 0.0;
+    };
     let mut light = 0.0;
-    Bundle::new(layout, Path::Direct, field, nm)
+    Bundle::new(layout, route, field, square)
         .for_each_cell(|corners, area| light += area * mean_weight(corners));
     light
 }
@@ -186,7 +366,8 @@ pub fn add_ghost(
     sensor: &Sensor,
     plane: &mut [f64],
 ) -> f64 {
-    let patch = draw(layout, path, (field, nm), (direct, scale), sensor);
+    let square = search(layout, &layout.route(path, nm), field);
+    let patch = draw(layout, (path, square), (field, nm), (direct, scale), sensor);
     patch.add_to(plane, sensor.width);
     patch.light
 }
@@ -222,21 +403,27 @@ impl Patch {
 }
 
 /// As [`add_ghost`], onto a patch of the box of pixels the ghost covers:
-/// a small ghost takes a small patch, not a whole frame.
+/// a small ghost takes a small patch, not a whole frame. `square` is
+/// where in the pupil the path's light passes ([`search`]; none: no
+/// light).
 fn draw(
     layout: &Layout,
-    path: Path,
+    (path, square): (Path, Option<Square>),
     (field, nm): (Vector, f64),
     (direct, scale): (f64, f64),
     sensor: &Sensor,
 ) -> Patch {
     let mut quads = Vec::new();
     let mut light = 0.0;
-    Bundle::new(layout, path, field, nm).for_each_cell(|corners, area| {
-        let share = scale * area * mean_weight(corners) / direct;
-        light += share;
-        quads.push((*corners, share));
-    });
+    if let Some(square) = square {
+        Bundle::new(layout, layout.route(path, nm), field, square).for_each_cell(
+            |corners, area| {
+                let share = scale * area * mean_weight(corners) / direct;
+                light += share;
+                quads.push((*corners, share));
+            },
+        );
+    }
     // The pixels the quads' corners reach, and the one beyond each side
     // that the bilinear shares touch, within the sensor.
     let (mut lo, mut hi) = (
@@ -410,6 +597,14 @@ pub fn render(
     let images: Vec<f64> = (0..channels)
         .map(|c| light.iter().zip(&directs).map(|((_, w), d)| w[c] * d).sum())
         .collect();
+    // Where each path's light passes the pupil, looked for once at the
+    // middle wavelength: the bundle's square is a coarse cell wider than
+    // it each way, which the dispersion's shifts stay within.
+    let middle = light.get(light.len() / 2).map_or(550.0, |l| l.0);
+    let squares: Vec<Option<Square>> = paths
+        .par_iter()
+        .map(|&path| search(layout, &layout.route(path, middle), field))
+        .collect();
     let mut planes = vec![vec![0.0; pixels]; channels];
     let mut ranked = vec![0.0; paths.len()];
     let mut totals = vec![0.0; channels];
@@ -423,7 +618,10 @@ pub fn render(
                 control.check()?;
                 let patches: Vec<Patch> = chunk
                     .par_iter()
-                    .map(|&path| draw(layout, path, (field, *nm), (1.0, 1.0), sensor))
+                    .zip(&squares[c * size..])
+                    .map(|(&path, &square)| {
+                        draw(layout, (path, square), (field, *nm), (1.0, 1.0), sensor)
+                    })
                     .collect();
                 for (p, patch) in patches.into_iter().enumerate() {
                     for (channel, plane) in planes.iter_mut().enumerate() {

@@ -23,6 +23,44 @@ pub struct Ray {
     pub direction: Vector,
 }
 
+/// Where a ray crossed the stop's plane on its path, in order: once on
+/// the direct path, up to three times on a ghost's (forwards, back and
+/// forwards again).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Crossings {
+    points: [[f64; 2]; 3],
+    count: usize,
+}
+
+impl Crossings {
+    fn push(&mut self, point: [f64; 2]) {
+        if let Some(slot) = self.points.get_mut(self.count) {
+            *slot = point;
+            self.count += 1;
+        }
+    }
+
+    /// The points, mm in the stop's plane.
+    pub fn points(&self) -> &[[f64; 2]] {
+        &self.points[..self.count]
+    }
+}
+
+/// A ray arrived on the image plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Arrival {
+    /// Where it lands, mm.
+    pub at: Vector,
+    /// The share of its light that arrives.
+    pub weight: f64,
+    /// How far within every surface's clear semi-aperture it passed: the
+    /// least of 1 − r²/semi² over the surfaces it met, negative where one
+    /// of them stops it.
+    pub margin: f64,
+    /// Where it crossed the stop's plane.
+    pub stop: Crossings,
+}
+
 /// The light's way through a lens.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Path {
@@ -89,6 +127,8 @@ pub struct Layout<'a> {
     /// The stop's opening (mm, in its plane), where the camera shapes it:
     /// else the stop's clear semi-aperture.
     stop: Option<Pupil>,
+    /// The radius of the circle about the stop's opening, mm.
+    pub opening: f64,
     /// z in front of every surface, mm, where rays start: none bulges
     /// forwards by more than its clear semi-aperture.
     front: f64,
@@ -134,18 +174,36 @@ impl<'a> Layout<'a> {
             image,
             pupil,
             stop: None,
+            opening: lens.surfaces[lens.stop()].semi_aperture * mm,
             front: -(widest + 1.0),
         }
     }
 
     /// The same, its stop's opening `stop` (mm in the stop's plane: the
-    /// camera's blades at its f-number) instead of a circle; the entrance
-    /// pupil scaled to it.
+    /// camera's blades at its f-number), within a circle of `radius`,
+    /// instead of the stop's clear semi-aperture. The entrance pupil stays
+    /// the lens's wide open: rays are aimed in its units.
     pub fn with_stop(mut self, stop: Pupil, radius: f64) -> Layout<'a> {
-        let semi = self.lens.surfaces[self.lens.stop()].semi_aperture * self.lens.mm_per_unit;
-        self.pupil.1 *= radius / semi;
         self.stop = Some(stop);
+        self.opening = radius;
         self
+    }
+
+    /// Whether the stop's opening passes the point `xy` of its plane (mm).
+    pub fn opens(&self, xy: [f64; 2]) -> bool {
+        self.stop
+            .as_ref()
+            .is_none_or(|stop| stop.transmission(xy)[0] >= 0.5)
+    }
+
+    /// The z of the first surface's vertex and its clear semi-aperture,
+    /// mm: every ray that enters the lens passes there.
+    pub fn entrance(&self) -> (f64, f64) {
+        let first = &self.lens.surfaces[0];
+        (
+            self.vertices[0],
+            first.semi_aperture * self.lens.mm_per_unit,
+        )
     }
 
     /// The ray of a distant source in direction `field` (a unit vector,
@@ -250,14 +308,38 @@ impl<'a> Layout<'a> {
     }
 
     /// `ray` along a [`Route`], as [`Layout::trace`].
-    pub fn follow(&self, route: &Route, mut ray: Ray) -> Option<(Vector, f64)> {
+    pub fn follow(&self, route: &Route, ray: Ray) -> Option<(Vector, f64)> {
+        self.walk(route, ray, true).map(|a| (a.at, a.weight))
+    }
+
+    /// `ray` along a [`Route`] as [`Layout::follow`], but stopped neither
+    /// by the surfaces' clear semi-apertures nor by the stop's opening
+    /// (only where it misses a surface or is reflected wholly): how far
+    /// within the apertures it passed, and where it crossed the stop's
+    /// plane, are kept instead, for a bundle to clip between its rays,
+    /// where both vary smoothly ([`Arrival::margin`], [`Layout::opens`]).
+    pub fn follow_unclipped(&self, route: &Route, ray: Ray) -> Option<Arrival> {
+        self.walk(route, ray, false)
+    }
+
+    fn walk(&self, route: &Route, mut ray: Ray, clip: bool) -> Option<Arrival> {
         let mut weight = 1.0;
+        let mut stop = Crossings::default();
+        let mut margin = f64::INFINITY;
         for step in &route.steps {
-            let point = hit(&ray, step.z, step.curvature, step.semi)?;
-            if let (true, Some(stop)) = (step.stop, &self.stop) {
-                if stop.transmission([point[0], point[1]])[0] < 0.5 {
+            let point = hit(
+                &ray,
+                step.z,
+                step.curvature,
+                if clip { step.semi } else { f64::INFINITY },
+            )?;
+            let across = point[0] * point[0] + point[1] * point[1];
+            margin = margin.min(1.0 - across / (step.semi * step.semi));
+            if step.stop {
+                if clip && !self.opens([point[0], point[1]]) {
                     return None;
                 }
+                stop.push([point[0], point[1]]);
             }
             let (n_in, n_out) = step.indices;
             // The normal, turned to point along the ray.
@@ -288,7 +370,12 @@ impl<'a> Layout<'a> {
         if !(t.is_finite() && t >= 0.0) || weight <= 0.0 {
             return None;
         }
-        Some((add(ray.point, scale(ray.direction, t)), weight))
+        Some(Arrival {
+            at: add(ray.point, scale(ray.direction, t)),
+            weight,
+            margin,
+            stop,
+        })
     }
 }
 
