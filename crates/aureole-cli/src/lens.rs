@@ -13,7 +13,7 @@ use crate::Failure;
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// The lens file: .toml (aureole), .dat (pbrt), .json (lentil's database) or .txt (an Optical Bench file of photonstophotos.net)
+    /// The lens file: .toml (aureole), .dat (pbrt), .json (lentil's database) or .txt (an Optical Bench file of photonstophotos.net); or a shipped lens's name (double-gauss-50mm-f1.4, …)
     file: PathBuf,
     /// The lens of a lentil database to read (its id)
     #[arg(long)]
@@ -24,6 +24,9 @@ pub struct Args {
     /// Print the first-order data as JSON (in the prescription's units) instead of the table
     #[arg(long)]
     json: bool,
+    /// Draw the lens's section through the axis into this picture (SVG)
+    #[arg(long, value_name = "OUT.svg")]
+    svg: Option<PathBuf>,
     /// Render the ghosts of one distant source into this linear image (.exr, .pfm): R, G and B, each pixel the light it gets over the light of the source's own image
     #[arg(long, value_name = "OUT.exr")]
     ghosts: Option<PathBuf>,
@@ -70,7 +73,21 @@ fn parse_direction(text: &str) -> Result<(f64, f64), String> {
 }
 
 pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
-    let read = read_lens(&args.file, args.id.as_deref())?;
+    // A shipped lens by its name, where no file has it.
+    let shipped = args
+        .file
+        .to_str()
+        .filter(|_| !args.file.exists())
+        .and_then(aureole::lens::shipped::find);
+    let read = match shipped {
+        Some(found) => aureole_io::lenses::LensFile {
+            lens: found
+                .lens()
+                .map_err(|e| Failure::Usage(anyhow::anyhow!("{e}")))?,
+            notes: Vec::new(),
+        },
+        None => read_lens(&args.file, args.id.as_deref())?,
+    };
     let lens = read.lens;
     if !quiet {
         for note in &read.notes {
@@ -91,6 +108,12 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
             return Err(aureole_io::Error::OverwritesInput { path: out.clone() }.into());
         }
         write_lens(out, &lens)?;
+    }
+    if let Some(out) = &args.svg {
+        if aureole_io::atomic::same_file(&args.file, out) {
+            return Err(aureole_io::Error::OverwritesInput { path: out.clone() }.into());
+        }
+        aureole_io::lens_drawing::write_svg(out, &lens)?;
     }
     if let Some(out) = &args.ghosts {
         ghosts(args, (&lens, &paraxial), out, quiet)?;
@@ -242,7 +265,11 @@ fn ghosts(
     }
     let radius = open * p.f_number / f_number;
     let aperture = aureole::Aperture::new(args.blades);
-    let layout = layout.with_stop(aperture.stop(radius), radius);
+    let light = light(args.spectral);
+    let nms: Vec<f64> = light.iter().map(|(nm, _)| *nm).collect();
+    let layout = layout
+        .with_stop(aperture.stop(radius), radius)
+        .with_wavelengths(&nms);
     let (width, height) = args.size;
     let sensor = Sensor::centred(width, height, 36.0 / width as f64);
     let field = aureole::lens::ghost::direction(args.source.0, args.source.1);
@@ -254,7 +281,7 @@ fn ghosts(
         &layout,
         field,
         &sensor,
-        &light(args.spectral),
+        &light,
         &mut aureole::Control::new(&cancel, &mut report),
     )?;
     progress.finish();

@@ -224,3 +224,27 @@ fn a_lens_renders_the_ghosts_of_a_source_the_same_on_any_thread_count() {
         / 3.0;
     assert!(light > 1e-4 && light < 1e-2, "{light}");
 }
+
+#[test]
+fn a_shipped_lens_is_named_and_drawn_in_section() {
+    let dir = tempfile::tempdir().unwrap();
+    let picture = dir.path().join("lens.svg");
+    let done = aureole()
+        .current_dir(dir.path())
+        .args(["lens", "telephoto-300mm-f2.8", "--svg"])
+        .arg(&picture)
+        .assert()
+        .success();
+    let said = String::from_utf8_lossy(&done.get_output().stdout).to_string();
+    assert!(said.contains("US 6,288,845"), "{said}");
+    let drawing = std::fs::read_to_string(&picture).unwrap();
+    assert!(drawing.starts_with("<svg") && drawing.contains("<polygon"));
+    // A name that is neither a file nor a shipped lens is a missing file.
+    let missing = aureole()
+        .current_dir(dir.path())
+        .args(["lens", "telephoto-300mm"])
+        .assert()
+        .failure();
+    let said = String::from_utf8_lossy(&missing.get_output().stderr).to_string();
+    assert!(said.contains("telephoto-300mm") && said.lines().count() == 1, "{said}");
+}

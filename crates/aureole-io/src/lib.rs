@@ -43,6 +43,7 @@ pub mod formats;
 pub mod fuzzing;
 pub mod job;
 pub mod kernel;
+pub mod lens_drawing;
 pub mod lenses;
 pub mod limits;
 pub mod measured;

@@ -119,6 +119,7 @@ function buildPanels() {
     set.classList.toggle("off", !effect.on);
     const kind = state.schema.effects.find((e) => e.type === effect.table.type);
     for (const p of kind ? kind.parameters : []) set.append(control(p, effect.table, writeConfig));
+    if (effect.table.type === "ghosts" && effect.on) set.append(lensPicture());
     // Sub-tables (an aperture's star-filter families): each with its
     // controls and a remove, and one to add.
     for (const [name, parameters] of Object.entries((kind && kind.tables) || {})) {
@@ -140,6 +141,22 @@ function buildPanels() {
       }));
     }
   });
+}
+
+// The lens the ghosts are traced through, drawn by the server from the
+// config as it stands.
+function lensPicture() {
+  const picture = document.createElement("img");
+  picture.id = "lens-picture";
+  picture.alt = "the ghosts' lens, in section";
+  fetch("/api/lens", { method: "POST", body: $("config").value })
+    .then((reply) => (reply.ok ? reply.blob() : null))
+    .then((blob) => {
+      if (!blob) return;
+      picture.src = URL.createObjectURL(blob);
+      picture.dataset.drawn = "1";
+    });
+  return picture;
 }
 
 export function choosePreset() {

@@ -22,6 +22,8 @@
 //!   a job, followed at `GET /api/export/{id}` and cancelled by `DELETE`.
 //! - `POST /api/command` with an export's fields: `{"argv", "text"}`, the
 //!   command lines that write what that export writes.
+//! - `POST /api/lens` with a config's TOML: the section (SVG) of the lens
+//!   its ghosts are traced through.
 //!
 //! A refusal is a 4xx with `{"error": "one line"}`; a render that finds the
 //! memory budget taken by exports for too long, a 503.
@@ -127,6 +129,7 @@ pub fn router(studio: Studio) -> Router {
         )
         .route("/api/config/read", post(read_config))
         .route("/api/config/write", post(write_config))
+        .route("/api/lens", post(lens_picture))
         .route("/api/render", post(render_picture))
         .route("/api/export", post(start_export))
         .route("/api/command", post(command_lines))
@@ -151,6 +154,24 @@ async fn read_config(body: Bytes) -> Result<Json<serde_json::Value>, StudioError
     let text = std::str::from_utf8(&body)
         .map_err(|_| StudioError::BadRequest("the config is not UTF-8 text".into()))?;
     camera::read(text).map(Json)
+}
+
+/// `POST /api/lens`: the picture (SVG) of the lens a config's ghosts are
+/// traced through.
+async fn lens_picture(body: Bytes) -> Result<Response, StudioError> {
+    let text = std::str::from_utf8(&body)
+        .map_err(|_| StudioError::BadRequest("the config is not UTF-8 text".into()))?;
+    let config = render::parse_config(text)?;
+    let Some(ghosts) = &config.ghosts else {
+        return Err(StudioError::BadRequest(
+            "config: no lens to draw: it has no [[effect]] of type = \"ghosts\"".into(),
+        ));
+    };
+    Ok((
+        [(header::CONTENT_TYPE, "image/svg+xml")],
+        aureole_io::lens_drawing::svg(&ghosts.lens.lens),
+    )
+        .into_response())
 }
 
 async fn write_config(body: Bytes) -> Result<Response, StudioError> {

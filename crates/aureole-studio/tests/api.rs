@@ -701,6 +701,23 @@ fn the_camera_panels_come_from_the_library_schema_and_round_trip_the_toml() {
         "[[effect]]\ntype = \"ghosts\"\nlens = \"portrait-90mm-f2\"\n",
     );
     assert_eq!(shipped.status, 200);
+    // Its lens drawn, in section; a camera without ghosts has none.
+    let drawn = http(
+        addr,
+        "POST",
+        "/api/lens",
+        "[[effect]]\ntype = \"ghosts\"\nlens = \"portrait-90mm-f2\"\n",
+    );
+    assert_eq!(drawn.status, 200);
+    assert_eq!(drawn.header("content-type"), Some("image/svg+xml"));
+    let none = http(
+        addr,
+        "POST",
+        "/api/lens",
+        "[[effect]]\ntype = \"bloom\"\nepsilon = 0.1\nbeta = 2.0\nradius = \"3px\"\n",
+    );
+    assert_eq!(none.status, 400);
+    assert!(none.error().contains("no lens to draw"), "{}", none.error());
 }
 
 #[test]

@@ -378,3 +378,33 @@ fn two_tabs_render_side_by_side_without_cancelling_each_other() {
     stream.read_to_string(&mut reply).unwrap();
     assert!(reply.contains("\"cancelled\":0"), "{reply}");
 }
+
+#[test]
+fn a_camera_with_lens_ghosts_renders_and_draws_its_lens() {
+    let Some(browser) = chromium() else {
+        required::missing("browser", "no chromium (apt-get install chromium)");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let addr = server(dir.path());
+    let page = visit(
+        &browser,
+        &format!("http://{addr}/?token={TOKEN}&preset=camera-f8-7blade-ghosts"),
+        "ghosts",
+    );
+    assert!(page.attribute("data-rendered") >= 1, "{}", page.dom);
+    assert_eq!(
+        page.attribute("data-failed"),
+        0,
+        "{}",
+        page.text_of("error")
+    );
+    // The ghosts' panel: its lens chosen among the shipped ones, and drawn.
+    assert!(page.dom.contains(r#"data-param="lens""#), "no lens control");
+    assert!(
+        page.dom
+            .contains(r#"<option value="double-gauss-50mm-f1.4""#),
+        "no shipped lens offered"
+    );
+    assert_eq!(page.attribute("data-drawn"), 1, "the lens is not drawn");
+}

@@ -456,10 +456,12 @@ fn ghosts_look_the_same_at_twice_the_resolution_reduced() {
     for (k, v) in large.iter().enumerate() {
         reduced[(k / 480 / 2) * 240 + (k % 480) / 2] += v;
     }
-    // The same light in all, but for the bilinear shares of the frame's
-    // outermost pixels, which fall beyond it at either resolution alike.
+    // The same light in all, but at the frame's edges: the bilinear shares
+    // of its outermost pixels fall beyond it, and a large ghost's coarse
+    // pixels (lens/canvas.rs) that straddle an edge keep their light
+    // within it, each at its own resolution.
     let (a, b): (f64, f64) = (small.iter().sum(), reduced.iter().sum());
-    assert!((a / b - 1.0).abs() < 1e-4, "{a} {b}");
+    assert!((a / b - 1.0).abs() < 1e-3, "{a} {b}");
 }
 
 #[test]

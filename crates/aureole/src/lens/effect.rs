@@ -271,9 +271,13 @@ pub struct GhostOptics {
 }
 
 impl GhostOptics {
-    /// The lens set out for tracing, its stop the camera's.
+    /// The lens set out for tracing, its stop the camera's, its surfaces'
+    /// reflectances tabulated at the light's wavelengths.
     pub fn layout(&self) -> Result<Layout<'_>> {
-        Ok(Layout::new(&self.lens)?.with_stop(self.stop.clone(), self.radius))
+        let nms: Vec<f64> = self.light.iter().map(|(nm, _)| *nm).collect();
+        Ok(Layout::new(&self.lens)?
+            .with_stop(self.stop.clone(), self.radius)
+            .with_wavelengths(&nms))
     }
 
     /// A sensor of `width`×`height` pixels of this pitch, the axis at

@@ -8,6 +8,7 @@
 //! the direct path brings to the source's own image: a ghost's pixels
 //! sum to its path's power over the image's.
 
+use super::canvas::{Canvas, Patch, Quads};
 use super::trace::{Arrival, Layout, Path, Route, Vector};
 
 /// A sensor of `width`×`height` pixels of `pitch_mm`, the optical axis
@@ -39,7 +40,7 @@ impl Sensor {
 
     /// (column, row) in pixels of a point of the image plane (mm), pixel
     /// i spanning [i, i + 1).
-    fn pixel(&self, at: Vector) -> (f64, f64) {
+    pub(crate) fn pixel(&self, at: Vector) -> (f64, f64) {
         (
             self.centre.0 + at[0] / self.pitch_mm,
             self.centre.1 - at[1] / self.pitch_mm,
@@ -49,15 +50,11 @@ impl Sensor {
 
 /// Cells across the square of the pupil a path's light passes, where
 /// its bundle is traced.
-pub const GRID: usize = 64;
+pub const GRID: usize = 48;
 
 /// Cells across the whole entrance (the first surface's clear aperture
 /// as the source sees it), where each path's light is first looked for.
-const COARSE: usize = 40;
-
-/// The most pieces a cell is cut into along each side when it lands
-/// larger than a pixel.
-const MOST_PIECES: usize = 64;
+const COARSE: usize = 32;
 
 /// Cells a rim crosses are cut into this many pieces along each side:
 /// the rim's light is then counted to 1/`RIM` of a cell rather than to a
@@ -368,42 +365,18 @@ pub fn add_ghost(
 ) -> f64 {
     let square = search(layout, &layout.route(path, nm), field);
     let patch = draw(layout, (path, square), (field, nm), (direct, scale), sensor);
-    patch.add_to(plane, sensor.width);
+    let mut canvas = Canvas::new(*sensor, 1);
+    canvas.add(&patch, 0, 1.0);
+    for (p, v) in plane.iter_mut().zip(&canvas.finish()[0]) {
+        *p += v;
+    }
     patch.light
 }
 
-/// A ghost drawn on the pixels of the box it covers.
-struct Patch {
-    /// The box's first column and row, and its width.
-    x0: usize,
-    y0: usize,
-    width: usize,
-    /// Its pixels, rows downwards.
-    values: Vec<f64>,
-    /// Its light, including what falls beyond the sensor.
-    light: f64,
-}
-
-impl Patch {
-    fn add_to(&self, plane: &mut [f64], width: usize) {
-        self.add_scaled(plane, width, 1.0);
-    }
-
-    fn add_scaled(&self, plane: &mut [f64], width: usize, scale: f64) {
-        if self.width == 0 {
-            return;
-        }
-        for (r, row) in self.values.chunks(self.width).enumerate() {
-            let start = (self.y0 + r) * width + self.x0;
-            for (p, v) in plane[start..start + self.width].iter_mut().zip(row) {
-                *p += scale * v;
-            }
-        }
-    }
-}
-
-/// As [`add_ghost`], onto a patch of the box of pixels the ghost covers:
-/// a small ghost takes a small patch, not a whole frame. `square` is
+/// As [`add_ghost`], onto a patch of the box of pixels the ghost covers,
+/// at the level its cells land about a pixel wide ([`Patch::draw`]): a
+/// small ghost takes a small patch, not a whole frame, and a large one a
+/// coarse patch. `square` is
 /// where in the pupil the path's light passes ([`search`]; none: no
 /// light).
 fn draw(
@@ -413,7 +386,7 @@ fn draw(
     (direct, scale): (f64, f64),
     sensor: &Sensor,
 ) -> Patch {
-    let mut quads = Vec::new();
+    let mut quads: Quads = Vec::new();
     let mut light = 0.0;
     if let Some(square) = square {
         Bundle::new(layout, layout.route(path, nm), field, square).for_each_cell(
@@ -424,109 +397,7 @@ fn draw(
             },
         );
     }
-    // The pixels the quads' corners reach, and the one beyond each side
-    // that the bilinear shares touch, within the sensor.
-    let (mut lo, mut hi) = (
-        (f64::INFINITY, f64::INFINITY),
-        (f64::NEG_INFINITY, f64::NEG_INFINITY),
-    );
-    for (corners, _) in &quads {
-        for c in corners {
-            let (x, y) = sensor.pixel(c.0);
-            lo = (lo.0.min(x), lo.1.min(y));
-            hi = (hi.0.max(x), hi.1.max(y));
-        }
-    }
-    let clip = |v: f64, n: usize| v.clamp(0.0, n as f64) as usize;
-    let (x0, y0) = (
-        clip(lo.0.floor() - 1.0, sensor.width),
-        clip(lo.1.floor() - 1.0, sensor.height),
-    );
-    let (x1, y1) = (
-        clip(hi.0.ceil() + 1.0, sensor.width),
-        clip(hi.1.ceil() + 1.0, sensor.height),
-    );
-    let (width, height) = (x1.saturating_sub(x0), y1.saturating_sub(y0));
-    let mut values = vec![0.0; width * height];
-    for (corners, share) in &quads {
-        spread_at(
-            &mut values,
-            (width, height),
-            sensor,
-            (x0, y0),
-            corners,
-            *share,
-        );
-    }
-    Patch {
-        x0,
-        y0,
-        width,
-        values,
-        light,
-    }
-}
-
-/// `light` spread evenly over the quadrilateral the four `corners` land
-/// on: cut until each piece is smaller than a pixel, each piece's light
-/// going to the pixels about its centre, bilinearly (which keeps its
-/// centroid); into `plane`, a box of `size` pixels whose first is the
-/// sensor's `origin`.
-fn spread_at(
-    plane: &mut [f64],
-    size: (usize, usize),
-    sensor: &Sensor,
-    origin: (usize, usize),
-    corners: &[(Vector, f64); 4],
-    light: f64,
-) {
-    let px = corners.map(|c| {
-        let (x, y) = sensor.pixel(c.0);
-        (x - origin.0 as f64, y - origin.1 as f64)
-    });
-    let longest = (0..4)
-        .map(|k| {
-            let (a, b) = (px[k], px[(k + 1) % 4]);
-            ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt()
-        })
-        .fold(0.0, f64::max);
-    let pieces = (longest.ceil() as usize).clamp(1, MOST_PIECES);
-    let share = light / (pieces * pieces) as f64;
-    for v in 0..pieces {
-        for u in 0..pieces {
-            let (s, t) = (
-                (u as f64 + 0.5) / pieces as f64,
-                (v as f64 + 0.5) / pieces as f64,
-            );
-            let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
-            let x = (0..4).map(|k| w[k] * px[k].0).sum();
-            let y = (0..4).map(|k| w[k] * px[k].1).sum();
-            deposit(plane, size, (x, y), share);
-        }
-    }
-}
-
-/// `light` at the point (column, row) shared bilinearly among the four
-/// pixels whose centres surround it, in a plane of `width`×`height`;
-/// what falls beyond it is dropped.
-fn deposit(plane: &mut [f64], (width, height): (usize, usize), (x, y): (f64, f64), light: f64) {
-    let (fx, fy) = (x - 0.5, y - 0.5);
-    // Wholly beyond the plane (or not a number): nothing to share.
-    if !(fx >= -1.0 && fy >= -1.0 && fx < width as f64 && fy < height as f64) {
-        return;
-    }
-    // ⌊f⌋ by truncating f + 1 ≥ 0: a conversion, not a call to `floor`.
-    let (x0, y0) = ((fx + 1.0) as i64 - 1, (fy + 1.0) as i64 - 1);
-    let (ax, ay) = (fx - x0 as f64, fy - y0 as f64);
-    let (w, h) = (width as i64, height as i64);
-    for (dx, wx) in [(0, 1.0 - ax), (1, ax)] {
-        for (dy, wy) in [(0, 1.0 - ay), (1, ay)] {
-            let (cx, cy) = (x0 + dx, y0 + dy);
-            if cx >= 0 && cy >= 0 && cx < w && cy < h {
-                plane[(cy * w + cx) as usize] += light * wx * wy;
-            }
-        }
-    }
+    Patch::draw(&quads, light, sensor, GRID)
 }
 
 /// The unit direction of a distant source `x` degrees right of the axis
@@ -576,8 +447,7 @@ pub struct Rendered {
 
 /// Every ghost of a distant source in direction `field`, on `sensor`, in
 /// `light` (its wavelengths, each with its weight in every channel, as
-/// [`light`] gives). The paths are traced in parallel and added in their
-/// order: the same bits on any number of threads.
+/// [`light`] gives): [`trace`], painted at the source's brightness.
 pub fn render(
     layout: &Layout,
     field: Vector,
@@ -585,10 +455,63 @@ pub fn render(
     light: &[(f64, Vec<f64>)],
     control: &mut crate::control::Control,
 ) -> crate::Result<Rendered> {
+    let traced = trace(layout, field, sensor, light, control)?;
+    let channels = traced.light.len();
+    let mut canvas = Canvas::new(*sensor, channels);
+    let identity: Vec<Vec<f64>> = (0..channels)
+        .map(|t| (0..channels).map(|c| f64::from(u8::from(t == c))).collect())
+        .collect();
+    traced.paint(&mut canvas, &identity);
+    Ok(Rendered {
+        planes: canvas.finish(),
+        light: traced.light,
+        ranked: traced.ranked,
+    })
+}
+
+/// A source's ghosts traced, each path's at each wavelength drawn at the
+/// light of an image of 1 in each channel, to be painted at the source's
+/// own.
+#[derive(Debug, Clone)]
+pub struct Traced {
+    /// (wavelength, its ghost of each path), in the order traced.
+    patches: Vec<(usize, Patch)>,
+    /// For each wavelength, its share of each channel's image.
+    shares: Vec<Vec<f64>>,
+    /// Each channel's ghost light over its image's, including what falls
+    /// beyond the sensor.
+    pub light: Vec<f64>,
+    /// Each path's light over the image's (the channels' mean), the
+    /// brightest first.
+    pub ranked: Vec<(Path, f64)>,
+}
+
+impl Traced {
+    /// Adds the ghosts to `canvas`: its plane t gets Σ_c mix[t][c] ×
+    /// channel c's ghosts (each pixel its light over channel c's image).
+    pub fn paint(&self, canvas: &mut Canvas, mix: &[Vec<f64>]) {
+        for (k, patch) in &self.patches {
+            for (target, row) in mix.iter().enumerate() {
+                let scale: f64 = row.iter().zip(&self.shares[*k]).map(|(m, s)| m * s).sum();
+                canvas.add(patch, target, scale);
+            }
+        }
+    }
+}
+
+/// Every ghost of a distant source in direction `field`, on `sensor`, in
+/// `light`. The paths are traced in parallel and kept in their order: the
+/// same bits on any number of threads.
+pub fn trace(
+    layout: &Layout,
+    field: Vector,
+    sensor: &Sensor,
+    light: &[(f64, Vec<f64>)],
+    control: &mut crate::control::Control,
+) -> crate::Result<Traced> {
     use rayon::prelude::*;
     let paths = layout.ghosts();
     let channels = light.first().map_or(0, |(_, w)| w.len());
-    let pixels = sensor.width * sensor.height;
     // Each channel's image: its weights times the direct path's light.
     let directs: Vec<f64> = light
         .iter()
@@ -596,6 +519,20 @@ pub fn render(
         .collect();
     let images: Vec<f64> = (0..channels)
         .map(|c| light.iter().zip(&directs).map(|((_, w), d)| w[c] * d).sum())
+        .collect();
+    let shares: Vec<Vec<f64>> = light
+        .iter()
+        .map(|(_, weights)| {
+            (0..channels)
+                .map(|c| {
+                    if images[c] > 0.0 {
+                        weights[c] / images[c]
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
         .collect();
     // Where each path's light passes the pupil, looked for once at the
     // middle wavelength: the bundle's square is a coarse cell wider than
@@ -605,33 +542,30 @@ pub fn render(
         .par_iter()
         .map(|&path| search(layout, &layout.route(path, middle), field))
         .collect();
-    let mut planes = vec![vec![0.0; pixels]; channels];
+    let mut patches = Vec::new();
     let mut ranked = vec![0.0; paths.len()];
     let mut totals = vec![0.0; channels];
-    for (k, ((nm, weights), &direct)) in light.iter().zip(&directs).enumerate() {
+    for (k, (nm, _)) in light.iter().enumerate() {
         control.check()?;
-        if direct > 0.0 {
-            // Paths a few at a time: each drawn on its own patch, the
-            // patches added in the paths' order.
+        if directs[k] > 0.0 {
+            // Paths a few at a time, each drawn on its own patch, kept in
+            // the paths' order; cancellation is heard between.
             let size = rayon::current_num_threads().max(1) * 2;
             for (c, chunk) in paths.chunks(size).enumerate() {
                 control.check()?;
-                let patches: Vec<Patch> = chunk
+                let drawn: Vec<Patch> = chunk
                     .par_iter()
                     .zip(&squares[c * size..])
                     .map(|(&path, &square)| {
                         draw(layout, (path, square), (field, *nm), (1.0, 1.0), sensor)
                     })
                     .collect();
-                for (p, patch) in patches.into_iter().enumerate() {
-                    for (channel, plane) in planes.iter_mut().enumerate() {
-                        if weights[channel] > 0.0 && images[channel] > 0.0 {
-                            let share = weights[channel] / images[channel];
-                            ranked[c * size + p] += share * patch.light / channels as f64;
-                            totals[channel] += share * patch.light;
-                            patch.add_scaled(plane, sensor.width, share);
-                        }
+                for (p, patch) in drawn.into_iter().enumerate() {
+                    for (channel, share) in shares[k].iter().enumerate() {
+                        ranked[c * size + p] += share * patch.light / channels as f64;
+                        totals[channel] += share * patch.light;
                     }
+                    patches.push((k, patch));
                 }
             }
         }
@@ -639,8 +573,9 @@ pub fn render(
     }
     let mut ranked: Vec<(Path, f64)> = paths.into_iter().zip(ranked).collect();
     ranked.sort_by(|a, b| b.1.total_cmp(&a.1));
-    Ok(Rendered {
-        planes,
+    Ok(Traced {
+        patches,
+        shares,
         light: totals,
         ranked,
     })

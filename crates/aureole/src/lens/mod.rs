@@ -29,6 +29,7 @@
 //! # Ok::<(), aureole::Error>(())
 //! ```
 
+pub mod canvas;
 pub mod coating;
 pub mod effect;
 pub mod ghost;

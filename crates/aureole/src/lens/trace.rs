@@ -110,9 +110,16 @@ struct Step {
     /// Its coating's layers as the light meets them; `None`: it reflects
     /// nothing (the stop).
     layers: Option<Vec<super::Layer>>,
+    /// Its reflectance tabulated at the route's wavelength, where the
+    /// layout has it ([`Layout::with_wavelengths`]).
+    table: Option<std::sync::Arc<coating::Table>>,
     /// Whether the light is reflected here rather than refracted.
     reflect: bool,
 }
+
+/// A surface's reflectance tables, forwards and backwards (none for the
+/// stop).
+type Tables = [Option<std::sync::Arc<coating::Table>>; 2];
 
 /// A lens set out for tracing: each surface's vertex on the axis, in mm.
 #[derive(Debug, Clone)]
@@ -129,6 +136,9 @@ pub struct Layout<'a> {
     stop: Option<Pupil>,
     /// The radius of the circle about the stop's opening, mm.
     pub opening: f64,
+    /// Each surface's reflectance tabulated, forwards and backwards, at
+    /// the wavelengths [`Layout::with_wavelengths`] was given.
+    tables: Vec<(f64, Vec<Tables>)>,
     /// z in front of every surface, mm, where rays start: none bulges
     /// forwards by more than its clear semi-aperture.
     front: f64,
@@ -175,6 +185,7 @@ impl<'a> Layout<'a> {
             pupil,
             stop: None,
             opening: lens.surfaces[lens.stop()].semi_aperture * mm,
+            tables: Vec::new(),
             front: -(widest + 1.0),
         }
     }
@@ -186,6 +197,46 @@ impl<'a> Layout<'a> {
     pub fn with_stop(mut self, stop: Pupil, radius: f64) -> Layout<'a> {
         self.stop = Some(stop);
         self.opening = radius;
+        self
+    }
+
+    /// The same, each surface's reflectance tabulated at the wavelengths
+    /// `nms` ([`coating::Table`]): what a bundle of rays traced at them
+    /// spends most of its time on otherwise.
+    pub fn with_wavelengths(mut self, nms: &[f64]) -> Layout<'a> {
+        let lens = self.lens;
+        self.tables = nms
+            .iter()
+            .map(|&nm| {
+                let tables = (0..lens.surfaces.len())
+                    .map(|s| {
+                        let surface = &lens.surfaces[s];
+                        let (front, back) = (lens.medium_before(s), surface.medium);
+                        let (n_front, n_back) = (front.index_at(nm), back.index_at(nm));
+                        let table = |n_in, n_out, layers: &[super::Layer]| {
+                            Some(std::sync::Arc::new(coating::Table::new(
+                                n_in, n_out, layers, nm,
+                            )))
+                        };
+                        match &surface.coating {
+                            _ if surface.stop => [None, None],
+                            Coating::None => {
+                                [table(n_front, n_back, &[]), table(n_back, n_front, &[])]
+                            }
+                            Coating::Layers(layers) => {
+                                let reversed: Vec<super::Layer> =
+                                    layers.iter().rev().copied().collect();
+                                [
+                                    table(n_front, n_back, layers),
+                                    table(n_back, n_front, &reversed),
+                                ]
+                            }
+                        }
+                    })
+                    .collect();
+                (nm, tables)
+            })
+            .collect();
         self
     }
 
@@ -293,6 +344,11 @@ impl<'a> Layout<'a> {
                     Coating::Layers(layers) if forwards => Some(layers.clone()),
                     Coating::Layers(layers) => Some(layers.iter().rev().copied().collect()),
                 };
+                let table = self
+                    .tables
+                    .iter()
+                    .find(|(at, _)| *at == nm)
+                    .and_then(|(_, tables)| tables[s][usize::from(!forwards)].clone());
                 Step {
                     z: self.vertices[s],
                     curvature: surface.radius.map_or(0.0, |r| 1.0 / (r * mm)),
@@ -300,6 +356,7 @@ impl<'a> Layout<'a> {
                     stop: surface.stop,
                     indices: (n_in, n_out),
                     layers,
+                    table,
                     reflect,
                 }
             })
@@ -349,7 +406,10 @@ impl<'a> Layout<'a> {
             }
             let cos_in = dot(normal, ray.direction);
             let r = step.layers.as_ref().map_or(0.0, |layers| {
-                coating::reflectance(n_in, n_out, layers, cos_in, route.nm)
+                step.table
+                    .as_ref()
+                    .and_then(|t| t.at(cos_in))
+                    .unwrap_or_else(|| coating::reflectance(n_in, n_out, layers, cos_in, route.nm))
             });
             ray = if step.reflect {
                 weight *= r;

@@ -10,8 +10,9 @@ use std::collections::VecDeque;
 use crate::control::Control;
 use crate::error::Result;
 use crate::image::{Image, Layout as Planes, PixelLuminance};
+use crate::lens::canvas::Canvas;
 use crate::lens::effect::{GhostOptics, Ghosts};
-use crate::lens::ghost::{render, Sensor};
+use crate::lens::ghost::{trace, Sensor};
 use crate::lens::trace::{Layout, Path, Vector};
 
 /// Where a frame's display window lies in its pixels: a frame with
@@ -178,6 +179,8 @@ pub(crate) fn add_ghosts(
     let green = optics.light[optics.light.len() / 2].0;
     let weights = image.luminance_weights().map(f64::from);
     let mut scene = image.clone();
+    // Every source's ghosts on one canvas, its levels added up once.
+    let mut canvas = Canvas::new(sensor, image.planes.len());
     let (mut ghost_light, mut source_light) = (0.0, 0.0);
     for (k, source) in found.iter().take(traced).enumerate() {
         control.check()?;
@@ -188,17 +191,14 @@ pub(crate) fn add_ghosts(
         let field = aim(&layout, focal_mm, target, green);
         let start = k as f64 / traced as f64;
         let mut part = control.part(start, start + 1.0 / traced as f64);
-        let rendered = render(&layout, field, &sensor, &optics.light, &mut part)?;
+        let drawn = trace(&layout, field, &sensor, &optics.light, &mut part)?;
         // Each channel's share of the source: the input is what the lens
         // brought from it, its own image and its ghosts together.
         let shares: Vec<f64> = match image.layout {
-            Planes::Rgb => rendered.light.clone(),
-            Planes::Luminance => vec![weights
-                .iter()
-                .zip(&rendered.light)
-                .map(|(w, g)| w * g)
-                .sum()],
+            Planes::Rgb => drawn.light.clone(),
+            Planes::Luminance => vec![weights.iter().zip(&drawn.light).map(|(w, g)| w * g).sum()],
         };
+        let mut mix = Vec::with_capacity(scene.planes.len());
         for (c, plane) in scene.planes.iter_mut().enumerate() {
             let g = shares[c];
             let power: f64 = source
@@ -210,21 +210,20 @@ pub(crate) fn add_ghosts(
             for &i in &source.pixels {
                 plane[i] -= (f64::from(image.planes[c][i]) * g / (1.0 + g)) as f32;
             }
-            let ghost = |p: usize| match image.layout {
-                Planes::Rgb => rendered.planes[c][p],
-                Planes::Luminance => (0..3).map(|k| weights[k] * rendered.planes[k][p]).sum(),
-            };
-            for (p, value) in plane.iter_mut().enumerate() {
-                *value += (direct * ghost(p)) as f32;
-            }
+            mix.push(match image.layout {
+                Planes::Rgb => (0..3).map(|k| if k == c { direct } else { 0.0 }).collect(),
+                Planes::Luminance => weights.iter().map(|w| w * direct).collect(),
+            });
         }
-        let y_share: f64 = weights
-            .iter()
-            .zip(&rendered.light)
-            .map(|(w, g)| w * g)
-            .sum();
+        drawn.paint(&mut canvas, &mix);
+        let y_share: f64 = weights.iter().zip(&drawn.light).map(|(w, g)| w * g).sum();
         ghost_light += source.luminance * y_share / (1.0 + y_share);
         source_light += source.luminance;
+    }
+    for (plane, ghosts) in scene.planes.iter_mut().zip(canvas.finish()) {
+        for (value, ghost) in plane.iter_mut().zip(ghosts) {
+            *value += ghost as f32;
+        }
     }
     control.report(1.0);
     Ok((
