@@ -91,7 +91,8 @@ fn plate(path: &Path, display: (usize, usize), data_at: (i32, i32)) {
     .unwrap();
 }
 
-fn rgb(path: &Path) -> Vec<Vec<f32>> {
+/// The first part's channels, by name.
+fn channels(path: &Path) -> Vec<(String, Vec<f32>)> {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -100,18 +101,20 @@ fn rgb(path: &Path) -> Vec<Vec<f32>> {
         .all_attributes()
         .from_file(path)
         .unwrap();
+    image
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect()
+}
+
+fn rgb(path: &Path) -> Vec<Vec<f32>> {
+    let all = channels(path);
     ["R", "G", "B"]
         .iter()
-        .map(|name| {
-            let channel = image
-                .layer_data
-                .channel_data
-                .list
-                .iter()
-                .find(|c| c.name.to_string() == *name)
-                .unwrap();
-            channel.sample_data.values_as_f32().collect()
-        })
+        .map(|name| all.iter().find(|(n, _)| n == name).unwrap().1.clone())
         .collect()
 }
 
@@ -174,21 +177,7 @@ fn the_ghosts_have_their_layer_and_their_line_and_the_lens_file_is_found_beside_
         said.contains("ghosts: 1 of 1 sources traced through 3 paths at f/5.60"),
         "{said}"
     );
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(&output)
-        .unwrap();
-    let names: Vec<String> = image
-        .layer_data
-        .channel_data
-        .list
-        .iter()
-        .map(|c| c.name.to_string())
-        .collect();
+    let names: Vec<String> = channels(&output).into_iter().map(|(n, _)| n).collect();
     for name in [
         "glare.ghosts.R",
         "glare.ghosts.G",

@@ -246,5 +246,8 @@ fn a_shipped_lens_is_named_and_drawn_in_section() {
         .assert()
         .failure();
     let said = String::from_utf8_lossy(&missing.get_output().stderr).to_string();
-    assert!(said.contains("telephoto-300mm") && said.lines().count() == 1, "{said}");
+    assert!(
+        said.contains("telephoto-300mm") && said.lines().count() == 1,
+        "{said}"
+    );
 }
