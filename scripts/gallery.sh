@@ -240,6 +240,32 @@ done
 "$montage" "$out/guide-threshold.jpg" --width 420 \
   "$work/threshold0.png=threshold 0" "$work/threshold100.png=threshold 100 cd/m2" \
   "$work/threshold5000.png=threshold 5000 cd/m2"
+# Lens ghosts: the demo street through the double-Gauss of US 4,247,171
+# (7 blades) at f/2 and f/8, and its ghosts alone, far brighter.
+ghosts() { # ghosts NAME F_NUMBER BLADES
+  cat >"$work/$1.toml" <<EOF
+[camera]
+sensor_width_mm = 36.0
+focal_length_mm = 50.0
+f_number = $2
+
+[[effect]]
+type = "ghosts"
+lens = "double-gauss-50mm-f1.4"
+EOF
+  if [ "$3" != 0 ]; then printf '\n[[effect]]\ntype = "aperture"\nblades = %s\n' "$3" >>"$work/$1.toml"; fi
+}
+for n in 2 8; do
+  ghosts "ghosts-f$n" "$n" 7
+  "$aureole" apply -q "$work/street.exr" --config "$work/ghosts-f$n.toml" --white 6 -o "$work/ghosts-f$n.png"
+  ghosts "alone-f$n" "$n" 0
+  "$aureole" apply -q "$work/street.exr" --config "$work/alone-f$n.toml" --glare-only --white 0.2 \
+    -o "$work/alone-f$n.png"
+done
+"$montage" "$out/guide-ghosts.jpg" --columns 2 --width 480 --quality 85 \
+  "$work/ghosts-f2.png=f/2, 7 blades: ghosts and rays" "$work/ghosts-f8.png=f/8" \
+  "$work/alone-f2.png=f/2: the ghosts alone (round stop), 30x brighter" \
+  "$work/alone-f8.png=f/8: the ghosts alone, 30x brighter"
 for recipe in configs/*.toml; do
   kernel "$work/recipe-$(basename "$recipe" .toml).png" 257 1000 --config "$recipe"
 done
