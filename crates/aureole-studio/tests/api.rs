@@ -1408,3 +1408,34 @@ fn a_recent_camera_is_kept_within_the_budget() {
     render(addr, "paper-fig4-bloom");
     assert_eq!(reused(addr), 1);
 }
+
+/// A drag of a parameter the lens ghosts do not depend on keeps them
+/// rather than trace them again; one they depend on traces them anew.
+#[test]
+fn a_change_that_leaves_the_ghosts_keeps_them() {
+    let dir = tempfile::tempdir().unwrap();
+    street(dir.path(), "street.exr", (64, 36));
+    let addr = server(dir.path());
+    let kept = |addr| {
+        http(addr, "GET", "/api/status", "").json()["ghosts_reused"]
+            .as_u64()
+            .unwrap()
+    };
+    let camera = preset("camera-f8-7blade-ghosts");
+    let bloom = |epsilon: f64| {
+        format!(
+            "{camera}\n[[effect]]\ntype = \"bloom\"\nepsilon = {epsilon}\nbeta = 2.0\nradius = \"2px\"\n"
+        )
+    };
+    let stopped = camera.replace("f_number = 8.0", "f_number = 4.0");
+    for (config, reused) in [(bloom(0.01), 0), (bloom(0.05), 1), (stopped, 1)] {
+        let reply = http(
+            addr,
+            "POST",
+            "/api/render",
+            &render_body("street.exr", &config, 48, ""),
+        );
+        assert_eq!(reply.status, 200, "{}", reply.error());
+        assert_eq!(kept(addr), reused);
+    }
+}

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use aureole::config::ConfigFile;
 use aureole::image::{Image, Shape};
 use aureole::memory::Workload;
-use aureole::{ApplyOptions, Cancel, Config, Frame, Method};
+use aureole::{ApplyOptions, Cancel, Config, Frame, GhostSummary, Method};
 use aureole_io::display::{meter, render, DisplayOptions, Exposure, ToneCurve};
 use aureole_io::kernel::log_picture_window;
 use serde::Deserialize;
@@ -327,6 +327,11 @@ pub struct Renderer {
     kept: Mutex<Vec<KeptSession>>,
     /// Each client's running render.
     running: Mutex<HashMap<String, Cancel>>,
+    /// The last preview's lens ghosts, kept while what they depend on
+    /// stays: a drag of another parameter does not trace them again.
+    ghosts: Mutex<Option<(GhostKey, (Frame, GhostSummary))>>,
+    /// Renders whose ghosts were kept.
+    ghosts_reused: std::sync::atomic::AtomicU64,
     /// Renders under way, and renders that ended cancelled.
     active: std::sync::atomic::AtomicUsize,
     cancelled: std::sync::atomic::AtomicU64,
@@ -343,6 +348,27 @@ pub struct Status {
     pub cancelled: u64,
     /// Renders through a kept session (its kernel and spectra reused).
     pub reused: u64,
+    /// Renders whose lens ghosts were kept from the last.
+    pub ghosts_reused: u64,
+}
+
+/// What a preview's lens ghosts depend on: the preview itself (held, so
+/// that a reloaded or resized one is another), the ghosts' own
+/// parameters, the camera and the stop's shape.
+struct GhostKey {
+    preview: Arc<Frame>,
+    ghosts: aureole::lens::effect::Ghosts,
+    camera: aureole::CameraGeometry,
+    aperture: Option<aureole::Aperture>,
+}
+
+impl GhostKey {
+    fn is(&self, other: &GhostKey) -> bool {
+        Arc::ptr_eq(&self.preview, &other.preview)
+            && self.ghosts == other.ghosts
+            && self.camera == other.camera
+            && self.aperture == other.aperture
+    }
 }
 
 impl Renderer {
@@ -357,6 +383,8 @@ impl Renderer {
             preview: Mutex::new(None),
             kept: Mutex::new(Vec::new()),
             running: Mutex::new(HashMap::new()),
+            ghosts: Mutex::new(None),
+            ghosts_reused: std::sync::atomic::AtomicU64::new(0),
             active: std::sync::atomic::AtomicUsize::new(0),
             cancelled: std::sync::atomic::AtomicU64::new(0),
             reused: std::sync::atomic::AtomicU64::new(0),
@@ -389,7 +417,44 @@ impl Renderer {
             rendering: self.active.load(Ordering::SeqCst),
             cancelled: self.cancelled.load(Ordering::SeqCst),
             reused: self.reused.load(Ordering::SeqCst),
+            ghosts_reused: self.ghosts_reused.load(Ordering::SeqCst),
         }
+    }
+
+    /// The lens ghosts of `preview` through the camera of `session`: the
+    /// last ones where they depend on the same, else traced and kept.
+    fn ghosts_of(
+        &self,
+        preview: &Arc<Frame>,
+        session: &aureole::Session,
+    ) -> Result<Option<(Frame, GhostSummary)>, StudioError> {
+        let Some(config) = session.config() else {
+            return Ok(None);
+        };
+        let Some(ghosts) = &config.ghosts else {
+            return Ok(None);
+        };
+        let key = GhostKey {
+            preview: preview.clone(),
+            ghosts: ghosts.clone(),
+            camera: config.camera,
+            aperture: config.effects.iter().find_map(|e| match e {
+                aureole::Effect::Aperture(a) => Some(a.clone()),
+                _ => None,
+            }),
+        };
+        if let Some((kept, ghosted)) = locked(&self.ghosts).as_ref() {
+            if kept.is(&key) {
+                self.ghosts_reused
+                    .fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                return Ok(Some(ghosted.clone()));
+            }
+        }
+        let traced = session.trace_ghosts(preview, &mut |_, _| {})?;
+        if let Some(ghosted) = &traced {
+            *locked(&self.ghosts) = Some((key, ghosted.clone()));
+        }
+        Ok(traced)
     }
 
     fn render_counted(
@@ -452,7 +517,10 @@ impl Renderer {
                     return Err(StudioError::Internal("no session".into()));
                 };
                 kept.session.set_cancel_token(cancel.clone());
-                let applied = kept.session.apply(&preview, &options, &mut |_, _| {})?;
+                let ghosted = self.ghosts_of(&preview, &kept.session)?;
+                let applied =
+                    kept.session
+                        .apply_after_ghosts(&preview, ghosted, &options, &mut |_, _| {})?;
                 if view == View::Kernel {
                     let plan = kept
                         .session

@@ -378,8 +378,11 @@ impl Session {
     }
 
     /// The scene of `frame` with its lens ghosts, when the config traces
-    /// them: the frame the kernel's chain spreads.
-    pub(super) fn trace_ghosts(
+    /// them: the frame the kernel's chain spreads. [`Session::apply`] is
+    /// this, then [`Session::apply_after_ghosts`]; a front end that keeps
+    /// a frame's ghosts while the rest of the camera changes (the studio)
+    /// calls the two apart.
+    pub fn trace_ghosts(
         &self,
         frame: &Frame,
         progress: &mut dyn FnMut(Stage, f64),
@@ -410,7 +413,7 @@ impl Session {
 
     /// Applies the kernel's chain to the scene `ghosted` holds (else to
     /// `frame`'s); the light in and the glare are counted from `frame`.
-    pub(super) fn apply_after_ghosts(
+    pub fn apply_after_ghosts(
         &mut self,
         frame: &Frame,
         ghosted: Option<(Frame, GhostSummary)>,
