@@ -116,7 +116,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         aureole_io::lens_drawing::write_svg(out, &lens)?;
     }
     if let Some(out) = &args.ghosts {
-        ghosts(args, (&lens, &paraxial), out, quiet)?;
+        ghosts(args, &lens, out, quiet)?;
     }
     let text = if args.json {
         json(&lens, &paraxial)
@@ -240,38 +240,31 @@ fn describe(lens: &Lens, p: &aureole::lens::Paraxial) -> String {
 
 /// `--ghosts`: every ghost of the source, rendered and written; the
 /// brightest listed.
-fn ghosts(
-    args: &Args,
-    (lens, p): (&Lens, &aureole::lens::Paraxial),
-    out: &std::path::Path,
-    quiet: bool,
-) -> Result<(), Failure> {
-    use aureole::lens::ghost::{light, render, Sensor};
-    use aureole::lens::trace::{Layout, Path};
+fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Result<(), Failure> {
+    use aureole::lens::effect::GhostOptics;
+    use aureole::lens::ghost::render;
+    use aureole::lens::trace::Path;
     let failed =
         |e: aureole::Error| Failure::Usage(anyhow::anyhow!("{}: {e}", args.file.display()));
-    let layout = Layout::new(lens).map_err(failed)?;
-    let stop = &lens.surfaces[lens.stop()];
-    let open = stop.semi_aperture * lens.mm_per_unit;
-    // The stop's opening scales with the f-number asked, no wider than
-    // the lens opens.
-    let f_number = args.f_number.map_or(p.f_number, |n| n.max(p.f_number));
-    if let Some(n) = args.f_number.filter(|&n| n < p.f_number && !quiet) {
+    let (width, height) = args.size;
+    // A 36 mm wide sensor, the lens at its own focal length.
+    let camera = aureole::CameraGeometry {
+        sensor_width_mm: Some(36.0),
+        f_number: args.f_number,
+        ..Default::default()
+    };
+    let aperture = aureole::Aperture::new(args.blades);
+    let optics =
+        GhostOptics::new(lens, &camera, Some(&aperture), width, args.spectral).map_err(failed)?;
+    let f_number = optics.f_number;
+    if let Some(n) = args.f_number.filter(|&n| n < f_number && !quiet) {
         say!(
-            "aureole: note: {}: f/{n} is wider than the lens opens: its ghosts are traced at f/{:.2}, wide open",
-            args.file.display(),
-            p.f_number
+            "aureole: note: {}: f/{n} is wider than the lens opens: its ghosts are traced at f/{f_number:.2}, wide open",
+            args.file.display()
         );
     }
-    let radius = open * p.f_number / f_number;
-    let aperture = aureole::Aperture::new(args.blades);
-    let light = light(args.spectral);
-    let nms: Vec<f64> = light.iter().map(|(nm, _)| *nm).collect();
-    let layout = layout
-        .with_stop(aperture.stop(radius), radius)
-        .with_wavelengths(&nms);
-    let (width, height) = args.size;
-    let sensor = Sensor::centred(width, height, 36.0 / width as f64);
+    let layout = optics.layout().map_err(failed)?;
+    let sensor = optics.sensor((width, height), (0.5 * width as f64, 0.5 * height as f64));
     let field = aureole::lens::ghost::direction(args.source.0, args.source.1);
     let progress = crate::progress::Progress::new(quiet);
     progress.stage("tracing ghosts");
@@ -281,7 +274,7 @@ fn ghosts(
         &layout,
         field,
         &sensor,
-        &light,
+        &optics.light,
         &mut aureole::Control::new(&cancel, &mut report),
     )?;
     progress.finish();

@@ -38,22 +38,35 @@ fn parameter(p: &Parameter) -> Value {
 /// each effect an example table to add it from (the first preset that has
 /// one).
 pub fn schema() -> Value {
-    let effects: Vec<Value> = aureole::optics::EFFECT_PARAMETERS
-        .iter()
+    use aureole::lens::{effect, shipped};
+    let lenses: Vec<&str> = shipped::LENSES.iter().map(|l| l.name).collect();
+    let effects: Vec<Value> = aureole::config::effect_kinds()
         // A measured PSF names a file of its own, which the studio does
         // not read (render::parse_config refuses it): no panel offers it.
         .filter(|(kind, _)| *kind != aureole::optics::measured::KIND)
         .map(|(kind, parameters)| {
             // The aperture's star-filter families are tables of their own.
-            let tables = if *kind == "aperture" {
+            let tables = if kind == "aperture" {
                 let filter = aureole::optics::aperture::FILTER_PARAMETERS;
                 json!({ "filter": filter.iter().map(parameter).collect::<Vec<_>>() })
             } else {
                 json!({})
             };
+            let parameters: Vec<Value> = parameters
+                .iter()
+                .map(|p| {
+                    let mut shown = parameter(p);
+                    // The ghosts' lens is a shipped one: the studio reads
+                    // no lens files.
+                    if kind == effect::KIND && p.name == "lens" {
+                        shown["choices"] = json!(lenses);
+                    }
+                    shown
+                })
+                .collect();
             json!({
                 "type": kind,
-                "parameters": parameters.iter().map(parameter).collect::<Vec<_>>(),
+                "parameters": parameters,
                 "tables": tables,
                 "example": example(kind),
             })
@@ -61,30 +74,7 @@ pub fn schema() -> Value {
         .collect();
     json!({
         "camera": CAMERA.iter().map(parameter).collect::<Vec<_>>(),
-        "effects": effects.into_iter().chain([ghosts()]).collect::<Vec<_>>(),
-    })
-}
-
-/// The lens ghosts' panel: its lens one of the shipped ones (the studio
-/// reads no lens files), the first to start from.
-fn ghosts() -> Value {
-    use aureole::lens::{effect, shipped};
-    let names: Vec<&str> = shipped::LENSES.iter().map(|l| l.name).collect();
-    let parameters: Vec<Value> = effect::PARAMETERS
-        .iter()
-        .map(|p| {
-            let mut shown = parameter(p);
-            if p.name == "lens" {
-                shown["choices"] = json!(names);
-            }
-            shown
-        })
-        .collect();
-    json!({
-        "type": effect::KIND,
-        "parameters": parameters,
-        "tables": {},
-        "example": { "type": effect::KIND, "lens": "double-gauss-50mm-f1.4" },
+        "effects": effects,
     })
 }
 

@@ -603,16 +603,17 @@ fn the_camera_panels_come_from_the_library_schema_and_round_trip_the_toml() {
         .iter()
         .map(|e| e["type"].as_str().unwrap())
         .collect();
-    // Every effect but a measured PSF, whose file the studio does not
-    // read, and the lens ghosts, their lens one of the shipped ones.
-    let offered: Vec<&str> = aureole::optics::EFFECT_TYPES
-        .iter()
-        .copied()
+    // Every type a config's [[effect]] may name but a measured PSF, whose
+    // file the studio does not read; the lens ghosts' lens one of the
+    // shipped ones, their example a preset's.
+    let offered: Vec<&str> = aureole::config::effect_kinds()
+        .map(|(kind, _)| kind)
         .filter(|t| *t != aureole::optics::measured::KIND)
-        .chain([aureole::lens::effect::KIND])
         .collect();
     assert_eq!(types, offered);
+    assert!(types.contains(&"ghosts"));
     let ghosts = effects.iter().find(|e| e["type"] == "ghosts").unwrap();
+    assert_eq!(ghosts["example"]["lens"], "double-gauss-50mm-f1.4");
     let lens = &ghosts["parameters"][0];
     assert_eq!(lens["name"], "lens");
     assert_eq!(

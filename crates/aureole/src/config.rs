@@ -158,11 +158,11 @@ impl ConfigFile {
                 }
                 continue;
             }
-            if !crate::optics::EFFECT_TYPES.contains(&kind.as_str()) && keys.contains_key("type") {
-                // The ghosts are read apart (they are no kernel): a
-                // misspelt type hears of them too.
-                let types = crate::optics::EFFECT_TYPES.iter().chain([&ghosts::KIND]);
-                let listed: Vec<String> = types.map(|t| format!("`{t}`")).collect();
+            // The ghosts are read apart (they are no kernel): a misspelt
+            // type is refused here, listing every type a table may name.
+            let named = keys.get("type").and_then(toml::Value::as_str);
+            if named.is_some_and(|t| !crate::optics::EFFECT_TYPES.contains(&t)) {
+                let listed: Vec<String> = effect_kinds().map(|(t, _)| format!("`{t}`")).collect();
                 return Err(refused(toml::de::Error::custom(format!(
                     "unknown variant `{kind}`, expected one of {}",
                     listed.join(", ")
@@ -198,6 +198,15 @@ impl ConfigFile {
             effects,
             ghosts,
         })
+    }
+
+    /// The `type` of each of its `[[effect]]` tables: the ghosts first
+    /// (their stage comes first), then the chain's.
+    pub fn kinds(&self) -> impl Iterator<Item = &'static str> + '_ {
+        self.ghosts
+            .iter()
+            .map(|_| ghosts::KIND)
+            .chain(self.effects.iter().map(Effect::kind))
     }
 
     /// Reads and parses a config file.
@@ -268,6 +277,15 @@ impl ConfigFile {
         }
         table.to_string()
     }
+}
+
+/// Every `type` an `[[effect]]` table may name, with its parameters: the
+/// kernel's effects, then the lens ghosts (a stage of their own).
+pub fn effect_kinds() -> impl Iterator<Item = (&'static str, &'static [crate::schema::Parameter])> {
+    crate::optics::EFFECT_PARAMETERS
+        .iter()
+        .copied()
+        .chain([(ghosts::KIND, ghosts::PARAMETERS)])
 }
 
 /// `text` with control characters (a newline in a quoted value, say)
@@ -545,9 +563,13 @@ exponent = 2.0
     fn unknown_effect_types_list_the_types() {
         let e = error("[[effect]]\ntype = \"blom\"\nepsilon = 0.1\n");
         assert!(e.starts_with("my.toml:"), "{e}");
-        for kind in crate::optics::EFFECT_TYPES {
+        for (kind, _) in effect_kinds() {
             assert!(e.contains(kind), "{e}");
         }
+        assert!(e.contains("ghosts"), "{e}");
+        // A type that is no string is refused as such.
+        let e = error("[[effect]]\ntype = 3\n");
+        assert!(e.contains("is not a string"), "{e}");
     }
 
     #[test]

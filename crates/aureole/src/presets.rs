@@ -75,14 +75,11 @@ pub fn find(name: &str) -> Result<&'static Preset> {
 }
 
 /// A built-in preset with a complete effect of type `kind` (`bloom`,
-/// `corona`, `vos`, `aperture`), to point a user at.
+/// `corona`, `vos`, `aperture`, `ghosts`), to point a user at.
 pub fn example_of(kind: &str) -> Option<&'static str> {
     PRESETS
         .iter()
-        .find(|p| {
-            p.config()
-                .is_ok_and(|c| c.effects.iter().any(|e| e.kind() == kind))
-        })
+        .find(|p| p.config().is_ok_and(|c| c.kinds().any(|k| k == kind)))
         .map(|p| p.name)
 }
 

@@ -4,7 +4,7 @@
 
 use std::collections::BTreeSet;
 
-use aureole::optics::EFFECT_PARAMETERS;
+use aureole::config::effect_kinds;
 use aureole::schema::CAMERA;
 
 /// The keys in the first column of each section's table, by the name in
@@ -42,7 +42,7 @@ fn keys_of(sections: &[(String, BTreeSet<String>)], name: &str) -> BTreeSet<Stri
 #[test]
 fn the_guide_documents_every_parameter_of_every_effect() {
     let sections = documented();
-    for (kind, parameters) in EFFECT_PARAMETERS {
+    for (kind, parameters) in effect_kinds() {
         let schema: BTreeSet<String> = parameters.iter().map(|p| p.name.to_string()).collect();
         assert_eq!(keys_of(&sections, kind), schema, "effect {kind}");
     }

@@ -97,17 +97,22 @@ fn the_shipped_lenses_are_the_kinds_a_photographer_carries() {
     }
 }
 
-#[test]
-fn the_example_of_docs_lenses_md_is_a_lens_of_its_stated_focal_length() {
+/// The first TOML example of docs/lenses.md that holds `holding`.
+fn example_of_the_page(holding: &str) -> String {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/lenses.md");
     let page = std::fs::read_to_string(path).unwrap();
-    let example = page
-        .split("```toml\n")
+    page.split("```toml\n")
         .skip(1)
         .filter_map(|rest| rest.split("```").next())
-        .find(|block| block.contains("[[surface]]"))
-        .expect("docs/lenses.md has a lens file's example");
-    let lens = Lens::parse(example, "docs/lenses.md").unwrap_or_else(|e| panic!("{e}"));
+        .find(|block| block.contains(holding))
+        .unwrap_or_else(|| panic!("docs/lenses.md has no example with {holding}"))
+        .to_string()
+}
+
+#[test]
+fn the_example_of_docs_lenses_md_is_a_lens_of_its_stated_focal_length() {
+    let example = example_of_the_page("[[surface]]");
+    let lens = Lens::parse(&example, "docs/lenses.md").unwrap_or_else(|e| panic!("{e}"));
     let p = lens.paraxial().unwrap();
     assert!((p.focal_length * lens.mm_per_unit - 100.0).abs() < 1e-9);
     let stated = lens.patent.as_ref().and_then(|p| p.focal_length).unwrap();
@@ -115,5 +120,21 @@ fn the_example_of_docs_lenses_md_is_a_lens_of_its_stated_focal_length() {
         (p.focal_length / stated - 1.0).abs() < 1e-3,
         "{}",
         p.focal_length
+    );
+}
+
+#[test]
+fn the_camera_of_docs_lenses_md_is_the_preset_with_ghosts() {
+    use aureole::{presets, Config, ConfigFile};
+    let example = example_of_the_page("type = \"ghosts\"");
+    let config = Config::compose([ConfigFile::parse(&example, "docs/lenses.md").unwrap()]);
+    let ghosts = config.ghosts.as_ref().unwrap();
+    assert_eq!((ghosts.sources, ghosts.threshold), (16, 1000.0));
+    assert_eq!(config.effects.len(), 1);
+    let preset = presets::find("camera-f8-7blade-ghosts").unwrap();
+    assert_eq!(
+        Config::compose([preset.config().unwrap()]),
+        config,
+        "the preset is the page's camera"
     );
 }

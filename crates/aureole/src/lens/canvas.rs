@@ -48,11 +48,9 @@ impl Patch {
             };
         };
         let cell = (hi.0 - lo.0).max(hi.1 - lo.1) / cells as f64;
-        // ⌊log₂ cell⌋ for a cell of at least one pixel, by its exponent.
+        // ⌊log₂ cell⌋: pixels no wider than a cell lands.
         let level = if cell >= 2.0 {
-            ((cell.to_bits() >> 52) as usize)
-                .saturating_sub(1023)
-                .min(COARSEST)
+            (libm::floor(libm::log2(cell)) as usize).min(COARSEST)
         } else {
             0
         };

@@ -23,48 +23,51 @@ use crate::schema::{Default, Kind, Parameter};
 pub const KIND: &str = "ghosts";
 
 /// The ghosts' parameters, as a front end shows them.
-pub const PARAMETERS: &[Parameter] = &[
-    Parameter {
-        name: "lens",
-        kind: Kind::Text,
-        low: None,
-        high: None,
-        default: Default::Required,
-        unit: "",
-        allowed: "a shipped lens's name, a lens file (.toml) or the lens's tables inline",
-        about: "The lens whose surfaces reflect: a shipped lens (docs/lenses.md lists them) or a prescription file.",
-    },
-    Parameter {
-        name: "sources",
-        kind: Kind::Whole,
-        low: Some((1.0, true)),
-        high: Some((256.0, true)),
-        default: Default::Number(16.0),
-        unit: "",
-        allowed: "a whole number of sources from 1 to 256",
-        about: "How many of the brightest sources throw ghosts.",
-    },
-    Parameter {
-        name: "threshold",
-        kind: Kind::Number,
-        low: Some((0.0, false)),
-        high: None,
-        default: Default::Number(1000.0),
-        unit: "cd/m²",
-        allowed: "a luminance in cd/m² above 0",
-        about: "Pixels brighter than this are light sources; touching ones make one source.",
-    },
-    Parameter {
-        name: "spectral",
-        kind: Kind::Flag,
-        low: None,
-        high: None,
-        default: Default::Flag(false),
-        unit: "",
-        allowed: "true or false",
-        about: "Trace 17 wavelengths from 380 to 780 nm rather than one per channel.",
-    },
-];
+pub const PARAMETERS: &[Parameter] = &[LENS, SOURCES, THRESHOLD, SPECTRAL];
+
+const LENS: Parameter = Parameter {
+    name: "lens",
+    kind: Kind::Text,
+    low: None,
+    high: None,
+    default: Default::Required,
+    unit: "",
+    allowed: "a shipped lens's name, a lens file (.toml) or the lens's tables inline",
+    about: "The lens whose surfaces reflect: a shipped lens (docs/lenses.md lists them) or a prescription file.",
+};
+
+const SOURCES: Parameter = Parameter {
+    name: "sources",
+    kind: Kind::Whole,
+    low: Some((1.0, true)),
+    high: Some((256.0, true)),
+    default: Default::Number(16.0),
+    unit: "",
+    allowed: "a whole number of sources from 1 to 256",
+    about: "How many of the brightest sources throw ghosts.",
+};
+
+const THRESHOLD: Parameter = Parameter {
+    name: "threshold",
+    kind: Kind::Number,
+    low: Some((0.0, false)),
+    high: None,
+    default: Default::Number(1000.0),
+    unit: "cd/m²",
+    allowed: "a luminance in cd/m² above 0",
+    about: "Pixels brighter than this are light sources; touching ones make one source.",
+};
+
+const SPECTRAL: Parameter = Parameter {
+    name: "spectral",
+    kind: Kind::Flag,
+    low: None,
+    high: None,
+    default: Default::Flag(false),
+    unit: "",
+    allowed: "true or false",
+    about: "Trace 17 wavelengths from 380 to 780 nm rather than one per channel.",
+};
 
 /// The lens a config's ghosts are traced through, and how it was named.
 #[derive(Debug, Clone, PartialEq)]
@@ -124,12 +127,8 @@ impl Table {
     /// The ghosts, their lens read (a path relative to `folder`, the
     /// config's; refused without one) and every value checked.
     pub(crate) fn resolve(self, folder: Option<&Path>) -> Result<Ghosts> {
-        for (parameter, value) in PARAMETERS[1..3]
-            .iter()
-            .zip([f64::from(self.sources), self.threshold])
-        {
-            parameter.check(KIND, value)?;
-        }
+        SOURCES.check(KIND, f64::from(self.sources))?;
+        THRESHOLD.check(KIND, self.threshold)?;
         let lens = match self.lens {
             toml::Value::String(name) => match shipped::find(&name) {
                 Some(found) => LensChoice {
@@ -175,7 +174,7 @@ impl Table {
                     effect: KIND.to_string(),
                     name: "lens",
                     value: other.to_string(),
-                    allowed: PARAMETERS[0].allowed,
+                    allowed: LENS.allowed,
                 })
             }
         };
@@ -213,43 +212,14 @@ impl Ghosts {
     }
 
     /// The optics a frame whose display window is `width` pixels across
-    /// traces its ghosts through: the lens scaled to `camera`'s focal
-    /// length, its stop at the camera's f-number (no wider than the lens
-    /// opens) shaped by `aperture`'s blades (round without one).
+    /// traces its ghosts through ([`GhostOptics::new`]).
     pub fn optics(
         &self,
         camera: &CameraGeometry,
         aperture: Option<&Aperture>,
         width: usize,
     ) -> Result<GhostOptics> {
-        let pitch_mm = camera
-            .pixel_pitch_mm(width)
-            .ok_or_else(|| Error::NeedsCamera {
-                what: "ghosts".into(),
-                field: "sensor_width_mm",
-                why: "the ghosts' places and sizes on the sensor are in mm",
-            })?;
-        let mut lens = self.lens.lens.clone();
-        let paraxial = lens.paraxial()?;
-        if let Some(focal) = camera.focal_length_mm {
-            lens.mm_per_unit = focal / paraxial.focal_length;
-        }
-        let stop = &lens.surfaces[lens.stop()];
-        let open = stop.semi_aperture * lens.mm_per_unit;
-        let f_number = camera
-            .f_number
-            .map_or(paraxial.f_number, |n| n.max(paraxial.f_number));
-        let radius = open * paraxial.f_number / f_number;
-        let round = Aperture::new(0);
-        let pupil = aperture.unwrap_or(&round).stop(radius);
-        Ok(GhostOptics {
-            lens,
-            stop: pupil,
-            radius,
-            f_number,
-            pitch_mm,
-            light: ghost::light(self.spectral),
-        })
+        GhostOptics::new(&self.lens.lens, camera, aperture, width, self.spectral)
     }
 }
 
@@ -271,6 +241,48 @@ pub struct GhostOptics {
 }
 
 impl GhostOptics {
+    /// `lens` for a frame whose display window is `width` pixels across:
+    /// scaled to `camera`'s focal length (its own without one), its stop
+    /// at the camera's f-number (no wider than the lens opens) shaped by
+    /// `aperture`'s blades (round without one), traced at R, G and B or,
+    /// `spectral`, at 17 wavelengths.
+    pub fn new(
+        lens: &Lens,
+        camera: &CameraGeometry,
+        aperture: Option<&Aperture>,
+        width: usize,
+        spectral: bool,
+    ) -> Result<GhostOptics> {
+        let pitch_mm = camera
+            .pixel_pitch_mm(width)
+            .ok_or_else(|| Error::NeedsCamera {
+                what: "ghosts".into(),
+                field: "sensor_width_mm",
+                why: "the ghosts' places and sizes on the sensor are in mm",
+            })?;
+        let mut lens = lens.clone();
+        let paraxial = lens.paraxial()?;
+        if let Some(focal) = camera.focal_length_mm {
+            lens.mm_per_unit = focal / paraxial.focal_length;
+        }
+        let stop = &lens.surfaces[lens.stop()];
+        let open = stop.semi_aperture * lens.mm_per_unit;
+        let f_number = camera
+            .f_number
+            .map_or(paraxial.f_number, |n| n.max(paraxial.f_number));
+        let radius = open * paraxial.f_number / f_number;
+        let round = Aperture::new(0);
+        let pupil = aperture.unwrap_or(&round).stop(radius);
+        Ok(GhostOptics {
+            lens,
+            stop: pupil,
+            radius,
+            f_number,
+            pitch_mm,
+            light: ghost::light(spectral),
+        })
+    }
+
     /// The lens set out for tracing, its stop the camera's, its surfaces'
     /// reflectances tabulated at the light's wavelengths.
     pub fn layout(&self) -> Result<Layout<'_>> {

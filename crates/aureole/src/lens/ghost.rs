@@ -138,22 +138,20 @@ pub fn search(layout: &Layout, route: &Route, field: Vector) -> Option<Square> {
 /// stop's plane the box of their crossings, a quarter wider, meets the
 /// circle about the opening.
 fn may_pass(layout: &Layout, corners: &[Option<Arrival>; 4]) -> bool {
-    let alive: Vec<&Arrival> = corners.iter().flatten().collect();
-    let Some(first) = alive.first() else {
+    let alive = || corners.iter().flatten();
+    let Some(first) = alive().next() else {
         return false;
     };
-    let (low, high) = alive
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), a| {
-            (l.min(a.margin), h.max(a.margin))
-        });
+    let (low, high) = alive().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), a| {
+        (l.min(a.margin), h.max(a.margin))
+    });
     if high + 0.25 * (high - low) < 0.0 {
         return false;
     }
     let radius = layout.opening;
     (0..first.stop.points().len()).all(|k| {
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for a in &alive {
+        for a in alive() {
             let p = a.stop.points()[k];
             lo = [lo[0].min(p[0]), lo[1].min(p[1])];
             hi = [hi[0].max(p[0]), hi[1].max(p[1])];
@@ -300,9 +298,9 @@ impl<'l, 'a> Bundle<'l, 'a> {
 
     /// A cell beyond some of whose corners rays miss a surface (or are
     /// reflected wholly), cut into RIM² pieces traced anew, clipped by
-    /// every aperture; a piece still crossed
-    /// carries the share of its corners that arrive, landing on them
-    /// (those stopped replaced by the mean of the others).
+    /// every aperture; a piece still crossed carries the share of its
+    /// corners that arrive, landing on them (those stopped replaced by the
+    /// mean of the others).
     fn rim(&self, i: usize, j: usize, area: f64, visit: &mut impl FnMut(&[(Vector, f64); 4], f64)) {
         let side = RIM + 1;
         let mut rays = Vec::with_capacity(side * side);
@@ -376,9 +374,8 @@ pub fn add_ghost(
 /// As [`add_ghost`], onto a patch of the box of pixels the ghost covers,
 /// at the level its cells land about a pixel wide ([`Patch::draw`]): a
 /// small ghost takes a small patch, not a whole frame, and a large one a
-/// coarse patch. `square` is
-/// where in the pupil the path's light passes ([`search`]; none: no
-/// light).
+/// coarse patch. `square` is where in the pupil the path's light passes
+/// ([`search`]; none: no light).
 fn draw(
     layout: &Layout,
     (path, square): (Path, Option<Square>),

@@ -204,34 +204,17 @@ impl<'a> Layout<'a> {
     /// `nms` ([`coating::Table`]): what a bundle of rays traced at them
     /// spends most of its time on otherwise.
     pub fn with_wavelengths(mut self, nms: &[f64]) -> Layout<'a> {
-        let lens = self.lens;
         self.tables = nms
             .iter()
             .map(|&nm| {
-                let tables = (0..lens.surfaces.len())
+                let tables = (0..self.lens.surfaces.len())
                     .map(|s| {
-                        let surface = &lens.surfaces[s];
-                        let (front, back) = (lens.medium_before(s), surface.medium);
-                        let (n_front, n_back) = (front.index_at(nm), back.index_at(nm));
-                        let table = |n_in, n_out, layers: &[super::Layer]| {
-                            Some(std::sync::Arc::new(coating::Table::new(
-                                n_in, n_out, layers, nm,
-                            )))
-                        };
-                        match &surface.coating {
-                            _ if surface.stop => [None, None],
-                            Coating::None => {
-                                [table(n_front, n_back, &[]), table(n_back, n_front, &[])]
-                            }
-                            Coating::Layers(layers) => {
-                                let reversed: Vec<super::Layer> =
-                                    layers.iter().rev().copied().collect();
-                                [
-                                    table(n_front, n_back, layers),
-                                    table(n_back, n_front, &reversed),
-                                ]
-                            }
-                        }
+                        [true, false].map(|forwards| {
+                            let ((n_in, n_out), layers) = self.interface(s, forwards, nm);
+                            layers.map(|layers| {
+                                std::sync::Arc::new(coating::Table::new(n_in, n_out, &layers, nm))
+                            })
+                        })
                     })
                     .collect();
                 (nm, tables)
@@ -331,19 +314,7 @@ impl<'a> Layout<'a> {
                     Event::Reflect { s, forwards } => (s, forwards, true),
                 };
                 let surface = &self.lens.surfaces[s];
-                let (front, back) = (self.lens.medium_before(s), surface.medium);
-                let (n_in, n_out) = if forwards {
-                    (front.index_at(nm), back.index_at(nm))
-                } else {
-                    (back.index_at(nm), front.index_at(nm))
-                };
-                // The layers as the light meets them, from its side in.
-                let layers = match &surface.coating {
-                    _ if surface.stop => None,
-                    Coating::None => Some(Vec::new()),
-                    Coating::Layers(layers) if forwards => Some(layers.clone()),
-                    Coating::Layers(layers) => Some(layers.iter().rev().copied().collect()),
-                };
+                let (indices, layers) = self.interface(s, forwards, nm);
                 let table = self
                     .tables
                     .iter()
@@ -354,7 +325,7 @@ impl<'a> Layout<'a> {
                     curvature: surface.radius.map_or(0.0, |r| 1.0 / (r * mm)),
                     semi: surface.semi_aperture * mm,
                     stop: surface.stop,
-                    indices: (n_in, n_out),
+                    indices,
                     layers,
                     table,
                     reflect,
@@ -362,6 +333,31 @@ impl<'a> Layout<'a> {
             })
             .collect();
         Route { steps, nm }
+    }
+
+    /// Surface `s` as light meets it at `nm`, going forwards or back: the
+    /// indices it comes from and goes into, and its coating's layers from
+    /// the light's side in (`None`: it reflects nothing, the stop).
+    fn interface(
+        &self,
+        s: usize,
+        forwards: bool,
+        nm: f64,
+    ) -> ((f64, f64), Option<Vec<super::Layer>>) {
+        let surface = &self.lens.surfaces[s];
+        let (front, back) = (self.lens.medium_before(s), surface.medium);
+        let indices = if forwards {
+            (front.index_at(nm), back.index_at(nm))
+        } else {
+            (back.index_at(nm), front.index_at(nm))
+        };
+        let layers = match &surface.coating {
+            _ if surface.stop => None,
+            Coating::None => Some(Vec::new()),
+            Coating::Layers(layers) if forwards => Some(layers.clone()),
+            Coating::Layers(layers) => Some(layers.iter().rev().copied().collect()),
+        };
+        (indices, layers)
     }
 
     /// `ray` along a [`Route`], as [`Layout::trace`].

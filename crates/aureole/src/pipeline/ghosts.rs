@@ -194,9 +194,10 @@ pub(crate) fn add_ghosts(
         let drawn = trace(&layout, field, &sensor, &optics.light, &mut part)?;
         // Each channel's share of the source: the input is what the lens
         // brought from it, its own image and its ghosts together.
+        let y_share: f64 = weights.iter().zip(&drawn.light).map(|(w, g)| w * g).sum();
         let shares: Vec<f64> = match image.layout {
             Planes::Rgb => drawn.light.clone(),
-            Planes::Luminance => vec![weights.iter().zip(&drawn.light).map(|(w, g)| w * g).sum()],
+            Planes::Luminance => vec![y_share],
         };
         let mut mix = Vec::with_capacity(scene.planes.len());
         for (c, plane) in scene.planes.iter_mut().enumerate() {
@@ -216,7 +217,6 @@ pub(crate) fn add_ghosts(
             });
         }
         drawn.paint(&mut canvas, &mix);
-        let y_share: f64 = weights.iter().zip(&drawn.light).map(|(w, g)| w * g).sum();
         ghost_light += source.luminance * y_share / (1.0 + y_share);
         source_light += source.luminance;
     }

@@ -110,6 +110,15 @@ pub struct Applied {
     pub ghosts: Option<super::GhostSummary>,
 }
 
+/// `planes` less `input`'s, plane by plane: a result's glare alone
+/// ([`ApplyOptions::glare_only`]).
+pub(crate) fn subtract_input(planes: &mut [Vec<f32>], input: &[Vec<f32>]) {
+    use rayon::prelude::*;
+    for (out, input) in planes.iter_mut().zip(input) {
+        out.par_iter_mut().zip(input).for_each(|(o, i)| *o -= i);
+    }
+}
+
 impl Applied {
     /// `image` as it is: a chain that spreads nothing (ghosts alone).
     pub(crate) fn unspread(image: Image, threshold: f64) -> Applied {

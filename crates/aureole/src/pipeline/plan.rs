@@ -3,10 +3,8 @@
 
 use std::sync::{Mutex, OnceLock, PoisonError};
 
-use rayon::prelude::*;
-
 use super::cost::{self, Estimate};
-use super::options::{Applied, ApplyOptions, Arithmetic, Method};
+use super::options::{subtract_input, Applied, ApplyOptions, Arithmetic, Method};
 use super::precision;
 use super::precision::{Route, Scene};
 use super::splat::{copies, splat};
@@ -316,9 +314,7 @@ impl Plan {
         control.report(1.0);
         let energy_out = output.total_luminance();
         if options.glare_only {
-            for (out, input) in output.planes.iter_mut().zip(&image.planes) {
-                out.par_iter_mut().zip(input).for_each(|(o, i)| *o -= i);
-            }
+            subtract_input(&mut output.planes, &image.planes);
         }
         Ok(Applied {
             image: output,

@@ -438,11 +438,7 @@ impl Session {
         let input = frame.image();
         applied.energy_in = input.total_luminance();
         if options.glare_only {
-            for (out, plane) in applied.image.planes.iter_mut().zip(&input.planes) {
-                for (o, i) in out.iter_mut().zip(plane) {
-                    *o -= i;
-                }
-            }
+            super::options::subtract_input(&mut applied.image.planes, &input.planes);
         }
         applied.ghosts = Some(summary);
         Ok(applied)
@@ -634,10 +630,10 @@ impl Session {
         } else {
             GPU_DRIVERS
         };
-        // Ghosts hold the scene they are added to, and a source's ghosts
-        // in f64 for each of three channels.
+        // Ghosts hold the scene they are added to (f32) and their canvas:
+        // an f64 plane per channel, its coarser levels a third more.
         let ghosts = if self.config().is_some_and(|c| c.ghosts.is_some()) {
-            (image.width * image.height) as u64 * (3 * 8 + 4 * planes as u64)
+            (image.width * image.height * planes) as u64 * (4 + 8 * 4 / 3)
         } else {
             0
         };
