@@ -2,7 +2,8 @@
 """How long the studio takes from a changed parameter to the new picture.
 
 Starts `target/release/aureole studio` on a free port, then for each chain
-(bloom, corona, Vos, a spectral aperture, configs/dusty-lens.toml) renders a 1280-wide preview of the
+(bloom, corona, Vos, a spectral aperture, configs/dusty-lens.toml, the
+lens ghosts traced anew and kept) renders a 1280-wide preview of the
 demo street five times, changing one parameter each time, and prints the
 median of the last four (the first also loads the image). Then the same
 camera with only the exposure changed. Then, where Chromium is installed,
@@ -85,6 +86,12 @@ def main():
             "aperture, spectral": lambda k: presets["camera-f8-7blade"].replace(
                 "blades = 7", f"blades = {5 + k}"),
             "dusty lens": lambda k: dusty.replace("dust = 60", f"dust = {58 + k}"),
+            # The lens's ghosts traced anew (the stop's blades shape them)
+            # and kept (a bloom they do not depend on).
+            "ghosts, retraced": lambda k: presets["camera-f8-7blade-ghosts"].replace(
+                "blades = 7", f"blades = {5 + k}"),
+            "ghosts, kept": lambda k: presets["camera-f8-7blade-ghosts"] + bloom.format(
+                0.005 + 0.001 * k),
         }
         print(f"{width}x{height} preview of the demo street on device {args.device}, "
               "median of 4 changes (ms):")

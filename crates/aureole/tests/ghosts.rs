@@ -371,12 +371,14 @@ fn ghosts_lie_on_the_line_through_their_source_and_the_centre() {
             "{path:?}: {x} {y}"
         );
         // Off it, on the line through the source's image and the centre,
-        // and mirrored through the centre with the source.
+        // and mirrored through the centre with the source. The bundle's
+        // grid lies along the source's azimuth, as symmetric as the lens,
+        // and drawing keeps a ghost's centroid: on the line to rounding.
         let (x, y, size, _) = ghost(towards(6.0, 4.0), path);
         let (image_x, image_y) = (libm::tan(angle(6.0)), libm::tan(angle(4.0)));
         let across = (x * image_y - y * image_x) / libm::hypot(image_x, image_y);
         assert!(
-            across.abs() < 1e-3 * size,
+            across.abs() < 1e-9 * size,
             "{path:?}: ({x}, {y}) {across} mm off the line"
         );
         let (mx, my, _, _) = ghost(towards(-6.0, -4.0), path);
@@ -499,4 +501,82 @@ fn ghosts_take_their_colour_from_the_coatings_and_the_glass_dispersion_alone() {
         sum(1),
         sum(2)
     );
+}
+
+#[test]
+fn paths_traced_together_land_as_each_traced_alone() {
+    // Routes that begin alike share their first steps: the same
+    // arithmetic, so the same bits as each route on its own.
+    use aureole::lens::ghost::direction;
+    let lens = shipped("double-gauss-50mm-f1.4");
+    let layout = Layout::new(&lens).unwrap();
+    let field = direction(7.0, -3.0);
+    let routes: Vec<_> = layout
+        .ghosts()
+        .into_iter()
+        .chain([Path::Direct])
+        .map(|path| layout.route(path, 486.1))
+        .collect();
+    let rays: Vec<Ray> = (0..700)
+        .map(|k| {
+            let (x, y) = (
+                f64::from(k % 27) / 13.0 - 1.0,
+                f64::from(k / 27) / 13.0 - 1.0,
+            );
+            layout.collimated(field, (x, y))
+        })
+        .collect();
+    let together = layout.follow_unclipped_routes(&routes, &rays);
+    assert_eq!(together.len(), routes.len());
+    for (route, arrivals) in routes.iter().zip(together) {
+        let alone = layout.follow_unclipped_all(route, &rays);
+        assert!(alone.iter().any(Option::is_some));
+        assert_eq!(arrivals, alone);
+    }
+}
+
+#[test]
+fn ghosts_at_the_outer_wavelengths_match_them_traced_in_full() {
+    // render() traces each bundle at the middle wavelength and the others
+    // by their difference from it, every other ray each way; each
+    // wavelength's ghosts traced alone, every ray, hold the same light
+    // and land on the same pixels.
+    use aureole::lens::ghost::{add_ghost, direct_light, direction, light, Sensor};
+    let lens = shipped("portrait-90mm-f2");
+    let stop = lens.surfaces[lens.stop()].semi_aperture * 0.5;
+    let layout = Layout::new(&lens)
+        .unwrap()
+        .with_stop(aureole::Aperture::new(7).stop(stop), stop);
+    let sensor = Sensor::centred(480, 320, 0.075);
+    let field = direction(6.0, 4.0);
+    let rgb = light(false);
+    let drawn = rendered(&layout, field, &sensor, &rgb);
+    for channel in [0, 2] {
+        let nm = rgb[channel].0;
+        let direct = direct_light(&layout, field, nm);
+        let mut plane = vec![0.0; sensor.width * sensor.height];
+        let light: f64 = layout
+            .ghosts()
+            .into_iter()
+            .map(|path| {
+                add_ghost(
+                    &layout,
+                    path,
+                    (field, nm),
+                    (direct, 1.0),
+                    &sensor,
+                    &mut plane,
+                )
+            })
+            .sum();
+        let ratio = drawn.light[channel] / light;
+        assert!((ratio - 1.0).abs() < 2e-3, "channel {channel}: {ratio}");
+        let apart: f64 = drawn.planes[channel]
+            .iter()
+            .zip(&plane)
+            .map(|(a, b)| (a - b).abs())
+            .sum();
+        let whole: f64 = plane.iter().sum();
+        assert!(apart < 0.03 * whole, "channel {channel}: {}", apart / whole);
+    }
 }

@@ -1,11 +1,11 @@
 //! Where ghosts are drawn: a sensor's pixels at several resolutions. A
-//! ghost is drawn at the level whose pixels are about as large as its
-//! bundle's cells land (each level's pixels twice the last's across), so
-//! that a ghost spread over half a 4K frame costs what a small one does;
-//! the levels are added up once, each interpolated bilinearly onto the
-//! sensor's own pixels, which keeps every level's light (docs/physics.md
-//! §12). A large ghost's edge is then as soft as one of its cells, a
-//! sixty-fourth of it.
+//! ghost is drawn at the level whose pixels are about as large as a
+//! piece of its bundle's cells lands (each level's pixels twice the
+//! last's across), so that a ghost spread over half a 4K frame costs what
+//! a small one does; the levels are added up once, each interpolated
+//! bilinearly onto the sensor's own pixels, which keeps every level's
+//! light (docs/physics.md §12). A large ghost's edge is then as soft as
+//! half of one of its cells, a sixty-fourth of it.
 
 use super::ghost::Sensor;
 use super::trace::Vector;
@@ -38,8 +38,8 @@ pub(crate) struct Patch {
 
 impl Patch {
     /// `quads` (holding `light` together) drawn on `sensor` at the level
-    /// whose pixels are about as wide as the bundle's cells, `cells`
-    /// across it, land.
+    /// whose pixels are about as wide as `cells` across the quads' extent
+    /// (twice the bundle's: its rims are drawn sharper than its cells).
     pub(crate) fn draw(quads: &Quads, light: f64, sensor: &Sensor, cells: usize) -> Patch {
         let Some((lo, hi)) = extent(quads, sensor) else {
             return Patch {

@@ -9,7 +9,8 @@
 //! sum to its path's power over the image's.
 
 use super::canvas::{Canvas, Patch, Quads};
-use super::trace::{Arrival, Layout, Path, Route, Vector};
+use super::passage::{coarse, found, front, may_pass, search, Square};
+use super::trace::{Arrival, Layout, Path, Ray, Route, Vector};
 
 /// A sensor of `width`×`height` pixels of `pitch_mm`, the optical axis
 /// through `centre` (the display window's centre: a frame's overscan lies
@@ -50,126 +51,54 @@ impl Sensor {
 
 /// Cells across the square of the pupil a path's light passes, where
 /// its bundle is traced.
-pub const GRID: usize = 48;
+pub const GRID: usize = 32;
 
-/// Cells across the whole entrance (the first surface's clear aperture
-/// as the source sees it), where each path's light is first looked for.
-const COARSE: usize = 32;
-
-/// Cells a rim crosses are cut into this many pieces along each side:
-/// the rim's light is then counted to 1/`RIM` of a cell rather than to a
-/// whole one.
+/// A cell a rim crosses keeps the share of its RIM² points that pass
+/// ([`Bundle::between`]), or, where it must be traced anew, is cut into
+/// RIM × RIM pieces ([`Bundle::rim`]): the rim's light is then counted to
+/// a piece of a cell rather than to a whole one.
 const RIM: usize = 8;
 
-/// A square of the entrance pupil's plane, in units of the pupil's
-/// radius.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Square {
-    centre: (f64, f64),
-    half: f64,
-}
+/// A cell a rim crosses is drawn in this many pieces along each side.
+const PIECES: usize = 4;
 
-impl Square {
-    /// The pupil point at grid position (i, j) of `cells` across,
-    /// fractional within a cell.
-    fn point(&self, cells: usize, i: f64, j: f64) -> (f64, f64) {
-        let step = 2.0 * self.half / cells as f64;
-        (
-            self.centre.0 - self.half + i * step,
-            self.centre.1 - self.half + j * step,
-        )
-    }
-
-    /// The square every ray that enters the lens from direction `field`
-    /// comes through: the first surface's clear aperture, seen from the
-    /// entrance pupil's plane along the field.
-    fn entrance(layout: &Layout, field: Vector) -> Square {
-        let (z_pupil, radius) = layout.pupil;
-        let (z_first, semi) = layout.entrance();
-        let back = (z_pupil - z_first) / field[2];
-        Square {
-            centre: (back * field[0] / radius, back * field[1] / radius),
-            half: semi / radius,
-        }
-    }
-}
-
-/// Where in the pupil the light of `route` passes, looked for on a coarse
-/// grid over the whole entrance: the square about the cells whose rays
-/// may pass between them ([`may_pass`]), a coarse cell wider each way;
-/// `None` where no light passes.
-pub fn search(layout: &Layout, route: &Route, field: Vector) -> Option<Square> {
-    let entrance = Square::entrance(layout, field);
-    let side = COARSE + 1;
-    let rays: Vec<Option<Arrival>> = (0..side * side)
-        .map(|k| {
-            let (px, py) = entrance.point(COARSE, (k % side) as f64, (k / side) as f64);
-            layout.follow_unclipped(route, layout.collimated(field, (px, py)))
-        })
-        .collect();
-    let (mut lo, mut hi) = ((usize::MAX, usize::MAX), (0, 0));
-    for j in 0..COARSE {
-        for i in 0..COARSE {
-            let corners =
-                [(0, 0), (1, 0), (1, 1), (0, 1)].map(|(di, dj)| rays[(j + dj) * side + i + di]);
-            if may_pass(layout, &corners) {
-                lo = (lo.0.min(i), lo.1.min(j));
-                hi = (hi.0.max(i + 1), hi.1.max(j + 1));
-            }
-        }
-    }
-    if lo.0 > hi.0 {
-        return None;
-    }
-    let step = 2.0 * entrance.half / COARSE as f64;
-    let (a, b) = (
-        entrance.point(COARSE, lo.0 as f64 - 1.0, lo.1 as f64 - 1.0),
-        entrance.point(COARSE, hi.0 as f64 + 1.0, hi.1 as f64 + 1.0),
-    );
-    Some(Square {
-        centre: (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1)),
-        half: 0.5 * (b.0 - a.0).max(b.1 - a.1).max(step),
-    })
-}
-
-/// Whether light may pass between the rays of a cell's corners that
-/// arrive: their margins within the apertures, stretched by a quarter of
-/// their spread, reach 0, and at each of the path's crossings of the
-/// stop's plane the box of their crossings, a quarter wider, meets the
-/// circle about the opening.
-fn may_pass(layout: &Layout, corners: &[Option<Arrival>; 4]) -> bool {
-    let alive = || corners.iter().flatten();
-    let Some(first) = alive().next() else {
-        return false;
-    };
-    let (low, high) = alive().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), a| {
-        (l.min(a.margin), h.max(a.margin))
-    });
-    if high + 0.25 * (high - low) < 0.0 {
-        return false;
-    }
-    let radius = layout.opening;
-    (0..first.stop.points().len()).all(|k| {
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for a in alive() {
-            let p = a.stop.points()[k];
-            lo = [lo[0].min(p[0]), lo[1].min(p[1])];
-            hi = [hi[0].max(p[0]), hi[1].max(p[1])];
-        }
-        let grow = [0.125 * (hi[0] - lo[0]), 0.125 * (hi[1] - lo[1])];
-        let nearest = [
-            0.0f64.clamp(lo[0] - grow[0], hi[0] + grow[0]),
-            0.0f64.clamp(lo[1] - grow[1], hi[1] + grow[1]),
-        ];
-        nearest[0] * nearest[0] + nearest[1] * nearest[1] <= radius * radius
-    })
-}
+/// A bundle at another wavelength beside one traced is traced at every
+/// STRIDE-th ray each way ([`Bundle::beside`]).
+const STRIDE: usize = 2;
 
 /// Bilinear interpolation between a cell's corners (0, 0), (1, 0), (1, 1)
 /// and (0, 1), at (s, t).
 fn bilinear<const N: usize>(corners: [[f64; N]; 4], (s, t): (f64, f64)) -> [f64; N] {
     let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
     std::array::from_fn(|n| (0..4).map(|k| w[k] * corners[k][n]).sum())
+}
+
+/// The rays of a bundle over `square` from direction `field`: at every
+/// `stride`-th grid position each way, rows of constant pupil y.
+fn grid(layout: &Layout, field: Vector, square: Square, stride: usize) -> Vec<Ray> {
+    let side = GRID / stride + 1;
+    (0..side * side)
+        .map(|k| {
+            let (i, j) = (stride * (k % side), stride * (k / side));
+            layout.collimated(field, square.point(GRID, i as f64, j as f64))
+        })
+        .collect()
+}
+
+/// A value interpolated bilinearly over a cell, as a + b s + c t + d s t.
+#[derive(Debug, Clone, Copy)]
+struct Bilinear([f64; 4]);
+
+impl Bilinear {
+    /// Through the values at the corners (0, 0), (1, 0), (1, 1), (0, 1).
+    fn through([v0, v1, v2, v3]: [f64; 4]) -> Bilinear {
+        Bilinear([v0, v1 - v0, v3 - v0, v0 - v1 + v2 - v3])
+    }
+
+    fn at(&self, (s, t): (f64, f64)) -> f64 {
+        let [a, b, c, d] = self.0;
+        a + b * s + (c + d * s) * t
+    }
 }
 
 /// A bundle of rays from a distant source along one path: a grid over the
@@ -186,21 +115,85 @@ struct Bundle<'l, 'a> {
 
 impl<'l, 'a> Bundle<'l, 'a> {
     fn new(layout: &'l Layout<'a>, route: Route, field: Vector, square: Square) -> Bundle<'l, 'a> {
-        let side = GRID + 1;
-        let mut bundle = Bundle {
+        let rays = layout.follow_unclipped_all(&route, &grid(layout, field, square, 1));
+        Bundle {
             layout,
             route,
             field,
             square,
-            rays: Vec::with_capacity(side * side),
+            rays,
+        }
+    }
+
+    /// This bundle along `route`, the same path at another wavelength,
+    /// given its rays at every STRIDE-th grid position each way
+    /// (`traced`, [`grid`]); the others
+    /// this bundle's moved by the difference between the two bundles
+    /// at the traced rays about them, interpolated. Dispersion moves a
+    /// bundle's rays little and smoothly, so that the difference varies
+    /// far less across a cell than the rays do. A ray where any of those
+    /// rays is stopped is traced.
+    fn beside(&self, route: Route, traced: &[Option<Arrival>]) -> Bundle<'l, 'a> {
+        let (side, coarse) = (GRID + 1, GRID / STRIDE + 1);
+        let mut bundle = Bundle {
+            layout: self.layout,
+            route,
+            field: self.field,
+            square: self.square,
+            rays: vec![None; side * side],
         };
+        let mut missing = Vec::new();
         for j in 0..side {
             for i in 0..side {
-                let ray = bundle.collimated(i as f64, j as f64);
-                bundle
-                    .rays
-                    .push(layout.follow_unclipped(&bundle.route, ray));
+                let k = j * side + i;
+                let (a, b) = (i / STRIDE, j / STRIDE);
+                if i % STRIDE == 0 && j % STRIDE == 0 {
+                    bundle.rays[k] = traced[b * coarse + a];
+                    continue;
+                }
+                let (s, t) = (
+                    (i % STRIDE) as f64 / STRIDE as f64,
+                    (j % STRIDE) as f64 / STRIDE as f64,
+                );
+                let (a1, b1) = ((a + 1).min(coarse - 1), (b + 1).min(coarse - 1));
+                let about = [
+                    ((1.0 - s) * (1.0 - t), a, b),
+                    (s * (1.0 - t), a1, b),
+                    (s * t, a1, b1),
+                    ((1.0 - s) * t, a, b1),
+                ]
+                .map(|(w, a, b)| {
+                    (
+                        w,
+                        traced[b * coarse + a],
+                        self.rays[STRIDE * (b * side + a)],
+                    )
+                });
+                // Where this bundle's ray and every one about it are
+                // stopped, so is the other's: the rims are between.
+                if self.rays[k].is_none()
+                    && about.iter().all(|(_, a, b)| a.is_none() && b.is_none())
+                {
+                    continue;
+                }
+                let about: Option<Vec<_>> =
+                    about.iter().map(|&(w, a, b)| Some((w, a?, b?))).collect();
+                match self.rays[k]
+                    .zip(about)
+                    .and_then(|(ray, about)| moved(&ray, &about))
+                {
+                    Some(ray) => bundle.rays[k] = Some(ray),
+                    None => missing.push(k),
+                }
             }
+        }
+        let starts: Vec<_> = missing
+            .iter()
+            .map(|&k| bundle.collimated((k % side) as f64, (k / side) as f64))
+            .collect();
+        let traced = self.layout.follow_unclipped_all(&bundle.route, &starts);
+        for (&k, ray) in missing.iter().zip(traced) {
+            bundle.rays[k] = ray;
         }
         bundle
     }
@@ -243,7 +236,11 @@ impl<'l, 'a> Bundle<'l, 'a> {
                         if corners.iter().all(|c| self.passes(c)) {
                             visit(&corners.map(|c| (c.at, c.weight)), area);
                         } else if may_pass(self.layout, &corners.map(Some)) {
-                            self.between(&corners, area, &mut visit);
+                            self.between(
+                                &corners,
+                                (area, [2 * i >= GRID, 2 * j >= GRID]),
+                                &mut visit,
+                            );
                         }
                     }
                     [None, None, None, None] => {}
@@ -260,39 +257,66 @@ impl<'l, 'a> Bundle<'l, 'a> {
     }
 
     /// A cell an aperture's rim crosses, its corners all arriving: cut
-    /// into RIM² pieces, each landing between the corners, kept where its
-    /// centre's margin and crossings of the stop's plane, between the
-    /// corners', pass. The rims are then as sharp as the pieces, with no
-    /// ray traced anew.
+    /// into PIECES² pieces, each landing between the corners and carrying
+    /// the share of the cell's RIM² points within it whose margin and
+    /// crossings of the stop's plane, between the corners', pass. The
+    /// points are a Hammersley set, each piece holding as many, so that a
+    /// rim along the grid, as a blade's edge may lie, is counted to
+    /// 1/RIM² of a cell, not to a row of points; the rim is drawn as sharp
+    /// as the pieces, and no ray is traced anew. In the grid's far half
+    /// each way (`mirrored`) the points are mirrored, so that they are as
+    /// symmetric as the grid, about the line to the source (and, for a
+    /// source on the axis, across it).
     fn between(
         &self,
         corners: &[Arrival; 4],
-        area: f64,
+        (area, mirrored): (f64, [bool; 2]),
         visit: &mut impl FnMut(&[(Vector, f64); 4], f64),
     ) {
+        const POINTS: usize = RIM * RIM;
         let crossings = corners[0].stop.points().len();
         let landing = corners.map(|c| [c.at[0], c.at[1], c.at[2], c.weight]);
-        let piece = area / (RIM * RIM) as f64;
         let at = |u: usize, v: usize| {
-            let l = bilinear(landing, (u as f64 / RIM as f64, v as f64 / RIM as f64));
+            let l = bilinear(
+                landing,
+                (u as f64 / PIECES as f64, v as f64 / PIECES as f64),
+            );
             ([l[0], l[1], l[2]], l[3])
         };
-        for v in 0..RIM {
-            for u in 0..RIM {
-                let centre = ((u as f64 + 0.5) / RIM as f64, (v as f64 + 0.5) / RIM as f64);
-                let margin = bilinear(corners.map(|c| [c.margin]), centre)[0];
-                let passes = margin >= 0.0
-                    && (0..crossings).all(|k| {
-                        let xy = bilinear(corners.map(|c| c.stop.points()[k]), centre);
-                        self.layout.opens(xy)
-                    });
-                if passes {
-                    visit(
-                        &[at(u, v), at(u + 1, v), at(u + 1, v + 1), at(u, v + 1)],
-                        piece,
-                    );
-                }
+        let margin = Bilinear::through(corners.map(|c| c.margin));
+        let stop: [[Bilinear; 2]; 3] = std::array::from_fn(|n| {
+            [0, 1].map(|xy| {
+                Bilinear::through(corners.map(|c| c.stop.points().get(n).map_or(0.0, |p| p[xy])))
+            })
+        });
+        let mut passing = [0usize; PIECES * PIECES];
+        for k in 0..POINTS {
+            let bits = POINTS.trailing_zeros();
+            let reversed = (k as u32).reverse_bits() >> (32 - bits);
+            let (x, y) = (
+                (k as f64 + 0.5) / POINTS as f64,
+                (f64::from(reversed) + 0.5) / POINTS as f64,
+            );
+            let centre = (
+                if mirrored[0] { 1.0 - x } else { x },
+                if mirrored[1] { 1.0 - y } else { y },
+            );
+            let passes = margin.at(centre) >= 0.0
+                && stop[..crossings]
+                    .iter()
+                    .all(|[x, y]| self.layout.opens([x.at(centre), y.at(centre)]));
+            if passes {
+                let piece = |t: f64| ((t * PIECES as f64) as usize).min(PIECES - 1);
+                passing[piece(centre.1) * PIECES + piece(centre.0)] += 1;
             }
+        }
+        let point = area / POINTS as f64;
+        for (p, &count) in passing.iter().enumerate().filter(|(_, &c)| c > 0) {
+            let (u, v) = (p % PIECES, p / PIECES);
+            visit(
+                &[at(u, v), at(u + 1, v), at(u + 1, v + 1), at(u, v + 1)],
+                point * count as f64,
+            );
         }
     }
 
@@ -330,12 +354,48 @@ impl<'l, 'a> Bundle<'l, 'a> {
     }
 }
 
+/// `ray` moved by the difference between the pairs `about` (each its
+/// weight, a ray of another bundle and the same ray of `ray`'s), or
+/// `None` where their crossings of the stop's plane do not match.
+fn moved(ray: &Arrival, about: &[(f64, Arrival, Arrival)]) -> Option<Arrival> {
+    let crossings = ray.stop.points().len();
+    if about
+        .iter()
+        .any(|(_, a, b)| a.stop.points().len() != crossings || b.stop.points().len() != crossings)
+    {
+        return None;
+    }
+    let mean =
+        |f: &dyn Fn(&Arrival) -> f64| about.iter().map(|(w, a, b)| w * (f(a) - f(b))).sum::<f64>();
+    let points: Vec<[f64; 2]> = (0..crossings)
+        .map(|c| {
+            let p = ray.stop.points()[c];
+            [
+                p[0] + mean(&|a| a.stop.points()[c][0]),
+                p[1] + mean(&|a| a.stop.points()[c][1]),
+            ]
+        })
+        .collect();
+    Some(Arrival {
+        at: std::array::from_fn(|n| ray.at[n] + mean(&|a| a.at[n])),
+        weight: (ray.weight + mean(&|a| a.weight)).max(0.0),
+        margin: ray.margin + mean(&|a| a.margin),
+        stop: super::trace::Crossings::at(&points),
+    })
+}
+
 /// The light the direct path brings to the image from a source in
 /// direction `field`, per unit of its irradiance: what a ghost's light is
 /// counted against.
 pub fn direct_light(layout: &Layout, field: Vector, nm: f64) -> f64 {
+    direct_light_in(layout, field, nm, front(layout, field, nm))
+}
+
+/// As [`direct_light`], its light passing the pupil within `square`
+/// ([`front`]).
+fn direct_light_in(layout: &Layout, field: Vector, nm: f64, square: Option<Square>) -> f64 {
     let route = layout.route(Path::Direct, nm);
-    let Some(square) = search(layout, &route, field) else {
+    let Some(square) = square else {
         return 0.0;
     };
     let mut light = 0.0;
@@ -361,8 +421,20 @@ pub fn add_ghost(
     sensor: &Sensor,
     plane: &mut [f64],
 ) -> f64 {
-    let square = search(layout, &layout.route(path, nm), field);
-    let patch = draw(layout, (path, square), (field, nm), (direct, scale), sensor);
+    let square = if layout.stop_first(path) {
+        front(layout, field, nm)
+    } else {
+        search(layout, &layout.route(path, nm), field)
+    };
+    let patch = draw(
+        layout,
+        (&[path], square),
+        (field, &[nm]),
+        (direct, scale),
+        sensor,
+    )
+    .swap_remove(0)
+    .swap_remove(0);
     let mut canvas = Canvas::new(*sensor, 1);
     canvas.add(&patch, 0, 1.0);
     for (p, v) in plane.iter_mut().zip(&canvas.finish()[0]) {
@@ -371,30 +443,71 @@ pub fn add_ghost(
     patch.light
 }
 
-/// As [`add_ghost`], onto a patch of the box of pixels the ghost covers,
-/// at the level its cells land about a pixel wide ([`Patch::draw`]): a
-/// small ghost takes a small patch, not a whole frame, and a large one a
-/// coarse patch. `square` is where in the pupil the path's light passes
-/// ([`search`]; none: no light).
+/// As [`add_ghost`] for each of `paths` at each of the wavelengths
+/// `nms`, onto a patch of the box of pixels the ghost covers, at the level
+/// its cells land about half a pixel wide ([`Patch::draw`]): a small
+/// ghost takes a small patch, not a whole frame, and a large one a coarse
+/// patch. `square` is where in the pupil the paths' light passes at every
+/// wavelength ([`search`]; none: no light). The bundles are traced at the
+/// middle wavelength, and at the others by their difference from it
+/// ([`Bundle::beside`]); the paths share the rays of their common way in
+/// ([`Layout::follow_unclipped_routes`]).
 fn draw(
     layout: &Layout,
-    (path, square): (Path, Option<Square>),
-    (field, nm): (Vector, f64),
+    (paths, square): (&[Path], Option<Square>),
+    (field, nms): (Vector, &[f64]),
     (direct, scale): (f64, f64),
     sensor: &Sensor,
-) -> Patch {
-    let mut quads: Quads = Vec::new();
-    let mut light = 0.0;
-    if let Some(square) = square {
-        Bundle::new(layout, layout.route(path, nm), field, square).for_each_cell(
-            |corners, area| {
-                let share = scale * area * mean_weight(corners) / direct;
-                light += share;
-                quads.push((*corners, share));
-            },
-        );
+) -> Vec<Vec<Patch>> {
+    use rayon::prelude::*;
+    let Some(square) = square else {
+        let none = Patch::draw(&Vec::new(), 0.0, sensor, 2 * GRID);
+        return vec![vec![none; nms.len()]; paths.len()];
+    };
+    let patch = |bundle: &Bundle| {
+        let mut quads: Quads = Vec::new();
+        let mut light = 0.0;
+        bundle.for_each_cell(|corners, area| {
+            let share = scale * area * mean_weight(corners) / direct;
+            light += share;
+            quads.push((*corners, share));
+        });
+        Patch::draw(&quads, light, sensor, 2 * GRID)
+    };
+    let routes = |nm| -> Vec<Route> { paths.iter().map(|&p| layout.route(p, nm)).collect() };
+    let middle = nms.len() / 2;
+    let at_middle = routes(nms[middle]);
+    let traced = layout.follow_unclipped_routes(&at_middle, &grid(layout, field, square, 1));
+    let bases: Vec<Bundle> = at_middle
+        .into_iter()
+        .zip(traced)
+        .map(|(route, rays)| Bundle {
+            layout,
+            route,
+            field,
+            square,
+            rays,
+        })
+        .collect();
+    let mut patches = vec![Vec::with_capacity(nms.len()); paths.len()];
+    for (k, &nm) in nms.iter().enumerate() {
+        let drawn: Vec<Patch> = if k == middle {
+            bases.par_iter().map(patch).collect()
+        } else {
+            let routes = routes(nm);
+            let traced =
+                layout.follow_unclipped_routes(&routes, &grid(layout, field, square, STRIDE));
+            bases
+                .par_iter()
+                .zip(routes.into_par_iter().zip(traced))
+                .map(|(base, (route, traced))| patch(&base.beside(route, &traced)))
+                .collect()
+        };
+        for (path, drawn) in patches.iter_mut().zip(drawn) {
+            path.push(drawn);
+        }
     }
-    Patch::draw(&quads, light, sensor, GRID)
+    patches
 }
 
 /// The unit direction of a distant source `x` degrees right of the axis
@@ -510,9 +623,16 @@ pub fn trace(
     let paths = layout.ghosts();
     let channels = light.first().map_or(0, |(_, w)| w.len());
     // Each channel's image: its weights times the direct path's light.
+    // Where the light that meets the stop first enters the pupil, at
+    // each wavelength: the direct path's and most ghosts' ([`front`]).
+    let fronts: Vec<Option<Square>> = light
+        .par_iter()
+        .map(|&(nm, _)| front(layout, field, nm))
+        .collect();
     let directs: Vec<f64> = light
-        .iter()
-        .map(|&(nm, _)| direct_light(layout, field, nm))
+        .par_iter()
+        .zip(&fronts)
+        .map(|(&(nm, _), &square)| direct_light_in(layout, field, nm, square))
         .collect();
     let images: Vec<f64> = (0..channels)
         .map(|c| light.iter().zip(&directs).map(|((_, w), d)| w[c] * d).sum())
@@ -531,42 +651,62 @@ pub fn trace(
                 .collect()
         })
         .collect();
-    // Where each path's light passes the pupil, looked for once at the
-    // middle wavelength: the bundle's square is a coarse cell wider than
-    // it each way, which the dispersion's shifts stay within.
+    // Where each path's light passes the pupil, at every wavelength. A
+    // path that meets the stop first passes within where the direct
+    // path's light reaches it. The others are looked for at the middle
+    // wavelength: the bundle's square is a coarse cell wider than their
+    // light each way, which the dispersion's shifts stay within.
     let middle = light.get(light.len() / 2).map_or(550.0, |l| l.0);
-    let squares: Vec<Option<Square>> = paths
-        .par_iter()
-        .map(|&path| search(layout, &layout.route(path, middle), field))
+    let front = Square::cover(fronts);
+    let (first, others): (Vec<usize>, Vec<usize>) =
+        (0..paths.len()).partition(|&p| layout.stop_first(paths[p]));
+    let entrance = Square::entrance(layout, field);
+    let routes: Vec<Route> = others
+        .iter()
+        .map(|&p| layout.route(paths[p], middle))
         .collect();
+    let searched = layout.follow_unclipped_routes(&routes, &coarse(layout, field, entrance));
+    let mut squares = vec![front; paths.len()];
+    for (&p, rays) in others.iter().zip(&searched) {
+        squares[p] = found(layout, entrance, rays);
+    }
+    let nms: Vec<f64> = light.iter().map(|l| l.0).collect();
+    // The paths that meet the stop first together, sharing their way in;
+    // then every other on its own; kept in the paths' order. Each hears
+    // the cancellation before it starts.
+    let cancel = control.cancel();
+    cancel.check()?;
+    let group: Vec<Path> = first.iter().map(|&p| paths[p]).collect();
+    let together = draw(layout, (&group, front), (field, &nms), (1.0, 1.0), sensor);
+    let alone: Vec<Vec<Patch>> = others
+        .par_iter()
+        .map(|&p| {
+            cancel.check()?;
+            let one = (&paths[p..=p], squares[p]);
+            Ok(draw(layout, one, (field, &nms), (1.0, 1.0), sensor).swap_remove(0))
+        })
+        .collect::<crate::Result<_>>()?;
+    let mut drawn = vec![Vec::new(); paths.len()];
+    for (p, patches) in first
+        .into_iter()
+        .zip(together)
+        .chain(others.into_iter().zip(alone))
+    {
+        drawn[p] = patches;
+    }
+    control.report(1.0);
     let mut patches = Vec::new();
     let mut ranked = vec![0.0; paths.len()];
     let mut totals = vec![0.0; channels];
-    for (k, (nm, _)) in light.iter().enumerate() {
-        control.check()?;
-        if directs[k] > 0.0 {
-            // Paths a few at a time, each drawn on its own patch, kept in
-            // the paths' order; cancellation is heard between.
-            let size = rayon::current_num_threads().max(1) * 2;
-            for (c, chunk) in paths.chunks(size).enumerate() {
-                control.check()?;
-                let drawn: Vec<Patch> = chunk
-                    .par_iter()
-                    .zip(&squares[c * size..])
-                    .map(|(&path, &square)| {
-                        draw(layout, (path, square), (field, *nm), (1.0, 1.0), sensor)
-                    })
-                    .collect();
-                for (p, patch) in drawn.into_iter().enumerate() {
-                    for (channel, share) in shares[k].iter().enumerate() {
-                        ranked[c * size + p] += share * patch.light / channels as f64;
-                        totals[channel] += share * patch.light;
-                    }
-                    patches.push((k, patch));
-                }
+    for k in (0..light.len()).filter(|&k| directs[k] > 0.0) {
+        for (p, path) in drawn.iter_mut().enumerate() {
+            let patch = std::mem::take(&mut path[k]);
+            for (channel, share) in shares[k].iter().enumerate() {
+                ranked[p] += share * patch.light / channels as f64;
+                totals[channel] += share * patch.light;
             }
+            patches.push((k, patch));
         }
-        control.report((k + 1) as f64 / light.len() as f64);
     }
     let mut ranked: Vec<(Path, f64)> = paths.into_iter().zip(ranked).collect();
     ranked.sort_by(|a, b| b.1.total_cmp(&a.1));

@@ -35,6 +35,7 @@ pub mod effect;
 pub mod ghost;
 pub mod paraxial;
 mod parse;
+pub mod passage;
 pub mod shipped;
 pub mod trace;
 

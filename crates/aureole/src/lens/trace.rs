@@ -40,6 +40,15 @@ impl Crossings {
         }
     }
 
+    /// The crossings at `points` (the first three).
+    pub fn at(points: &[[f64; 2]]) -> Crossings {
+        let mut crossings = Crossings::default();
+        for &p in points {
+            crossings.push(p);
+        }
+        crossings
+    }
+
     /// The points, mm in the stop's plane.
     pub fn points(&self) -> &[[f64; 2]] {
         &self.points[..self.count]
@@ -94,19 +103,43 @@ pub struct Route {
     nm: f64,
 }
 
+impl Route {
+    /// The route up to the stop and no further: the light of every path
+    /// that meets the stop before its reflections passes there
+    /// ([`Layout::stop_first`]).
+    pub fn to_stop(&self) -> Route {
+        let end = self
+            .steps
+            .iter()
+            .position(|s| s.stop)
+            .map_or(self.steps.len(), |k| k + 1);
+        Route {
+            steps: self.steps[..end].to_vec(),
+            nm: self.nm,
+        }
+    }
+}
+
 /// One surface met on a [`Route`].
 #[derive(Debug, Clone)]
 struct Step {
+    /// Which surface it is, met forwards or not, reflecting or not: two
+    /// routes with the same steps so far have followed the same rays.
+    event: (usize, bool, bool),
     /// Its vertex, mm.
     z: f64,
     /// 1/R, mm⁻¹; 0 for a plane.
     curvature: f64,
     /// Its clear semi-aperture, mm.
     semi: f64,
+    /// 1/semi², mm⁻².
+    reach: f64,
     /// Whether it is the stop, whose opening may be the camera's blades.
     stop: bool,
     /// The indices the light comes from and goes into.
     indices: (f64, f64),
+    /// Their ratio, n_in/n_out.
+    mu: f64,
     /// Its coating's layers as the light meets them; `None`: it reflects
     /// nothing (the stop).
     layers: Option<Vec<super::Layer>>,
@@ -272,6 +305,16 @@ impl<'a> Layout<'a> {
         paths
     }
 
+    /// Whether `path` crosses the stop on its way in, before either
+    /// reflection: then its light enters where the direct path's passes
+    /// the surfaces up to the stop ([`Route::to_stop`]).
+    pub fn stop_first(&self, path: Path) -> bool {
+        match path {
+            Path::Direct => true,
+            Path::Ghost { second, .. } => second > self.lens.stop(),
+        }
+    }
+
     /// The surfaces a path meets, in order.
     fn events(&self, path: Path) -> Vec<Event> {
         let n = self.lens.surfaces.len();
@@ -320,12 +363,16 @@ impl<'a> Layout<'a> {
                     .iter()
                     .find(|(at, _)| *at == nm)
                     .and_then(|(_, tables)| tables[s][usize::from(!forwards)].clone());
+                let semi = surface.semi_aperture * mm;
                 Step {
+                    event: (s, forwards, reflect),
                     z: self.vertices[s],
                     curvature: surface.radius.map_or(0.0, |r| 1.0 / (r * mm)),
-                    semi: surface.semi_aperture * mm,
+                    semi,
+                    reach: 1.0 / (semi * semi),
                     stop: surface.stop,
                     indices,
+                    mu: indices.0 / indices.1,
                     layers,
                     table,
                     reflect,
@@ -375,63 +422,209 @@ impl<'a> Layout<'a> {
         self.walk(route, ray, false)
     }
 
-    fn walk(&self, route: &Route, mut ray: Ray, clip: bool) -> Option<Arrival> {
-        let mut weight = 1.0;
-        let mut stop = Crossings::default();
-        let mut margin = f64::INFINITY;
-        for step in &route.steps {
-            let point = hit(
-                &ray,
-                step.z,
-                step.curvature,
-                if clip { step.semi } else { f64::INFINITY },
-            )?;
-            let across = point[0] * point[0] + point[1] * point[1];
-            margin = margin.min(1.0 - across / (step.semi * step.semi));
-            if step.stop {
-                if clip && !self.opens([point[0], point[1]]) {
-                    return None;
-                }
-                stop.push([point[0], point[1]]);
+    /// `rays` along a [`Route`] as [`Layout::follow_unclipped`], several
+    /// at a time: each ray's steps are a long chain of dependent square
+    /// roots and divisions, and rays side by side keep the processor busy
+    /// while each waits (the same arithmetic, so the same bits, as one at
+    /// a time).
+    pub fn follow_unclipped_all(&self, route: &Route, rays: &[Ray]) -> Vec<Option<Arrival>> {
+        let mut arrivals = Vec::with_capacity(rays.len());
+        for chunk in rays.chunks(LANES) {
+            let mut lanes = [Lane::new(chunk[0]); LANES];
+            for (lane, &ray) in lanes.iter_mut().zip(chunk) {
+                *lane = Lane::new(ray);
             }
-            let (n_in, n_out) = step.indices;
-            // The normal, turned to point along the ray.
-            let mut normal = normal(point, step.z, step.curvature);
-            if dot(normal, ray.direction) < 0.0 {
-                normal = scale(normal, -1.0);
+            let lanes = &mut lanes[..chunk.len()];
+            for step in &route.steps {
+                for lane in lanes.iter_mut() {
+                    if lane.alive {
+                        lane.alive = self.advance(route.nm, step, lane, false).is_some();
+                    }
+                }
             }
-            let cos_in = dot(normal, ray.direction);
-            let r = step.layers.as_ref().map_or(0.0, |layers| {
-                step.table
-                    .as_ref()
-                    .and_then(|t| t.at(cos_in))
-                    .unwrap_or_else(|| coating::reflectance(n_in, n_out, layers, cos_in, route.nm))
-            });
-            ray = if step.reflect {
-                weight *= r;
-                Ray {
-                    point,
-                    direction: add(ray.direction, scale(normal, -2.0 * cos_in)),
-                }
-            } else {
-                weight *= 1.0 - r;
-                Ray {
-                    point,
-                    direction: refract(ray.direction, normal, cos_in, n_in / n_out)?,
-                }
-            };
+            arrivals.extend(lanes.iter().map(|lane| self.land(lane)));
         }
-        // On to the image plane.
+        arrivals
+    }
+
+    /// `rays` along each of `routes` (at one wavelength) as
+    /// [`Layout::follow_unclipped_all`], one list for each route: the
+    /// steps routes share from the start (a ghost's way in, up to its
+    /// first reflection, is every other's that reflects later) are taken
+    /// once for them all, the same arithmetic as each alone.
+    pub fn follow_unclipped_routes(
+        &self,
+        routes: &[Route],
+        rays: &[Ray],
+    ) -> Vec<Vec<Option<Arrival>>> {
+        use rayon::prelude::*;
+        let Some(nm) = routes.first().map(|r| r.nm) else {
+            return Vec::new();
+        };
+        let members: Vec<usize> = (0..routes.len()).collect();
+        let chunks: Vec<Vec<Vec<Option<Arrival>>>> = rays
+            .par_chunks(256)
+            .map(|chunk| {
+                let mut out = vec![Vec::new(); routes.len()];
+                let lanes = chunk.iter().map(|&r| Lane::new(r)).collect();
+                self.branch(nm, (routes, &members), 0, lanes, &mut out);
+                out
+            })
+            .collect();
+        let mut arrivals = vec![Vec::with_capacity(rays.len()); routes.len()];
+        for chunk in chunks {
+            for (all, part) in arrivals.iter_mut().zip(chunk) {
+                all.extend(part);
+            }
+        }
+        arrivals
+    }
+
+    /// `lanes`, having taken the first `depth` steps of every route of
+    /// `members`, on along them: the routes that end land, the others go
+    /// on in groups that take the same next step.
+    fn branch(
+        &self,
+        nm: f64,
+        (routes, members): (&[Route], &[usize]),
+        depth: usize,
+        lanes: Vec<Lane>,
+        out: &mut [Vec<Option<Arrival>>],
+    ) {
+        let mut groups: Vec<Vec<usize>> = Vec::new();
+        for &m in members {
+            match routes[m].steps.get(depth) {
+                None => out[m] = lanes.iter().map(|l| self.land(l)).collect(),
+                Some(step) => match groups
+                    .iter_mut()
+                    .find(|g| routes[g[0]].steps[depth].event == step.event)
+                {
+                    Some(group) => group.push(m),
+                    None => groups.push(vec![m]),
+                },
+            }
+        }
+        let mut lanes = Some(lanes);
+        let count = groups.len();
+        for (g, group) in groups.into_iter().enumerate() {
+            let mut lanes = if g + 1 == count {
+                lanes.take().unwrap_or_default()
+            } else {
+                lanes.clone().unwrap_or_default()
+            };
+            // On while every route of the group goes on alike.
+            let first = &routes[group[0]].steps;
+            let mut at = depth;
+            while at < first.len()
+                && (at == depth
+                    || group.iter().all(|&m| {
+                        routes[m].steps.get(at).map(|s| s.event) == Some(first[at].event)
+                    }))
+            {
+                for lane in lanes.iter_mut().filter(|l| l.alive) {
+                    lane.alive = self.advance(nm, &first[at], lane, false).is_some();
+                }
+                at += 1;
+            }
+            self.branch(nm, (routes, &group), at, lanes, out);
+        }
+    }
+
+    fn walk(&self, route: &Route, ray: Ray, clip: bool) -> Option<Arrival> {
+        let mut lane = Lane::new(ray);
+        for step in &route.steps {
+            self.advance(route.nm, step, &mut lane, clip)?;
+        }
+        self.land(&lane)
+    }
+
+    /// `lane`'s ray through one surface of `route`; `None` where it stops
+    /// there.
+    #[inline(always)]
+    fn advance(&self, nm: f64, step: &Step, lane: &mut Lane, clip: bool) -> Option<()> {
+        let ray = &lane.ray;
+        let point = hit(
+            ray,
+            step.z,
+            step.curvature,
+            if clip { step.semi } else { f64::INFINITY },
+        )?;
+        let across = point[0] * point[0] + point[1] * point[1];
+        lane.margin = lane.margin.min(1.0 - across * step.reach);
+        if step.stop {
+            if clip && !self.opens([point[0], point[1]]) {
+                return None;
+            }
+            lane.stop.push([point[0], point[1]]);
+        }
+        let (n_in, n_out) = step.indices;
+        // The normal, turned to point along the ray.
+        let mut normal = normal(point, step.z, step.curvature);
+        if dot(normal, ray.direction) < 0.0 {
+            normal = scale(normal, -1.0);
+        }
+        let cos_in = dot(normal, ray.direction);
+        let r = step.layers.as_ref().map_or(0.0, |layers| {
+            step.table
+                .as_ref()
+                .and_then(|t| t.at(cos_in))
+                .unwrap_or_else(|| coating::reflectance(n_in, n_out, layers, cos_in, nm))
+        });
+        lane.ray = if step.reflect {
+            lane.weight *= r;
+            Ray {
+                point,
+                direction: add(ray.direction, scale(normal, -2.0 * cos_in)),
+            }
+        } else {
+            lane.weight *= 1.0 - r;
+            Ray {
+                point,
+                direction: refract(ray.direction, normal, cos_in, step.mu)?,
+            }
+        };
+        Some(())
+    }
+
+    /// A ray through every surface, on to the image plane.
+    fn land(&self, lane: &Lane) -> Option<Arrival> {
+        let ray = &lane.ray;
         let t = (self.image - ray.point[2]) / ray.direction[2];
-        if !(t.is_finite() && t >= 0.0) || weight <= 0.0 {
+        if !(lane.alive && t.is_finite() && t >= 0.0) || lane.weight <= 0.0 {
             return None;
         }
         Some(Arrival {
             at: add(ray.point, scale(ray.direction, t)),
-            weight,
-            margin,
-            stop,
+            weight: lane.weight,
+            margin: lane.margin,
+            stop: lane.stop,
         })
+    }
+}
+
+/// Rays traced side by side ([`Layout::follow_unclipped_all`]).
+const LANES: usize = 8;
+
+/// A ray on its way along a route: where it is, what it carries, and
+/// what it met.
+#[derive(Debug, Clone, Copy)]
+struct Lane {
+    ray: Ray,
+    weight: f64,
+    stop: Crossings,
+    margin: f64,
+    alive: bool,
+}
+
+impl Lane {
+    fn new(ray: Ray) -> Lane {
+        Lane {
+            ray,
+            weight: 1.0,
+            stop: Crossings::default(),
+            margin: f64::INFINITY,
+            alive: true,
+        }
     }
 }
 
@@ -461,14 +654,15 @@ fn hit(ray: &Ray, z: f64, curvature: f64, semi: f64) -> Option<Vector> {
     (at[0] * at[0] + at[1] * at[1] <= semi * semi).then_some(at)
 }
 
-/// The surface's unit normal at `point` (on it), +z at the vertex.
+/// The surface's unit normal at `point` (on it), +z at the vertex:
+/// (centre − point)/R, a unit vector with no square root taken, since the
+/// point lies on the sphere.
 fn normal(point: Vector, z: f64, curvature: f64) -> Vector {
-    let n = [
+    [
         -curvature * point[0],
         -curvature * point[1],
         1.0 - curvature * (point[2] - z),
-    ];
-    scale(n, 1.0 / dot(n, n).sqrt())
+    ]
 }
 
 /// Snell's law in vector form: `d` refracted at a surface of unit normal
