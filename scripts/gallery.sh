@@ -266,6 +266,63 @@ done
   "$work/ghosts-f2.png=f/2, 7 blades: ghosts and rays" "$work/ghosts-f8.png=f/8" \
   "$work/alone-f2.png=f/2: the ghosts alone (round stop), 30x brighter" \
   "$work/alone-f8.png=f/8: the ghosts alone, 30x brighter"
+# Ghosts that move: a headlamp crossing a dark night through the
+# double-Gauss at f/4 (its ghosts cross the other way, through the
+# centre), and the sun by day at f/11. The scenes are written here.
+python3 - "$work" <<'PY'
+import sys
+from array import array
+work, width, height = sys.argv[1], 960, 540
+
+
+def write(name, rows):
+    """A PFM of RGB rows, top first (the format stores them bottom first)."""
+    pixels = array("f")
+    for row in reversed(rows):
+        pixels.extend(row)
+    if sys.byteorder == "big":
+        pixels.byteswap()
+    with open(f"{work}/{name}.pfm", "wb") as out:
+        out.write(b"PF\n%d %d\n-1.0\n" % (width, height))
+        out.write(pixels.tobytes())
+
+
+def scene(sky, ground, horizon, spot):
+    """Sky above the horizon and ground below (cd/m², RGB), and a round
+    white source (x, y, radius, cd/m²)."""
+    x0, y0, radius, value = spot
+    rows = []
+    for y in range(height):
+        row = array("f", sky(y) if y < horizon else ground) * width
+        if abs(y - y0) <= radius:
+            for x in range(max(0, int(x0 - radius)), min(width, int(x0 + radius) + 1)):
+                if (x - x0) ** 2 + (y - y0) ** 2 <= radius * radius:
+                    row[3 * x:3 * x + 3] = array("f", [value] * 3)
+        rows.append(row)
+    return rows
+
+
+# A headlamp of 2·10⁵ cd/m² crossing a night of 0.01–0.2 cd/m².
+night = lambda y: [0.01 + 0.02 * y / height] * 3
+for k, x in enumerate((150, 360, 600, 810)):
+    write(f"crossing{k}", scene(night, [0.05, 0.045, 0.04], 380, (x, 300, 1.5, 2e5)))
+# The sun (1.6·10⁹ cd/m², 0.53° across: 12 px at 50 mm on a 36 mm sensor
+# 960 px wide) in a blue sky of 3000–8000 cd/m² over a meadow of 1000.
+sky = lambda y: [(8000 - 5000 * y / 380) * c for c in (0.75, 0.95, 1.3)]
+write("sun", scene(sky, [900.0, 1100.0, 500.0], 380, (250, 110, 6.0, 1.6e9)))
+PY
+ghosts "moving" 4 7
+for k in 0 1 2; do
+  "$aureole" apply -q "$work/crossing$k.pfm" --config "$work/moving.toml" --white 1 \
+    -o "$work/crossing$k.png"
+done
+ghosts "sun" 11 7
+"$aureole" apply -q "$work/sun.pfm" --config "$work/sun.toml" --white 15000 -o "$work/sun.png"
+"$montage" "$out/guide-ghosts-moving.jpg" --columns 2 --width 480 --quality 85 \
+  "$work/crossing0.png=f/4: a lamp, its ghosts opposite" \
+  "$work/crossing1.png=nearer the centre, they close in" \
+  "$work/crossing2.png=past it, they cross over" \
+  "$work/sun.png=the sun by day at f/11"
 for recipe in configs/*.toml; do
   kernel "$work/recipe-$(basename "$recipe" .toml).png" 257 1000 --config "$recipe"
 done

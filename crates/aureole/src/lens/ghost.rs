@@ -11,6 +11,7 @@
 use super::canvas::{Canvas, Patch, Quads};
 use super::passage::{coarse, found, front, may_pass, search, Square};
 use super::trace::{Arrival, Layout, Path, Ray, Route, Vector};
+use crate::control::Cancel;
 
 /// A sensor of `width`×`height` pixels of `pitch_mm`, the optical axis
 /// through `centre` (the display window's centre: a frame's overscan lies
@@ -426,15 +427,19 @@ pub fn add_ghost(
     } else {
         search(layout, &layout.route(path, nm), field)
     };
+    // Never cancelled: the one drawing is always there.
+    let never = Cancel::new();
+    let drawing = (sensor, &never);
     let patch = draw(
         layout,
         (&[path], square),
         (field, &[nm]),
         (direct, scale),
-        sensor,
+        drawing,
     )
-    .swap_remove(0)
-    .swap_remove(0);
+    .ok()
+    .and_then(|mut paths| paths.pop()?.pop())
+    .unwrap_or_default();
     let mut canvas = Canvas::new(*sensor, 1);
     canvas.add(&patch, 0, 1.0);
     for (p, v) in plane.iter_mut().zip(&canvas.finish()[0]) {
@@ -457,12 +462,12 @@ fn draw(
     (paths, square): (&[Path], Option<Square>),
     (field, nms): (Vector, &[f64]),
     (direct, scale): (f64, f64),
-    sensor: &Sensor,
-) -> Vec<Vec<Patch>> {
+    (sensor, cancel): (&Sensor, &Cancel),
+) -> crate::Result<Vec<Vec<Patch>>> {
     use rayon::prelude::*;
     let Some(square) = square else {
         let none = Patch::draw(&Vec::new(), 0.0, sensor, 2 * GRID);
-        return vec![vec![none; nms.len()]; paths.len()];
+        return Ok(vec![vec![none; nms.len()]; paths.len()]);
     };
     let patch = |bundle: &Bundle| {
         let mut quads: Quads = Vec::new();
@@ -491,6 +496,7 @@ fn draw(
         .collect();
     let mut patches = vec![Vec::with_capacity(nms.len()); paths.len()];
     for (k, &nm) in nms.iter().enumerate() {
+        cancel.check()?;
         let drawn: Vec<Patch> = if k == middle {
             bases.par_iter().map(patch).collect()
         } else {
@@ -507,7 +513,7 @@ fn draw(
             path.push(drawn);
         }
     }
-    patches
+    Ok(patches)
 }
 
 /// The unit direction of a distant source `x` degrees right of the axis
@@ -677,13 +683,19 @@ pub fn trace(
     let cancel = control.cancel();
     cancel.check()?;
     let group: Vec<Path> = first.iter().map(|&p| paths[p]).collect();
-    let together = draw(layout, (&group, front), (field, &nms), (1.0, 1.0), sensor);
+    let together = draw(
+        layout,
+        (&group, front),
+        (field, &nms),
+        (1.0, 1.0),
+        (sensor, &cancel),
+    )?;
     let alone: Vec<Vec<Patch>> = others
         .par_iter()
         .map(|&p| {
             cancel.check()?;
             let one = (&paths[p..=p], squares[p]);
-            Ok(draw(layout, one, (field, &nms), (1.0, 1.0), sensor).swap_remove(0))
+            Ok(draw(layout, one, (field, &nms), (1.0, 1.0), (sensor, &cancel))?.swap_remove(0))
         })
         .collect::<crate::Result<_>>()?;
     let mut drawn = vec![Vec::new(); paths.len()];
