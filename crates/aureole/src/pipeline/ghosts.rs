@@ -7,6 +7,8 @@
 
 use std::collections::VecDeque;
 
+use rayon::prelude::*;
+
 use crate::control::Control;
 use crate::error::Result;
 use crate::image::{Image, Layout as Planes, PixelLuminance};
@@ -182,44 +184,63 @@ pub(crate) fn add_ghosts(
     // Every source's ghosts on one canvas, its levels added up once.
     let mut canvas = Canvas::new(sensor, image.planes.len());
     let (mut ghost_light, mut source_light) = (0.0, 0.0);
-    for (k, source) in found.iter().take(traced).enumerate() {
+    // Sources a few at a time, side by side (each source's tracing has
+    // parts too small to share out among every core), painted in order.
+    let cancel = control.cancel();
+    let batch = rayon::current_num_threads().max(1);
+    let mut done = 0;
+    for sources in found[..traced].chunks(batch) {
         control.check()?;
-        let target = (
-            (source.centre.0 - sensor.centre.0) * sensor.pitch_mm,
-            (sensor.centre.1 - source.centre.1) * sensor.pitch_mm,
-        );
-        let field = aim(&layout, focal_mm, target, green);
-        let start = k as f64 / traced as f64;
-        let mut part = control.part(start, start + 1.0 / traced as f64);
-        let drawn = trace(&layout, field, &sensor, &optics.light, &mut part)?;
-        // Each channel's share of the source: the input is what the lens
-        // brought from it, its own image and its ghosts together.
-        let y_share: f64 = weights.iter().zip(&drawn.light).map(|(w, g)| w * g).sum();
-        let shares: Vec<f64> = match image.layout {
-            Planes::Rgb => drawn.light.clone(),
-            Planes::Luminance => vec![y_share],
-        };
-        let mut mix = Vec::with_capacity(scene.planes.len());
-        for (c, plane) in scene.planes.iter_mut().enumerate() {
-            let g = shares[c];
-            let power: f64 = source
-                .pixels
-                .iter()
-                .map(|&i| f64::from(image.planes[c][i]))
-                .sum();
-            let direct = power / (1.0 + g);
-            for &i in &source.pixels {
-                plane[i] -= (f64::from(image.planes[c][i]) * g / (1.0 + g)) as f32;
+        let traced_here: Vec<_> = sources
+            .par_iter()
+            .map(|source| {
+                let target = (
+                    (source.centre.0 - sensor.centre.0) * sensor.pitch_mm,
+                    (sensor.centre.1 - source.centre.1) * sensor.pitch_mm,
+                );
+                let field = aim(&layout, focal_mm, target, green);
+                trace(
+                    &layout,
+                    field,
+                    &sensor,
+                    &optics.light,
+                    &mut Control::quiet(&cancel),
+                )
+            })
+            .collect::<Result<_>>()?;
+        done += sources.len();
+        control.report(done as f64 / traced as f64);
+        for (source, drawn) in sources.iter().zip(traced_here) {
+            // Each channel's share of the source: the input is what the lens
+            // brought from it, its own image and its ghosts together.
+            let y_share: f64 = weights.iter().zip(&drawn.light).map(|(w, g)| w * g).sum();
+            let shares: Vec<f64> = match image.layout {
+                Planes::Rgb => drawn.light.clone(),
+                Planes::Luminance => vec![y_share],
+            };
+            let mut mix = Vec::with_capacity(scene.planes.len());
+            for (c, plane) in scene.planes.iter_mut().enumerate() {
+                let g = shares[c];
+                let power: f64 = source
+                    .pixels
+                    .iter()
+                    .map(|&i| f64::from(image.planes[c][i]))
+                    .sum();
+                let direct = power / (1.0 + g);
+                for &i in &source.pixels {
+                    plane[i] -= (f64::from(image.planes[c][i]) * g / (1.0 + g)) as f32;
+                }
+                mix.push(match image.layout {
+                    Planes::Rgb => (0..3).map(|k| if k == c { direct } else { 0.0 }).collect(),
+                    Planes::Luminance => weights.iter().map(|w| w * direct).collect(),
+                });
             }
-            mix.push(match image.layout {
-                Planes::Rgb => (0..3).map(|k| if k == c { direct } else { 0.0 }).collect(),
-                Planes::Luminance => weights.iter().map(|w| w * direct).collect(),
-            });
+            drawn.paint(&mut canvas, &mix);
+            ghost_light += source.luminance * y_share / (1.0 + y_share);
+            source_light += source.luminance;
         }
-        drawn.paint(&mut canvas, &mix);
-        ghost_light += source.luminance * y_share / (1.0 + y_share);
-        source_light += source.luminance;
     }
+    control.check()?;
     for (plane, ghosts) in scene.planes.iter_mut().zip(canvas.finish()) {
         for (value, ghost) in plane.iter_mut().zip(ghosts) {
             *value += ghost as f32;
