@@ -28,18 +28,12 @@ kernel() { # kernel OUT.png SIZE IMAGE_WIDTH CAMERA-ARGS...
 }
 
 # A config for one aperture or bloom variant, written into $work.
+camera() { # camera NAME F_NUMBER: a full-frame 50 mm camera, no effect yet
+  printf '[camera]\nsensor_width_mm = 36.0\nfocal_length_mm = 50.0\nf_number = %s\n' "$2" >"$work/$1.toml"
+}
 stop() { # stop NAME F_NUMBER BLADES ROUNDNESS
-  cat >"$work/$1.toml" <<EOF
-[camera]
-sensor_width_mm = 36.0
-focal_length_mm = 50.0
-f_number = $2
-
-[[effect]]
-type = "aperture"
-blades = $3
-roundness = $4
-EOF
+  camera "$1" "$2"
+  printf '\n[[effect]]\ntype = "aperture"\nblades = %s\nroundness = %s\n' "$3" "$4" >>"$work/$1.toml"
 }
 bloom() { # bloom NAME EPSILON
   cat >"$work/$1.toml" <<EOF
@@ -242,17 +236,9 @@ done
   "$work/threshold5000.png=threshold 5000 cd/m2"
 # Lens ghosts: the demo street through the double-Gauss of US 4,247,171
 # (7 blades) at f/2 and f/8, and its ghosts alone, far brighter.
-ghosts() { # ghosts NAME F_NUMBER BLADES
-  cat >"$work/$1.toml" <<EOF
-[camera]
-sensor_width_mm = 36.0
-focal_length_mm = 50.0
-f_number = $2
-
-[[effect]]
-type = "ghosts"
-lens = "double-gauss-50mm-f1.4"
-EOF
+ghosts() { # ghosts NAME F_NUMBER BLADES (0: a round stop, no aperture)
+  camera "$1" "$2"
+  printf '\n[[effect]]\ntype = "ghosts"\nlens = "double-gauss-50mm-f1.4"\n' >>"$work/$1.toml"
   if [ "$3" != 0 ]; then printf '\n[[effect]]\ntype = "aperture"\nblades = %s\n' "$3" >>"$work/$1.toml"; fi
 }
 for n in 2 8; do

@@ -429,6 +429,15 @@ impl Default for Config {
 }
 
 impl Config {
+    /// The first aperture of the chain: the stop whose optics its
+    /// diffraction and its lens ghosts share.
+    pub fn first_aperture(&self) -> Option<&crate::Aperture> {
+        self.effects.iter().find_map(|e| match e {
+            Effect::Aperture(a) => Some(a),
+            _ => None,
+        })
+    }
+
     /// The same camera for the image resampled by `factor` (a preview of
     /// width W·factor): lengths in pixels scale with it, while lengths on
     /// the sensor and diffraction follow from the new pixel pitch, so the

@@ -120,6 +120,20 @@ pub(crate) const fn angle(name: &'static str, about: &'static str) -> Parameter 
     }
 }
 
+/// A switch, on (`true`) or off, by default `on`.
+pub(crate) const fn flag(name: &'static str, on: bool, about: &'static str) -> Parameter {
+    Parameter {
+        name,
+        kind: Kind::Flag,
+        low: None,
+        high: None,
+        default: Default::Flag(on),
+        unit: "",
+        allowed: "true or false",
+        about,
+    }
+}
+
 /// A length in px, or µm/mm on the sensor: any above 0.
 pub(crate) const fn length(name: &'static str, default: Default, about: &'static str) -> Parameter {
     Parameter {

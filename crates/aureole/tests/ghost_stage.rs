@@ -254,17 +254,25 @@ fn a_shipped_lens_throws_all_its_ghosts_and_needs_the_sensors_width() {
 
 #[test]
 fn a_session_cancelled_while_it_traces_ghosts_stops() {
-    // Cancelled from the tracing's own first report: the stage must hear
-    // it, as a closed tab or Ctrl-C would be heard.
+    // Cancelled from the tracing's own first report, after the first
+    // batch of sources (two, on two threads): the stage must hear it
+    // before the next, as a closed tab or Ctrl-C would be heard.
     let mut session = Session::new(config(ACHROMAT));
     let cancel = session.cancel_token();
     let mut reports = 0;
-    let input = night(96, 64, &[((70, 20), 1e6), ((20, 40), 1e6)]);
-    let result = session.apply(&frame(input), &ApplyOptions::default(), &mut |stage, _| {
-        if stage == Stage::TracingGhosts {
-            reports += 1;
-            cancel.cancel();
-        }
+    let lamps = [(70, 20), (20, 40), (40, 10), (80, 50)].map(|at| (at, 1e6));
+    let input = night(96, 64, &lamps);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let result = pool.install(|| {
+        session.apply(&frame(input), &ApplyOptions::default(), &mut |stage, _| {
+            if stage == Stage::TracingGhosts {
+                reports += 1;
+                cancel.cancel();
+            }
+        })
     });
     assert!(matches!(result, Err(Error::Cancelled)), "{result:?}");
     assert_eq!(reports, 1, "the tracing went on after it was cancelled");

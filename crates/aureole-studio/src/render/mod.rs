@@ -438,10 +438,7 @@ impl Renderer {
             preview: preview.clone(),
             ghosts: ghosts.clone(),
             camera: config.camera,
-            aperture: config.effects.iter().find_map(|e| match e {
-                aureole::Effect::Aperture(a) => Some(a.clone()),
-                _ => None,
-            }),
+            aperture: config.first_aperture().cloned(),
         };
         if let Some((kept, ghosted)) = locked(&self.ghosts).as_ref() {
             if kept.is(&key) {

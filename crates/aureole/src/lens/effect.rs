@@ -17,7 +17,7 @@ use crate::camera::CameraGeometry;
 use crate::error::{Error, Result};
 use crate::optics::aperture::pupil::Pupil;
 use crate::optics::Aperture;
-use crate::schema::{Default, Kind, Parameter};
+use crate::schema::{flag, Default, Kind, Parameter};
 
 /// The `type` a config names the ghosts by.
 pub const KIND: &str = "ghosts";
@@ -58,16 +58,11 @@ const THRESHOLD: Parameter = Parameter {
     about: "Pixels brighter than this are light sources; touching ones make one source.",
 };
 
-const SPECTRAL: Parameter = Parameter {
-    name: "spectral",
-    kind: Kind::Flag,
-    low: None,
-    high: None,
-    default: Default::Flag(false),
-    unit: "",
-    allowed: "true or false",
-    about: "Trace 17 wavelengths from 380 to 780 nm rather than one per channel.",
-};
+const SPECTRAL: Parameter = flag(
+    "spectral",
+    false,
+    "Trace 17 wavelengths from 380 to 780 nm rather than one per channel.",
+);
 
 /// The lens a config's ghosts are traced through, and how it was named.
 #[derive(Debug, Clone, PartialEq)]

@@ -10,7 +10,7 @@
 
 use super::canvas::{Canvas, Patch, Quads};
 use super::passage::{coarse, found, front, may_pass, search, Square};
-use super::trace::{Arrival, Layout, Path, Ray, Route, Vector};
+use super::trace::{Arrival, Layout, Path, Route, Vector};
 use crate::control::Cancel;
 
 /// A sensor of `width`×`height` pixels of `pitch_mm`, the optical axis
@@ -67,25 +67,6 @@ const PIECES: usize = 4;
 /// STRIDE-th ray each way ([`Bundle::beside`]).
 const STRIDE: usize = 2;
 
-/// Bilinear interpolation between a cell's corners (0, 0), (1, 0), (1, 1)
-/// and (0, 1), at (s, t).
-fn bilinear<const N: usize>(corners: [[f64; N]; 4], (s, t): (f64, f64)) -> [f64; N] {
-    let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
-    std::array::from_fn(|n| (0..4).map(|k| w[k] * corners[k][n]).sum())
-}
-
-/// The rays of a bundle over `square` from direction `field`: at every
-/// `stride`-th grid position each way, rows of constant pupil y.
-fn grid(layout: &Layout, field: Vector, square: Square, stride: usize) -> Vec<Ray> {
-    let side = GRID / stride + 1;
-    (0..side * side)
-        .map(|k| {
-            let (i, j) = (stride * (k % side), stride * (k / side));
-            layout.collimated(field, square.point(GRID, i as f64, j as f64))
-        })
-        .collect()
-}
-
 /// A value interpolated bilinearly over a cell, as a + b s + c t + d s t.
 #[derive(Debug, Clone, Copy)]
 struct Bilinear([f64; 4]);
@@ -116,7 +97,7 @@ struct Bundle<'l, 'a> {
 
 impl<'l, 'a> Bundle<'l, 'a> {
     fn new(layout: &'l Layout<'a>, route: Route, field: Vector, square: Square) -> Bundle<'l, 'a> {
-        let rays = layout.follow_unclipped_all(&route, &grid(layout, field, square, 1));
+        let rays = layout.follow_unclipped_all(&route, &square.rays(layout, field, GRID, 1));
         Bundle {
             layout,
             route,
@@ -128,7 +109,7 @@ impl<'l, 'a> Bundle<'l, 'a> {
 
     /// This bundle along `route`, the same path at another wavelength,
     /// given its rays at every STRIDE-th grid position each way
-    /// (`traced`, [`grid`]); the others
+    /// (`traced`, [`Square::rays`]); the others
     /// this bundle's moved by the difference between the two bundles
     /// at the traced rays about them, interpolated. Dispersion moves a
     /// bundle's rays little and smoothly, so that the difference varies
@@ -276,13 +257,13 @@ impl<'l, 'a> Bundle<'l, 'a> {
     ) {
         const POINTS: usize = RIM * RIM;
         let crossings = corners[0].stop.points().len();
-        let landing = corners.map(|c| [c.at[0], c.at[1], c.at[2], c.weight]);
+        let landing: [Bilinear; 4] = std::array::from_fn(|n| {
+            Bilinear::through(corners.map(|c| if n < 3 { c.at[n] } else { c.weight }))
+        });
         let at = |u: usize, v: usize| {
-            let l = bilinear(
-                landing,
-                (u as f64 / PIECES as f64, v as f64 / PIECES as f64),
-            );
-            ([l[0], l[1], l[2]], l[3])
+            let st = (u as f64 / PIECES as f64, v as f64 / PIECES as f64);
+            let [x, y, z, weight] = landing.map(|l| l.at(st));
+            ([x, y, z], weight)
         };
         let margin = Bilinear::through(corners.map(|c| c.margin));
         let stop: [[Bilinear; 2]; 3] = std::array::from_fn(|n| {
@@ -290,10 +271,10 @@ impl<'l, 'a> Bundle<'l, 'a> {
                 Bilinear::through(corners.map(|c| c.stop.points().get(n).map_or(0.0, |p| p[xy])))
             })
         });
+        let piece = |t: f64| ((t * PIECES as f64) as usize).min(PIECES - 1);
         let mut passing = [0usize; PIECES * PIECES];
         for k in 0..POINTS {
-            let bits = POINTS.trailing_zeros();
-            let reversed = (k as u32).reverse_bits() >> (32 - bits);
+            let reversed = (k as u32).reverse_bits() >> (32 - POINTS.trailing_zeros());
             let (x, y) = (
                 (k as f64 + 0.5) / POINTS as f64,
                 (f64::from(reversed) + 0.5) / POINTS as f64,
@@ -307,7 +288,6 @@ impl<'l, 'a> Bundle<'l, 'a> {
                     .iter()
                     .all(|[x, y]| self.layout.opens([x.at(centre), y.at(centre)]));
             if passes {
-                let piece = |t: f64| ((t * PIECES as f64) as usize).min(PIECES - 1);
                 passing[piece(centre.1) * PIECES + piece(centre.0)] += 1;
             }
         }
@@ -466,8 +446,7 @@ fn draw(
 ) -> crate::Result<Vec<Vec<Patch>>> {
     use rayon::prelude::*;
     let Some(square) = square else {
-        let none = Patch::draw(&Vec::new(), 0.0, sensor, 2 * GRID);
-        return Ok(vec![vec![none; nms.len()]; paths.len()]);
+        return Ok(vec![vec![Patch::default(); nms.len()]; paths.len()]);
     };
     let patch = |bundle: &Bundle| {
         let mut quads: Quads = Vec::new();
@@ -482,7 +461,7 @@ fn draw(
     let routes = |nm| -> Vec<Route> { paths.iter().map(|&p| layout.route(p, nm)).collect() };
     let middle = nms.len() / 2;
     let at_middle = routes(nms[middle]);
-    let traced = layout.follow_unclipped_routes(&at_middle, &grid(layout, field, square, 1));
+    let traced = layout.follow_unclipped_routes(&at_middle, &square.rays(layout, field, GRID, 1));
     let bases: Vec<Bundle> = at_middle
         .into_iter()
         .zip(traced)
@@ -502,7 +481,7 @@ fn draw(
         } else {
             let routes = routes(nm);
             let traced =
-                layout.follow_unclipped_routes(&routes, &grid(layout, field, square, STRIDE));
+                layout.follow_unclipped_routes(&routes, &square.rays(layout, field, GRID, STRIDE));
             bases
                 .par_iter()
                 .zip(routes.into_par_iter().zip(traced))
@@ -672,10 +651,6 @@ pub fn trace(
         .map(|&p| layout.route(paths[p], middle))
         .collect();
     let searched = layout.follow_unclipped_routes(&routes, &coarse(layout, field, entrance));
-    let mut squares = vec![front; paths.len()];
-    for (&p, rays) in others.iter().zip(&searched) {
-        squares[p] = found(layout, entrance, rays);
-    }
     let nms: Vec<f64> = light.iter().map(|l| l.0).collect();
     // The paths that meet the stop first together, sharing their way in;
     // then every other on its own; kept in the paths' order. Each hears
@@ -692,9 +667,10 @@ pub fn trace(
     )?;
     let alone: Vec<Vec<Patch>> = others
         .par_iter()
-        .map(|&p| {
+        .zip(&searched)
+        .map(|(&p, rays)| {
             cancel.check()?;
-            let one = (&paths[p..=p], squares[p]);
+            let one = (&paths[p..=p], found(layout, entrance, rays));
             Ok(draw(layout, one, (field, &nms), (1.0, 1.0), (sensor, &cancel))?.swap_remove(0))
         })
         .collect::<crate::Result<_>>()?;

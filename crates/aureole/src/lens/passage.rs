@@ -38,6 +38,24 @@ impl Square {
         (u * c - v * s, u * s + v * c)
     }
 
+    /// The rays from direction `field` at every `stride`-th position each
+    /// way of a grid of `cells` across, rows of constant pupil y.
+    pub(super) fn rays(
+        &self,
+        layout: &Layout,
+        field: Vector,
+        cells: usize,
+        stride: usize,
+    ) -> Vec<Ray> {
+        let side = cells / stride + 1;
+        (0..side * side)
+            .map(|k| {
+                let (i, j) = (stride * (k % side), stride * (k / side));
+                layout.collimated(field, self.point(cells, i as f64, j as f64))
+            })
+            .collect()
+    }
+
     /// The least square on the line about the box from `lo` to `hi`
     /// (along and across the azimuth).
     fn about(lo: (f64, f64), hi: (f64, f64), axis: (f64, f64)) -> Square {
@@ -119,13 +137,7 @@ pub(super) fn search_in(
 
 /// The rays of a search over `within` from direction `field`.
 pub(super) fn coarse(layout: &Layout, field: Vector, within: Square) -> Vec<Ray> {
-    let side = COARSE + 1;
-    (0..side * side)
-        .map(|k| {
-            let (px, py) = within.point(COARSE, (k % side) as f64, (k / side) as f64);
-            layout.collimated(field, (px, py))
-        })
-        .collect()
+    within.rays(layout, field, COARSE, 1)
 }
 
 /// Where a search over `within` found the light, from its `rays`.

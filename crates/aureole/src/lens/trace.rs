@@ -422,36 +422,22 @@ impl<'a> Layout<'a> {
         self.walk(route, ray, false)
     }
 
-    /// `rays` along a [`Route`] as [`Layout::follow_unclipped`], several
-    /// at a time: each ray's steps are a long chain of dependent square
-    /// roots and divisions, and rays side by side keep the processor busy
-    /// while each waits (the same arithmetic, so the same bits, as one at
-    /// a time).
+    /// `rays` along a [`Route`] as [`Layout::follow_unclipped`], all
+    /// together ([`Layout::follow_unclipped_routes`] of one route).
     pub fn follow_unclipped_all(&self, route: &Route, rays: &[Ray]) -> Vec<Option<Arrival>> {
-        let mut arrivals = Vec::with_capacity(rays.len());
-        for chunk in rays.chunks(LANES) {
-            let mut lanes = [Lane::new(chunk[0]); LANES];
-            for (lane, &ray) in lanes.iter_mut().zip(chunk) {
-                *lane = Lane::new(ray);
-            }
-            let lanes = &mut lanes[..chunk.len()];
-            for step in &route.steps {
-                for lane in lanes.iter_mut() {
-                    if lane.alive {
-                        lane.alive = self.advance(route.nm, step, lane, false).is_some();
-                    }
-                }
-            }
-            arrivals.extend(lanes.iter().map(|lane| self.land(lane)));
-        }
-        arrivals
+        self.follow_unclipped_routes(std::slice::from_ref(route), rays)
+            .pop()
+            .unwrap_or_default()
     }
 
     /// `rays` along each of `routes` (at one wavelength) as
-    /// [`Layout::follow_unclipped_all`], one list for each route: the
-    /// steps routes share from the start (a ghost's way in, up to its
-    /// first reflection, is every other's that reflects later) are taken
-    /// once for them all, the same arithmetic as each alone.
+    /// [`Layout::follow_unclipped`], one list for each route. The rays go
+    /// through each surface side by side: a ray's steps are a long chain
+    /// of dependent square roots and divisions, and its neighbours keep
+    /// the processor busy while it waits. The steps routes share from the
+    /// start (a ghost's way in, up to its first reflection, is every
+    /// other's that reflects later) are taken once for them all. The
+    /// arithmetic is each ray's alone, so the bits are too.
     pub fn follow_unclipped_routes(
         &self,
         routes: &[Route],
@@ -488,7 +474,7 @@ impl<'a> Layout<'a> {
         nm: f64,
         (routes, members): (&[Route], &[usize]),
         depth: usize,
-        lanes: Vec<Lane>,
+        mut lanes: Vec<Lane>,
         out: &mut [Vec<Option<Arrival>>],
     ) {
         let mut groups: Vec<Vec<usize>> = Vec::new();
@@ -504,13 +490,13 @@ impl<'a> Layout<'a> {
                 },
             }
         }
-        let mut lanes = Some(lanes);
-        let count = groups.len();
-        for (g, group) in groups.into_iter().enumerate() {
-            let mut lanes = if g + 1 == count {
-                lanes.take().unwrap_or_default()
+        let mut groups = groups.into_iter().peekable();
+        while let Some(group) = groups.next() {
+            // The last group takes the lanes; the others copies.
+            let mut lanes = if groups.peek().is_some() {
+                lanes.clone()
             } else {
-                lanes.clone().unwrap_or_default()
+                std::mem::take(&mut lanes)
             };
             // On while every route of the group goes on alike.
             let first = &routes[group[0]].steps;
@@ -601,9 +587,6 @@ impl<'a> Layout<'a> {
         })
     }
 }
-
-/// Rays traced side by side ([`Layout::follow_unclipped_all`]).
-const LANES: usize = 8;
 
 /// A ray on its way along a route: where it is, what it carries, and
 /// what it met.

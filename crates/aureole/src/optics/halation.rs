@@ -23,7 +23,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::schema::{fraction, length, Default, Kind, Parameter};
+use crate::schema::{flag, fraction, length, Default, Kind, Parameter};
 
 use super::shape::{self, SpreadShape, Supersampling, CHUNK_POINTS};
 use super::whole::{self, Whole, Window};
@@ -120,16 +120,11 @@ const REFLECTANCE: Parameter = Parameter {
     about: "R₀: the base's back surface at normal incidence; sets the critical angle too",
 };
 
-const REMJET: Parameter = Parameter {
-    name: "remjet",
-    kind: Kind::Flag,
-    low: None,
-    high: None,
-    default: Default::Flag(false),
-    unit: "",
-    allowed: "true or false",
-    about: "the anti-halation backing: on, only a trace of halo; off, a red halo",
-};
+const REMJET: Parameter = flag(
+    "remjet",
+    false,
+    "the anti-halation backing: on, only a trace of halo; off, a red halo",
+);
 
 const REMJET_RESIDUAL: Parameter = fraction(
     "remjet_residual",

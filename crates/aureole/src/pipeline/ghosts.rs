@@ -14,7 +14,7 @@ use crate::error::Result;
 use crate::image::{Image, Layout as Planes, PixelLuminance};
 use crate::lens::canvas::Canvas;
 use crate::lens::effect::{GhostOptics, Ghosts};
-use crate::lens::ghost::{trace, Sensor};
+use crate::lens::ghost::{trace, Sensor, Traced};
 use crate::lens::trace::{Layout, Path, Vector};
 
 /// Where a frame's display window lies in its pixels: a frame with
@@ -162,6 +162,44 @@ fn aim(layout: &Layout, focal_mm: f64, target: (f64, f64), nm: f64) -> Vector {
     direction(t)
 }
 
+/// `source`'s ghosts (`drawn`) painted on `canvas` and their light taken
+/// out of the source's pixels in `scene`: the input is what the lens
+/// brought from the source, its own image and its ghosts together.
+/// Returns the ghosts' share of its luminance over its image's.
+fn share_out(
+    image: &Image,
+    (scene, canvas): (&mut Image, &mut Canvas),
+    source: &Source,
+    drawn: &Traced,
+) -> f64 {
+    let weights = image.luminance_weights().map(f64::from);
+    let y_share: f64 = weights.iter().zip(&drawn.light).map(|(w, g)| w * g).sum();
+    // Each channel's share of the source.
+    let shares: Vec<f64> = match image.layout {
+        Planes::Rgb => drawn.light.clone(),
+        Planes::Luminance => vec![y_share],
+    };
+    let mut mix = Vec::with_capacity(scene.planes.len());
+    for (c, plane) in scene.planes.iter_mut().enumerate() {
+        let g = shares[c];
+        let power: f64 = source
+            .pixels
+            .iter()
+            .map(|&i| f64::from(image.planes[c][i]))
+            .sum();
+        let direct = power / (1.0 + g);
+        for &i in &source.pixels {
+            plane[i] -= (f64::from(image.planes[c][i]) * g / (1.0 + g)) as f32;
+        }
+        mix.push(match image.layout {
+            Planes::Rgb => (0..3).map(|k| if k == c { direct } else { 0.0 }).collect(),
+            Planes::Luminance => weights.iter().map(|w| w * direct).collect(),
+        });
+    }
+    drawn.paint(canvas, &mix);
+    y_share
+}
+
 /// `image` with the ghosts of its brightest sources, traced through
 /// `optics`: each source's ghosts add its light times each path's share,
 /// and the source keeps the rest, so that no light is made (what falls
@@ -179,7 +217,6 @@ pub(crate) fn add_ghosts(
     let traced = found.len().min(ghosts.sources as usize);
     let focal_mm = optics.lens.paraxial()?.focal_length * optics.lens.mm_per_unit;
     let green = optics.light[optics.light.len() / 2].0;
-    let weights = image.luminance_weights().map(f64::from);
     let mut scene = image.clone();
     // Every source's ghosts on one canvas, its levels added up once.
     let mut canvas = Canvas::new(sensor, image.planes.len());
@@ -211,31 +248,7 @@ pub(crate) fn add_ghosts(
         done += sources.len();
         control.report(done as f64 / traced as f64);
         for (source, drawn) in sources.iter().zip(traced_here) {
-            // Each channel's share of the source: the input is what the lens
-            // brought from it, its own image and its ghosts together.
-            let y_share: f64 = weights.iter().zip(&drawn.light).map(|(w, g)| w * g).sum();
-            let shares: Vec<f64> = match image.layout {
-                Planes::Rgb => drawn.light.clone(),
-                Planes::Luminance => vec![y_share],
-            };
-            let mut mix = Vec::with_capacity(scene.planes.len());
-            for (c, plane) in scene.planes.iter_mut().enumerate() {
-                let g = shares[c];
-                let power: f64 = source
-                    .pixels
-                    .iter()
-                    .map(|&i| f64::from(image.planes[c][i]))
-                    .sum();
-                let direct = power / (1.0 + g);
-                for &i in &source.pixels {
-                    plane[i] -= (f64::from(image.planes[c][i]) * g / (1.0 + g)) as f32;
-                }
-                mix.push(match image.layout {
-                    Planes::Rgb => (0..3).map(|k| if k == c { direct } else { 0.0 }).collect(),
-                    Planes::Luminance => weights.iter().map(|w| w * direct).collect(),
-                });
-            }
-            drawn.paint(&mut canvas, &mix);
+            let y_share = share_out(image, (&mut scene, &mut canvas), source, &drawn);
             ghost_light += source.luminance * y_share / (1.0 + y_share);
             source_light += source.luminance;
         }

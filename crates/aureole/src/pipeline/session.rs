@@ -394,11 +394,7 @@ impl Session {
             return Ok(None);
         };
         let window = frame.display_window();
-        let aperture = config.effects.iter().find_map(|e| match e {
-            crate::Effect::Aperture(a) => Some(a),
-            _ => None,
-        });
-        let optics = traced.optics(&config.camera, aperture, window.width)?;
+        let optics = traced.optics(&config.camera, config.first_aperture(), window.width)?;
         let mut report = |f| progress(Stage::TracingGhosts, f);
         let mut control = Control::new(&self.cancel, &mut report);
         let (scene, summary) = ghosts::add_ghosts(

@@ -16,7 +16,7 @@ use std::f64::consts::{PI, TAU};
 
 use serde::{Deserialize, Serialize};
 
-use crate::schema::{Default, Kind, Parameter};
+use crate::schema::{flag, Default, Kind, Parameter};
 
 use super::{Context, Model, Source};
 use crate::camera::CameraGeometry;
@@ -207,16 +207,11 @@ const ROUNDNESS: Parameter = fraction(
     "0 (straight blades) to 1 (a circle)",
     "0 straight blades … 1 a circle through their tips",
 );
-const SPECTRAL: Parameter = Parameter {
-    name: "spectral",
-    kind: Kind::Flag,
-    low: None,
-    high: None,
-    default: Default::Flag(true),
-    unit: "",
-    allowed: "true or false",
-    about: "17 wavelengths into R, G, B; false: one, wavelength_nm",
-};
+const SPECTRAL: Parameter = flag(
+    "spectral",
+    true,
+    "17 wavelengths into R, G, B; false: one, wavelength_nm",
+);
 const WAVELENGTH: Parameter = Parameter {
     name: "wavelength_nm",
     kind: Kind::Number,
@@ -566,11 +561,8 @@ pub(crate) fn orders_reach(pitch_mm: f64, (width, height): (usize, usize)) -> f6
 /// from the config's seed as for its kernel (without a filter's orders);
 /// `None` without an aperture.
 pub fn first_optics(config: &crate::Config) -> Result<Option<Optics>> {
-    let first = config.effects.iter().find_map(|e| match e {
-        super::Effect::Aperture(a) => Some(a),
-        _ => None,
-    });
-    first
+    config
+        .first_aperture()
         .map(|a| a.optics(&config.camera, 0.0, super::stream(config.seed, 0)))
         .transpose()
 }
