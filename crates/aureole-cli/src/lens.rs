@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::PathBuf;
 
-use aureole::lens::{Coating, Lens, Medium};
+use aureole::lens::{Coating, Lens, Medium, Paraxial};
 use aureole_io::lenses::{read_lens, write_lens};
 
 use crate::Failure;
@@ -118,20 +118,24 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     if let Some(out) = &args.ghosts {
         ghosts(args, &lens, out, quiet)?;
     }
+    let horizontal = lens
+        .paraxial_x()
+        .map_err(|e| Failure::Usage(anyhow::anyhow!("{}: {e}", args.file.display())))?;
     let text = if args.json {
-        json(&lens, &paraxial)
+        json(&lens, (&paraxial, &horizontal))
     } else if quiet {
         return Ok(());
     } else {
-        describe(&lens, &paraxial)
+        describe(&lens, (&paraxial, &horizontal))
     };
     let _ = std::io::stdout().lock().write_all(text.as_bytes());
     Ok(())
 }
 
-/// What scripts read of a lens: its first-order data and what its patent
-/// states, in the prescription's units (mm × `mm_per_unit`).
-fn json(lens: &Lens, p: &aureole::lens::Paraxial) -> String {
+/// What scripts read of a lens: its first-order data (vertical, and the
+/// horizontal `_x` ones, which differ for an anamorphic lens) and what its
+/// patent states, in the prescription's units (mm × `mm_per_unit`).
+fn json(lens: &Lens, (p, x): (&Paraxial, &Paraxial)) -> String {
     let patent = lens.patent.as_ref().map(|patent| {
         serde_json::json!({
             "number": patent.number,
@@ -152,13 +156,16 @@ fn json(lens: &Lens, p: &aureole::lens::Paraxial) -> String {
         "entrance_pupil": p.entrance_pupil,
         "entrance_pupil_radius": p.entrance_pupil_radius,
         "f_number": p.f_number,
+        "focal_length_x": x.focal_length,
+        "back_focus_x": x.back_focus,
+        "squeeze": p.focal_length / x.focal_length,
     });
     format!("{value:#}\n")
 }
 
 /// What a user reads of a lens: its first-order data, what its patent
 /// states beside ours, and its surfaces.
-fn describe(lens: &Lens, p: &aureole::lens::Paraxial) -> String {
+fn describe(lens: &Lens, (p, x): (&Paraxial, &Paraxial)) -> String {
     let mut out = String::new();
     let mm = lens.mm_per_unit;
     let _ = writeln!(out, "{}", lens.name);
@@ -185,6 +192,16 @@ fn describe(lens: &Lens, p: &aureole::lens::Paraxial) -> String {
         p.entrance_pupil * mm,
         2.0 * p.entrance_pupil_radius * mm
     );
+    let anamorphic = lens.is_anamorphic();
+    if anamorphic {
+        let _ = writeln!(
+            out,
+            "anamorphic: across x focal length {:.3} mm, back focus {:.3} mm; a squeeze of {:.3}",
+            x.focal_length * mm,
+            x.back_focus * mm,
+            p.focal_length / x.focal_length
+        );
+    }
     if let Some(patent) = &lens.patent {
         for (what, stated, ours) in [
             ("focal length", patent.focal_length, p.focal_length),
@@ -201,14 +218,22 @@ fn describe(lens: &Lens, p: &aureole::lens::Paraxial) -> String {
     }
     let _ = writeln!(
         out,
-        "\n  #       radius   thickness      n_d     V_d  semi-aperture  coating"
+        "\n  #       radius{}   thickness      n_d     V_d  semi-aperture  coating",
+        if anamorphic { "     radius y" } else { "" }
     );
+    let shown = |r: Option<f64>| r.map_or("flat".to_string(), |r| format!("{:.4}", r * mm));
     for (i, s) in lens.surfaces.iter().enumerate() {
-        let radius = match (s.stop, s.radius) {
-            (true, _) => "stop".to_string(),
-            (false, None) => "flat".to_string(),
-            (false, Some(r)) => format!("{:.4}", r * mm),
+        let mut radius = match s.stop {
+            true => "stop".to_string(),
+            false => shown(s.radius),
         };
+        if anamorphic {
+            let across_y = match s.stop {
+                true => String::new(),
+                false => shown(s.radius_y.unwrap_or(s.radius)),
+            };
+            radius = format!("{radius:>12} {across_y:>12}");
+        }
         let (n_d, v_d) = match s.medium {
             Medium::Glass { n_d, v_d } if !s.stop => (
                 format!("{n_d:.5}"),

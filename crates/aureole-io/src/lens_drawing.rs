@@ -23,14 +23,15 @@ pub fn svg(lens: &Lens) -> String {
     let mm = lens.mm_per_unit;
     let mut z = 0.0;
     // Each surface's vertex, radius of curvature and clear semi-aperture,
-    // mm.
+    // mm: the vertical section, an anamorphic surface's y–z curve.
     let surfaces: Vec<(f64, Option<f64>, f64)> = lens
         .surfaces
         .iter()
         .map(|s| {
             let here = z;
             z += s.thickness * mm;
-            (here, s.radius.map(|r| r * mm), s.semi_aperture * mm)
+            let radius = s.radius_y.unwrap_or(s.radius);
+            (here, radius.map(|r| r * mm), s.semi_aperture * mm)
         })
         .collect();
     let last = surfaces.last().map_or(0.0, |s| s.0);

@@ -159,6 +159,7 @@ fn pbrt(text: &str, stem: &str) -> std::result::Result<(String, Vec<Surface>), S
         };
         surfaces.push(Surface {
             radius: (!stop).then_some(radius),
+            radius_y: None,
             thickness,
             medium,
             semi_aperture: aperture / 2.0,
@@ -222,11 +223,19 @@ fn lentil(
             .get("lens-geometry")
             .and_then(|v| v.as_str())
             .unwrap_or("spherical");
-        if geometry != "spherical" {
-            return Err(at(&format!(
-                "its surface is {geometry}: only spherical surfaces are read yet"
-            )));
-        }
+        // lentil's cylinders are named by their axis: "cyl-y" runs along
+        // y, so it curves across x (its tracer drops y from the distance
+        // to the axis), and "cyl-x" curves across y.
+        let curved = match geometry {
+            "spherical" => None,
+            "cyl-y" => Some(true),
+            "cyl-x" => Some(false),
+            _ => {
+                return Err(at(&format!(
+                    "its surface is {geometry}: spherical and cylindrical (cyl-x, cyl-y) surfaces are read, aspheric ones not yet"
+                )))
+            }
+        };
         let material = element
             .get("material")
             .and_then(|v| v.as_str())
@@ -248,8 +257,15 @@ fn lentil(
                 v_d: number_of(element, "abbe").filter(|v| *v > 0.0),
             }
         };
+        let (radius, radius_y) = match curved {
+            _ if stop => (None, None),
+            None => (Some(radius), None),
+            Some(true) => (Some(radius), Some(None)),
+            Some(false) => (None, Some(Some(radius))),
+        };
         surfaces.push(Surface {
-            radius: (!stop).then_some(radius),
+            radius,
+            radius_y,
             thickness,
             medium,
             semi_aperture,
@@ -389,6 +405,7 @@ fn optical_bench(text: &str) -> std::result::Result<Bench, String> {
         }
         surfaces.push(Surface {
             radius,
+            radius_y: None,
             thickness,
             medium,
             semi_aperture: diameter / 2.0,
@@ -490,5 +507,31 @@ mod tests {
         );
         let error = lentil(json, Some("9")).unwrap_err();
         assert!(error.contains("no lens with id \"9\""), "{error}");
+    }
+
+    #[test]
+    fn lentils_cylinders_curve_across_the_axis_they_are_not_named_by() {
+        let json = r#"{"3": {"product-name": "rear-anamorph", "optical-elements-patent": [
+              {"radius": 99999, "thickness": 2, "housing-radius": 5, "material": "iris", "lens-geometry": "spherical"},
+              {"radius": 136.373, "thickness": 2.444, "ior": 1.816, "abbe": 46.62, "housing-radius": 14, "material": "SLAH59", "lens-geometry": "cyl-y"},
+              {"radius": -176.528, "thickness": 5, "ior": null, "housing-radius": 14, "material": "air", "lens-geometry": "cyl-x"},
+              {"radius": 50, "thickness": 5, "ior": 1.5, "housing-radius": 14, "material": "x", "lens-geometry": "aspherical"}
+            ]}}"#;
+        let error = lentil(json, None).unwrap_err();
+        assert!(
+            error.contains("element 4") && error.contains("aspherical"),
+            "{error}"
+        );
+        let cut = json.replacen("aspherical", "spherical", 1);
+        let (_, _, surfaces) = lentil(&cut, None).unwrap();
+        assert_eq!(
+            (surfaces[1].radius, surfaces[1].radius_y),
+            (Some(136.373), Some(None))
+        );
+        assert_eq!(
+            (surfaces[2].radius, surfaces[2].radius_y),
+            (None, Some(Some(-176.528)))
+        );
+        assert!(surfaces[3].is_round() && surfaces[0].stop);
     }
 }

@@ -87,8 +87,15 @@ pub struct Patent {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Surface {
     /// Radius of curvature, positive when its centre lies behind it
-    /// (towards the image); `None` for a plane.
+    /// (towards the image); `None` for a plane. Across the x–z plane only
+    /// where `radius_y` is given.
     pub radius: Option<f64>,
+    /// An anamorphic surface's radius across the y–z plane, where it
+    /// differs from `radius` (`Some(None)`: flat that way): a cylinder
+    /// when one of the two is flat, else a torus, the y–z section's circle
+    /// turned about an axis parallel to y through the x–z section's
+    /// centre. `None`: the surface is turned about the lens's axis.
+    pub radius_y: Option<Option<f64>>,
     /// Distance along the axis to the next surface (after the last: to
     /// the image plane as designed, 0 where not given).
     pub thickness: f64,
@@ -116,6 +123,20 @@ pub enum Medium {
         /// V_d = (n_d − 1) / (n_F − n_C).
         v_d: Option<f64>,
     },
+}
+
+impl Surface {
+    /// Its curvatures across the x–z and the y–z plane, per unit of the
+    /// prescription: 1/R, 0 where flat.
+    pub fn curvatures(&self) -> (f64, f64) {
+        let of = |r: Option<f64>| r.map_or(0.0, |r| 1.0 / r);
+        (of(self.radius), of(self.radius_y.unwrap_or(self.radius)))
+    }
+
+    /// Whether it is turned about the lens's axis (a sphere or a plane).
+    pub fn is_round(&self) -> bool {
+        self.radius_y.is_none_or(|y| y == self.radius)
+    }
 }
 
 impl Medium {
@@ -221,9 +242,29 @@ impl Lens {
         self.surfaces.iter().position(|s| s.stop).unwrap_or(0)
     }
 
-    /// The paraxial data at the d line, in the prescription's units.
+    /// The paraxial data at the d line, in the prescription's units, in
+    /// the y–z plane: an anamorphic lens is named by its vertical focal
+    /// length, as cinema's are.
     pub fn paraxial(&self) -> crate::Result<Paraxial> {
-        paraxial::trace(self, D_LINE_NM)
+        paraxial::trace(self, D_LINE_NM, paraxial::Meridian::Y)
+    }
+
+    /// The same in the x–z plane: the same as [`Lens::paraxial`] unless
+    /// the lens is anamorphic.
+    pub fn paraxial_x(&self) -> crate::Result<Paraxial> {
+        paraxial::trace(self, D_LINE_NM, paraxial::Meridian::X)
+    }
+
+    /// Whether some surface is not turned about the axis.
+    pub fn is_anamorphic(&self) -> bool {
+        !self.surfaces.iter().all(Surface::is_round)
+    }
+
+    /// The anamorphic squeeze: the vertical focal length over the
+    /// horizontal (1 for a round lens; 2 for a lens that puts twice the
+    /// width of its height's view on the sensor).
+    pub fn squeeze(&self) -> crate::Result<f64> {
+        Ok(self.paraxial()?.focal_length / self.paraxial_x()?.focal_length)
     }
 
     /// The medium in front of surface `i`: air before the first.

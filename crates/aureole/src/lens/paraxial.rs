@@ -4,7 +4,9 @@
 //! y ← y + t u′ to the next. Two rays give a lens's first-order data: one
 //! parallel to the axis (focal length, back focus, the marginal height at
 //! the stop) and one through the first vertex (where the stop's image,
-//! the entrance pupil, lies).
+//! the entrance pupil, lies). An anamorphic lens is traced in its x–z
+//! and y–z planes apart, each surface with its curvature across that
+//! plane: a paraxial ray in one never leaves it.
 
 use super::{Lens, Medium};
 use crate::error::{Error, Result};
@@ -27,6 +29,15 @@ pub struct Paraxial {
     pub f_number: f64,
 }
 
+/// The plane through the axis a paraxial ray stays in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Meridian {
+    /// The x–z plane: the horizontal.
+    X,
+    /// The y–z plane: the vertical.
+    Y,
+}
+
 /// A paraxial ray: height, and angle in the medium it is in.
 #[derive(Debug, Clone, Copy)]
 struct Ray {
@@ -36,7 +47,7 @@ struct Ray {
 
 /// A ray through every surface: its height at each, and its angle after
 /// the last.
-fn through(lens: &Lens, nm: f64, mut ray: Ray) -> (Vec<f64>, f64) {
+fn through(lens: &Lens, (nm, meridian): (f64, Meridian), mut ray: Ray) -> (Vec<f64>, f64) {
     let mut heights = Vec::with_capacity(lens.surfaces.len());
     let mut n = 1.0;
     for (i, surface) in lens.surfaces.iter().enumerate() {
@@ -45,16 +56,17 @@ fn through(lens: &Lens, nm: f64, mut ray: Ray) -> (Vec<f64>, f64) {
         }
         heights.push(ray.y);
         let after = surface.medium.index_at(nm);
-        let curvature = surface.radius.map_or(0.0, |r| 1.0 / r);
+        let (cx, cy) = surface.curvatures();
+        let curvature = if meridian == Meridian::X { cx } else { cy };
         ray.u = (n * ray.u - ray.y * curvature * (after - n)) / after;
         n = after;
     }
     (heights, ray.u)
 }
 
-/// The paraxial data of `lens` at `nm`, refused where the lens forms no
-/// real image of a distant object.
-pub fn trace(lens: &Lens, nm: f64) -> Result<Paraxial> {
+/// The paraxial data of `lens` at `nm` in `meridian`, refused where the
+/// lens forms no real image of a distant object.
+pub fn trace(lens: &Lens, nm: f64, meridian: Meridian) -> Result<Paraxial> {
     let refuse = |message: String| Error::Lens {
         name: lens.name.clone(),
         message,
@@ -64,7 +76,7 @@ pub fn trace(lens: &Lens, nm: f64) -> Result<Paraxial> {
             "the last surface must leave the light in air (no n_d after it)".into(),
         ));
     }
-    let (heights, u) = through(lens, nm, Ray { y: 1.0, u: 0.0 });
+    let (heights, u) = through(lens, (nm, meridian), Ray { y: 1.0, u: 0.0 });
     let last = heights.last().copied().unwrap_or(1.0);
     let focal_length = -1.0 / u;
     if !focal_length.is_finite() || focal_length <= 0.0 {
@@ -78,7 +90,7 @@ pub fn trace(lens: &Lens, nm: f64) -> Result<Paraxial> {
     // ray, and the object side sees the stop where it meets the axis.
     let stop = lens.stop();
     let marginal = heights[stop];
-    let (chief, _) = through(lens, nm, Ray { y: 0.0, u: 1.0 });
+    let (chief, _) = through(lens, (nm, meridian), Ray { y: 0.0, u: 1.0 });
     if marginal == 0.0 {
         return Err(refuse(
             "a ray parallel to the axis crosses it at the stop: no light passes the stop's opening"
@@ -104,6 +116,7 @@ mod tests {
     fn surface(radius: Option<f64>, thickness: f64, medium: Medium) -> Surface {
         Surface {
             radius,
+            radius_y: None,
             thickness,
             medium,
             semi_aperture: 5.0,
@@ -138,7 +151,7 @@ mod tests {
             surface(Some(r1), d, GLASS),
             surface(Some(r2), 0.0, Medium::Air),
         ]);
-        let p = trace(&lens, 587.5618).unwrap();
+        let p = trace(&lens, 587.5618, Meridian::Y).unwrap();
         let f = 1.0 / ((n - 1.0) * (1.0 / r1 - 1.0 / r2 + (n - 1.0) * d / (n * r1 * r2)));
         assert!(
             (p.focal_length - f).abs() < 1e-9 * f,
@@ -165,7 +178,8 @@ mod tests {
         let mut stop = surface(None, 10.0, Medium::Air);
         stop.stop = true;
         stop.semi_aperture = 4.0;
-        let p = trace(&lens(vec![first, second, stop]), 587.5618).unwrap_or_else(|e| panic!("{e}"));
+        let p = trace(&lens(vec![first, second, stop]), 587.5618, Meridian::Y)
+            .unwrap_or_else(|e| panic!("{e}"));
         assert!((p.focal_length - 100.0).abs() < 1e-9);
         assert!(
             (p.entrance_pupil - 100.0).abs() < 1e-9,
@@ -185,7 +199,7 @@ mod tests {
             surface(Some(-50.0), 3.0, GLASS),
             surface(Some(50.0), 0.0, Medium::Air),
         ]);
-        let error = trace(&lens, 587.5618).unwrap_err().to_string();
+        let error = trace(&lens, 587.5618, Meridian::Y).unwrap_err().to_string();
         assert!(error.contains("positive"), "{error}");
     }
 }

@@ -39,6 +39,7 @@ struct RawPatent {
 #[serde(deny_unknown_fields)]
 struct RawSurface {
     radius: Option<Spanned<toml::Value>>,
+    radius_y: Option<Spanned<toml::Value>>,
     #[serde(default)]
     thickness: f64,
     n_d: Option<f64>,
@@ -74,11 +75,21 @@ pub(super) fn lens(text: &str, source_name: &str) -> Result<Lens> {
         let span = spanned.span();
         let s = spanned.get_ref();
         let at = |m: String| place(span.clone(), format!("surface {}: {m}", i + 1));
-        let radius = match &s.radius {
-            None => None,
-            Some(value) => radius(value.get_ref())
-                .map_err(|m| place(value.span(), format!("surface {}: {m}", i + 1)))?,
+        let read = |key: &str, value: &Spanned<toml::Value>| {
+            radius(key, value.get_ref())
+                .map_err(|m| place(value.span(), format!("surface {}: {m}", i + 1)))
         };
+        let radius = s
+            .radius
+            .as_ref()
+            .map(|v| read("radius", v))
+            .transpose()?
+            .flatten();
+        let radius_y = s
+            .radius_y
+            .as_ref()
+            .map(|v| read("radius_y", v))
+            .transpose()?;
         let medium = match (s.n_d, s.v_d) {
             (None, None) if s.stop => before,
             (None, None) => Medium::Air,
@@ -92,6 +103,7 @@ pub(super) fn lens(text: &str, source_name: &str) -> Result<Lens> {
         };
         surfaces.push(Surface {
             radius,
+            radius_y,
             thickness: s.thickness,
             medium,
             semi_aperture: s.semi_aperture,
@@ -134,10 +146,10 @@ pub(super) fn lens(text: &str, source_name: &str) -> Result<Lens> {
     Ok(lens)
 }
 
-/// A radius: a number other than 0, or "flat".
-fn radius(value: &toml::Value) -> std::result::Result<Option<f64>, String> {
+/// A radius (`key`): a number other than 0, or "flat".
+fn radius(key: &str, value: &toml::Value) -> std::result::Result<Option<f64>, String> {
     let refuse = || {
-        format!("radius = {value} is not allowed: a radius of curvature other than 0 (positive: its centre lies behind the surface), or \"flat\" for a plane")
+        format!("{key} = {value} is not allowed: a radius of curvature other than 0 (positive: its centre lies behind the surface), or \"flat\" for a plane")
     };
     match value {
         toml::Value::String(s) if s == "flat" => Ok(None),
@@ -234,10 +246,10 @@ fn problems(lens: &Lens) -> std::result::Result<(), (Option<usize>, String)> {
                 s.semi_aperture
             ));
         }
-        if let Some(r) = s.radius {
-            if s.semi_aperture > r.abs() {
+        for (key, r) in [("radius", s.radius), ("radius_y", s.radius_y.flatten())] {
+            if let Some(r) = r.filter(|r| s.semi_aperture > r.abs()) {
                 return at(format!(
-                    "semi_aperture = {} exceeds |radius| = {}: a sphere reaches no farther from its axis",
+                    "semi_aperture = {} exceeds |{key}| = {}: the surface's curve reaches no farther from its axis",
                     s.semi_aperture,
                     r.abs()
                 ));
@@ -253,9 +265,11 @@ fn problems(lens: &Lens) -> std::result::Result<(), (Option<usize>, String)> {
                 ));
             }
         }
-        if s.stop && (s.radius.is_some() || s.medium != lens.medium_before(i)) {
+        if s.stop
+            && (s.radius.is_some() || s.radius_y.is_some() || s.medium != lens.medium_before(i))
+        {
             return at(
-                "the stop is a plane in the medium before it: give it no radius, n_d or v_d".into(),
+                "the stop is a plane in the medium before it: give it no radius, radius_y, n_d or v_d".into(),
             );
         }
         if let Coating::Layers(layers) = &s.coating {
@@ -319,6 +333,13 @@ pub(super) fn to_toml(lens: &Lens) -> String {
                 }
                 None => out.push_str("radius = \"flat\"\n"),
             }
+            match s.radius_y {
+                Some(Some(r)) => {
+                    let _ = writeln!(out, "radius_y = {r:?}");
+                }
+                Some(None) => out.push_str("radius_y = \"flat\"\n"),
+                None => {}
+            }
         }
         let _ = writeln!(out, "thickness = {:?}", s.thickness);
         if let (Medium::Glass { n_d, v_d }, false) = (s.medium, s.stop) {
@@ -380,6 +401,19 @@ semi_aperture = 8.0
     }
 
     #[test]
+    fn an_anamorphic_file_round_trips_through_its_text() {
+        let text = SINGLET
+            .replacen("radius = 50.0", "radius = 50.0\nradius_y = \"flat\"", 1)
+            .replacen("radius = -80.0", "radius = \"flat\"\nradius_y = -80", 1);
+        let lens = Lens::parse(&text, "a.toml").unwrap();
+        assert_eq!(lens.surfaces[1].radius_y, Some(None));
+        assert_eq!(lens.surfaces[2].curvatures(), (0.0, -1.0 / 80.0));
+        assert!(lens.is_anamorphic() && lens.surfaces[0].is_round());
+        let again = Lens::parse(&lens.to_toml(), "again.toml").unwrap();
+        assert_eq!(again, lens);
+    }
+
+    #[test]
     fn the_focal_length_scales_the_prescription() {
         let text = SINGLET.replace("name = \"singlet\"", "name = \"x\"\nfocal_length_mm = 25");
         let lens = Lens::parse(&text, "x.toml").unwrap();
@@ -435,6 +469,21 @@ semi_aperture = 8.0
                 "exceeds |radius|",
             ),
             ("radius = 50.0", "radius = 0", "\"flat\""),
+            (
+                "radius = 50.0",
+                "radius = 50.0\nradius_y = 0",
+                "radius_y = 0 is not allowed",
+            ),
+            (
+                "radius = 50.0",
+                "radius = 50.0\nradius_y = 7.0",
+                "exceeds |radius_y| = 7",
+            ),
+            (
+                "stop = true",
+                "stop = true\nradius_y = 40.0",
+                "give it no radius, radius_y",
+            ),
             ("n_d = 1.5", "n_d = 4.5", "an index from 1 to 3"),
             (
                 "stop = true",

@@ -20,13 +20,15 @@ macro_rules! shipped {
     };
 }
 
-/// Every shipped lens, by focal length.
+/// Every shipped lens, the round ones by focal length, then the
+/// anamorphic.
 pub const LENSES: &[Shipped] = shipped!(
     "retrofocus-28mm-f2.8",
     "double-gauss-50mm-f1.4",
     "zoom-70-200mm-f2.8-at-72mm",
     "portrait-90mm-f2",
     "telephoto-300mm-f2.8",
+    "anamorphic-rear-1.3x-f1.8",
 );
 
 impl Shipped {

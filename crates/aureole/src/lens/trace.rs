@@ -1,5 +1,6 @@
 //! Real rays through a prescription: exact refraction and reflection at
-//! spherical surfaces (no paraxial approximation), clipped at every
+//! spherical, cylindrical and toric surfaces (no paraxial approximation),
+//! clipped at every
 //! surface's clear semi-aperture, the weight of a ray multiplied by each
 //! surface's Fresnel transmittance or reflectance on the way
 //! (docs/physics.md §12). A path is the light's way through the lens: the
@@ -128,8 +129,11 @@ struct Step {
     event: (usize, bool, bool),
     /// Its vertex, mm.
     z: f64,
-    /// 1/R, mm⁻¹; 0 for a plane.
+    /// 1/R, mm⁻¹; 0 for a plane. Across the x–z plane where the surface
+    /// is anamorphic.
     curvature: f64,
+    /// 1/R across the y–z plane, where the surface is anamorphic.
+    curvature_y: Option<f64>,
     /// Its clear semi-aperture, mm.
     semi: f64,
     /// 1/semi², mm⁻².
@@ -186,8 +190,12 @@ impl<'a> Layout<'a> {
             paraxial.entrance_pupil * mm,
             paraxial.entrance_pupil_radius * mm,
         );
+        // An anamorphic lens focuses its two planes apart, by as little as
+        // its design allows: the sensor lies midway, where the blur is
+        // least.
+        let back_focus = 0.5 * (paraxial.back_focus + lens.paraxial_x()?.back_focus);
         let mut layout = Layout::with_image(lens, 0.0, pupil);
-        layout.image = layout.vertices.last().copied().unwrap_or(0.0) + paraxial.back_focus * mm;
+        layout.image = layout.vertices.last().copied().unwrap_or(0.0) + back_focus * mm;
         Ok(layout)
     }
 
@@ -364,10 +372,12 @@ impl<'a> Layout<'a> {
                     .find(|(at, _)| *at == nm)
                     .and_then(|(_, tables)| tables[s][usize::from(!forwards)].clone());
                 let semi = surface.semi_aperture * mm;
+                let (cx, cy) = surface.curvatures();
                 Step {
                     event: (s, forwards, reflect),
                     z: self.vertices[s],
-                    curvature: surface.radius.map_or(0.0, |r| 1.0 / (r * mm)),
+                    curvature: cx / mm,
+                    curvature_y: (!surface.is_round()).then_some(cy / mm),
                     semi,
                     reach: 1.0 / (semi * semi),
                     stop: surface.stop,
@@ -529,12 +539,11 @@ impl<'a> Layout<'a> {
     #[inline(always)]
     fn advance(&self, nm: f64, step: &Step, lane: &mut Lane, clip: bool) -> Option<()> {
         let ray = &lane.ray;
-        let point = hit(
-            ray,
-            step.z,
-            step.curvature,
-            if clip { step.semi } else { f64::INFINITY },
-        )?;
+        let semi = if clip { step.semi } else { f64::INFINITY };
+        let point = match step.curvature_y {
+            None => hit(ray, step.z, step.curvature, semi)?,
+            Some(cy) => hit_toric(ray, step.z, (step.curvature, cy), semi)?,
+        };
         let across = point[0] * point[0] + point[1] * point[1];
         lane.margin = lane.margin.min(1.0 - across * step.reach);
         if step.stop {
@@ -545,7 +554,14 @@ impl<'a> Layout<'a> {
         }
         let (n_in, n_out) = step.indices;
         // The normal, turned to point along the ray.
-        let mut normal = normal(point, step.z, step.curvature);
+        let mut normal = match step.curvature_y {
+            None => normal(point, step.z, step.curvature),
+            Some(cy) => {
+                let (_, hx, hy) = sag(point[0], point[1], (step.curvature, cy))?;
+                let norm = (hx * hx + hy * hy + 1.0).sqrt();
+                [-hx / norm, -hy / norm, 1.0 / norm]
+            }
+        };
         if dot(normal, ray.direction) < 0.0 {
             normal = scale(normal, -1.0);
         }
@@ -635,6 +651,60 @@ fn hit(ray: &Ray, z: f64, curvature: f64, semi: f64) -> Option<Vector> {
     }
     let at = add(ray.point, scale(d, t));
     (at[0] * at[0] + at[1] * at[1] <= semi * semi).then_some(at)
+}
+
+/// Where `ray` meets the anamorphic surface of curvatures (c_x, c_y)
+/// whose vertex is at `z`, within `semi` of the axis, or `None`. A torus
+/// meets a line in up to four points, so no closed form picks the one
+/// near the vertex: Newton's method along the ray, from where it crosses
+/// the vertex's plane, converges to it in a few steps wherever the
+/// surface is a lens's (its slope well below 1).
+fn hit_toric(ray: &Ray, z: f64, curvatures: (f64, f64), semi: f64) -> Option<Vector> {
+    let p = [ray.point[0], ray.point[1], ray.point[2] - z];
+    let d = ray.direction;
+    let mut t = -p[2] / d[2];
+    let mut converged = false;
+    for _ in 0..32 {
+        if !t.is_finite() {
+            return None;
+        }
+        let (h, hx, hy) = sag(p[0] + t * d[0], p[1] + t * d[1], curvatures)?;
+        let gap = h - (p[2] + t * d[2]);
+        let step = gap / (hx * d[0] + hy * d[1] - d[2]);
+        t -= step;
+        // Quadratic convergence: the step after one this small is at the
+        // rounding of the coordinates.
+        if step.abs() <= 1e-12 * (1.0 + t.abs()) {
+            converged = true;
+            break;
+        }
+    }
+    if !(converged && t.is_finite() && t >= -1e-9) {
+        return None;
+    }
+    let at = add(ray.point, scale(d, t));
+    (at[0] * at[0] + at[1] * at[1] <= semi * semi).then_some(at)
+}
+
+/// An anamorphic surface's sag at (x, y) from its vertex's plane, and its
+/// slopes ∂/∂x and ∂/∂y; `None` beyond its rim. The y–z section's circle,
+/// sag s_y(y), is turned about an axis parallel to y, 1/c_x behind the
+/// vertex, so at height y the x–z section is a circle of curvature
+/// c_x / (1 − c_x s_y): a cylinder where either curvature is 0.
+fn sag(x: f64, y: f64, (cx, cy): (f64, f64)) -> Option<(f64, f64, f64)> {
+    let ky = 1.0 - cy * cy * y * y;
+    if ky < 0.0 {
+        return None;
+    }
+    let ry = ky.sqrt();
+    let sy = cy * y * y / (1.0 + ry);
+    let c = cx / (1.0 - cx * sy);
+    let kx = 1.0 - c * c * x * x;
+    if !(kx > 0.0 && ry > 0.0 && c.is_finite()) {
+        return None;
+    }
+    let rx = kx.sqrt();
+    Some((sy + c * x * x / (1.0 + rx), c * x / rx, cy * y / ry / rx))
 }
 
 /// The surface's unit normal at `point` (on it), +z at the vertex:

@@ -134,7 +134,7 @@ fn sources(image: &Image, level: f64) -> Vec<Source> {
 /// `target` (mm on the sensor, y upwards): the chief ray aimed by a few
 /// Newton steps from the paraxial guess, so that the ghosts line up with
 /// the source's own image whatever the lens's distortion.
-fn aim(layout: &Layout, focal_mm: f64, target: (f64, f64), nm: f64) -> Vector {
+fn aim(layout: &Layout, focal_mm: (f64, f64), target: (f64, f64), nm: f64) -> Vector {
     let direction = |(a, b): (f64, f64)| {
         let norm = (a * a + b * b + 1.0).sqrt();
         [a / norm, b / norm, 1.0 / norm]
@@ -150,10 +150,13 @@ fn aim(layout: &Layout, focal_mm: f64, target: (f64, f64), nm: f64) -> Vector {
     };
     // The image is upright in the frame as the camera shows it: a source
     // right of the axis is seen through the lens from the right.
-    let mut t = (target.0 / focal_mm, target.1 / focal_mm);
+    let mut t = (target.0 / focal_mm.0, target.1 / focal_mm.1);
     for _ in 0..6 {
         let Some(at) = lands(t) else { break };
-        let step = ((target.0 - at.0) / focal_mm, (target.1 - at.1) / focal_mm);
+        let step = (
+            (target.0 - at.0) / focal_mm.0,
+            (target.1 - at.1) / focal_mm.1,
+        );
         t = (t.0 + step.0, t.1 + step.1);
         if step.0.abs().max(step.1.abs()) < 1e-9 {
             break;
@@ -215,7 +218,12 @@ pub(crate) fn add_ghosts(
     let sensor: Sensor = optics.sensor((image.width, image.height), window.centre());
     let found = sources(image, ghosts.threshold / scale);
     let traced = found.len().min(ghosts.sources as usize);
-    let focal_mm = optics.lens.paraxial()?.focal_length * optics.lens.mm_per_unit;
+    // An anamorphic lens's two focal lengths: each way its own.
+    let mm = optics.lens.mm_per_unit;
+    let focal_mm = (
+        optics.lens.paraxial_x()?.focal_length * mm,
+        optics.lens.paraxial()?.focal_length * mm,
+    );
     let green = optics.light[optics.light.len() / 2].0;
     let mut scene = image.clone();
     // Every source's ghosts on one canvas, its levels added up once.
