@@ -278,7 +278,11 @@ fn ghosts(args: &Args, lens: &Lens, out: &std::path::Path, quiet: bool) -> Resul
         f_number: args.f_number,
         ..Default::default()
     };
-    let aperture = aureole::Aperture::new(args.blades);
+    // The lens's own squeeze: the stop is an anamorphic lens's too.
+    let aperture = aureole::Aperture {
+        squeeze: lens.squeeze().map_err(failed)?,
+        ..aureole::Aperture::new(args.blades)
+    };
     let optics =
         GhostOptics::new(lens, &camera, Some(&aperture), width, args.spectral).map_err(failed)?;
     let f_number = optics.f_number;

@@ -57,9 +57,9 @@ const PUPIL_SAMPLES: usize = 4;
 
 /// Draws the pupil of `optics` into a `side`-pixel square PNG at `path`:
 /// the share of the light each point passes, |t|², white on black,
-/// across the stop's diameter.
+/// across the stop's widest diameter.
 pub fn write_pupil_picture(path: &Path, optics: &Optics, side: u32) -> Result<()> {
-    let half = 0.51 * optics.diameter_mm;
+    let half = 0.51 * optics.diameter_mm * optics.stretch.max(1.0);
     let n = side as usize;
     let step = 2.0 * half / (n * PUPIL_SAMPLES) as f64;
     let pixels: Vec<u8> = (0..n * n)

@@ -123,21 +123,24 @@ def polygon_mask(blades, radius_m, roundness, rotation):
 
 
 def reference(blades, f_number, pitch_um, roundness=0.0, pupil_samples=256, sub_pixels=6,
-              size=SIZE, mask=None, light=None, pupil_step=None, variants=None):
+              size=SIZE, mask=None, light=None, pupil_step=None, variants=None, wider=1.0):
     """hcipy's PSF integrated over our pixels, top row first, Σ = 1: one
     plane in 550 nm, or the R, G, B planes of `light` = (nm, weights).
     With `pupil_step` (m) the pupil is sampled that finely instead; with
     `variants`, a function of the sampled pupil and its grid giving
-    several pupils, the result is the mean of their patterns."""
+    several pupils, the result is the mean of their patterns. The pupil's
+    grid spans `wider` times the stop's diameter f/N (an oval stop's
+    width)."""
     focal = FOCAL_MM * 1e-3
-    diameter = focal / f_number
+    diameter = focal / f_number * wider
     pitch = pitch_um * 1e-6
     if pupil_step:
         pupil_samples = int(np.ceil(diameter * 1.01 / pupil_step))
         pupil_grid = hcipy.make_pupil_grid(pupil_samples, pupil_samples * pupil_step)
     else:
         pupil_grid = hcipy.make_pupil_grid(pupil_samples, diameter * 1.01)
-    shape = mask(diameter / 2) if mask else stop_mask(blades, diameter / 2, roundness)
+    radius = diameter / wider / 2
+    shape = mask(radius) if mask else stop_mask(blades, radius, roundness)
     pupil = hcipy.evaluate_supersampled(shape, pupil_grid, 8)
     pupils = variants(pupil, pupil_grid) if variants else [pupil]
     points = size * sub_pixels
@@ -337,6 +340,32 @@ width_um = 10.0
     # the angular profile, and there are no rays to count. In 17
     # wavelengths the orders spread into spectra, and the rays are counted.
     compare(ours, theirs, finer, (6, 12, 30, 45, 60), 4 if spectral else 0)
+
+
+@pytest.mark.parametrize("blades,squeeze", [(0, 1.3), (7, 1.5), (6, 0.75)])
+def test_an_anamorphic_lens_squeezes_the_pattern_as_an_oval_stop_does_in_hcipy(blades, squeeze):
+    # A lens of focal length f across y and f/s across x forms the pattern
+    # of its stop stretched s times along x at f (docs/physics.md §6):
+    # hcipy propagates that oval stop at f, 550 nm, f/4, 1 µm pixels.
+    ours = camera(blades, 4.0, extra=f"squeeze = {squeeze}").kernel(
+        SIZE, SIZE, image_width=36000, sent_by="point")
+
+    def oval(radius):
+        round_stop = stop_mask(blades, radius, 0.0)
+
+        def mask(grid):
+            stretched = hcipy.CartesianGrid(hcipy.UnstructuredCoords(
+                [np.asarray(grid.x) / squeeze, np.asarray(grid.y)]))
+            return hcipy.Field(np.asarray(round_stop(stretched)), grid)
+
+        return mask
+
+    wider = max(squeeze, 1.0)
+    theirs, finer = (
+        reference(blades, 4.0, 1.0, mask=oval, pupil_samples=round(n * wider), sub_pixels=k,
+                  wider=wider)
+        for n, k in ((256, 6), (384, 9)))
+    compare(ours, theirs, finer, (12, 25, 30, 60), blades, rays_from=30)
 
 
 DIRT = """dust = 40

@@ -21,6 +21,7 @@ fn optics(pupil: Pupil, diameter_mm: f64) -> Optics {
     Optics {
         pupil,
         diameter_mm,
+        stretch: 1.0,
         focal_mm: F,
         orders: vec![([0.0, 0.0], 1.0)],
     }

@@ -253,6 +253,34 @@ fn a_shipped_lens_throws_all_its_ghosts_and_needs_the_sensors_width() {
 }
 
 #[test]
+fn an_anamorphic_lens_squeezes_its_stops_diffraction_too_or_is_refused() {
+    // Super 35 at 100 mm: the rear group's small clear apertures pass a
+    // field of ±11° across x, a full-frame sensor at 50 mm none.
+    let text = "[camera]\nsensor_width_mm = 24.9\nfocal_length_mm = 100.0\nf_number = 8.0\n[[effect]]\ntype = \"ghosts\"\nlens = \"anamorphic-rear-1.3x-f1.8\"\n[[effect]]\ntype = \"aperture\"\nblades = 6\nspectral = false\n";
+    let input = night(96, 64, &[((70, 20), 1e6)]);
+    let refused = Session::new(config(text))
+        .apply(
+            &frame(input.clone()),
+            &ApplyOptions::default(),
+            &mut |_, _| {},
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(
+        refused.contains("squeezes 1.301") && refused.contains("write squeeze = 1.301"),
+        "{refused}"
+    );
+    assert_eq!(refused.lines().count(), 1);
+    let squeezed = format!("{text}squeeze = 1.301\n");
+    let applied = apply(config(&squeezed), &frame(input));
+    let ghosts = applied.ghosts.unwrap();
+    // 29 surfaces but the stop, in pairs.
+    assert_eq!(ghosts.paths, 28 * 27 / 2);
+    assert!(ghosts.light > 1e-5 && ghosts.light < 1e-2, "{ghosts:?}");
+    assert!(applied.energy_out <= applied.energy_in * (1.0 + 1e-6));
+}
+
+#[test]
 fn a_session_cancelled_while_it_traces_ghosts_stops() {
     // Cancelled from the tracing's own first report, after the first
     // batch of sources (two, on two threads): the stage must hear it

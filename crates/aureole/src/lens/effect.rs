@@ -257,6 +257,19 @@ impl GhostOptics {
             })?;
         let mut lens = lens.clone();
         let paraxial = lens.paraxial()?;
+        // The stop's diffraction and the ghosts are one lens's: an
+        // anamorphic lens squeezes both.
+        let squeeze = lens.squeeze()?;
+        if let Some(stated) = aperture.map(|a| a.squeeze) {
+            if (stated / squeeze - 1.0).abs() > 0.005 {
+                return Err(Error::Lens {
+                    name: lens.name.clone(),
+                    message: format!(
+                        "it squeezes {squeeze:.3} but the aperture's squeeze is {stated}: write squeeze = {squeeze:.3} in the aperture effect, so that its diffraction is this lens's"
+                    ),
+                });
+            }
+        }
         if let Some(focal) = camera.focal_length_mm {
             lens.mm_per_unit = focal / paraxial.focal_length;
         }

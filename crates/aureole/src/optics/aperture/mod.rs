@@ -99,6 +99,10 @@ pub struct Aperture {
     /// Star filter or grating: one family of parallel lines per entry.
     #[serde(default, rename = "filter")]
     pub filters: Vec<Filter>,
+    /// An anamorphic lens's squeeze: its focal length across x is the
+    /// camera's over this (1: a round lens).
+    #[serde(default = "one")]
+    pub squeeze: f64,
 }
 
 /// One family of parallel opaque lines on a filter in front of the lens.
@@ -126,6 +130,9 @@ impl Filter {
 
 fn yes() -> bool {
     true
+}
+fn one() -> f64 {
+    1.0
 }
 fn green() -> f64 {
     550.0
@@ -161,8 +168,12 @@ fn grease_phase() -> f64 {
 pub struct Optics {
     /// The pupil, mm.
     pub pupil: Pupil,
-    /// Pupil diameter D = f/N, mm.
+    /// Pupil diameter D = f/N, mm: across y, and across x too unless
+    /// stretched.
     pub diameter_mm: f64,
+    /// How far the pupil is stretched along x: an anamorphic lens's
+    /// squeeze (1: a round lens).
+    pub stretch: f64,
     /// Focal length f, mm.
     pub focal_mm: f64,
     /// Filter orders: the spatial frequency each order is shifted by
@@ -353,6 +364,16 @@ const GREASE_PHASE: Parameter = Parameter {
     allowed: "a finite angle in degrees",
     about: "the delay of the light through the smudge, in degrees of phase",
 };
+const SQUEEZE: Parameter = Parameter {
+    name: "squeeze",
+    kind: Kind::Number,
+    low: Some((0.25, true)),
+    high: Some((4.0, true)),
+    default: Default::Number(1.0),
+    unit: "",
+    allowed: "an anamorphic squeeze from 0.25 to 4 (1: a round lens)",
+    about: "an anamorphic lens's squeeze: its focal length across x is focal_length_mm over this, its pattern that much narrower across x",
+};
 const ROTATION: Parameter = crate::schema::angle(
     "rotation_deg",
     "the stop's rotation; at 0 a blade tip points along +x",
@@ -408,6 +429,7 @@ impl Model for Aperture {
         GREASE,
         GREASE_TRANSMISSION,
         GREASE_PHASE,
+        SQUEEZE,
     ];
 
     /// Checks every parameter.
@@ -458,6 +480,7 @@ impl Model for Aperture {
         GREASE.check(NAME, self.grease)?;
         GREASE_TRANSMISSION.check(NAME, self.grease_transmission)?;
         GREASE_PHASE.check(NAME, self.grease_phase_deg)?;
+        SQUEEZE.check(NAME, self.squeeze)?;
         check::count(
             NAME,
             "filter",
@@ -592,6 +615,7 @@ impl Aperture {
             grease_transmission: grease_transmission(),
             grease_phase_deg: grease_phase(),
             filters: Vec::new(),
+            squeeze: one(),
         }
     }
 
@@ -625,11 +649,23 @@ impl Aperture {
             .f_number
             .ok_or_else(|| need("f_number", "the pupil's diameter is f/N"))?;
         let diameter = focal / n;
+        // An anamorphic lens's pattern is a round one's of the stop and
+        // the filter stretched along x (pupil/oval.rs): their lines' orders
+        // lie that much closer across x.
+        let mut pupil = self.pupil(diameter / 2.0, seed)?;
+        let mut orders = self.orders(focal, reach_mm);
+        if self.squeeze != 1.0 {
+            pupil = pupil.stretched(self.squeeze);
+            for (nu, _) in &mut orders {
+                nu[0] /= self.squeeze;
+            }
+        }
         Ok(Optics {
-            pupil: self.pupil(diameter / 2.0, seed)?,
+            pupil,
             diameter_mm: diameter,
+            stretch: self.squeeze,
             focal_mm: focal,
-            orders: self.orders(focal, reach_mm),
+            orders,
         })
     }
 

@@ -11,6 +11,8 @@
 use super::jinc;
 use std::f64::consts::{PI, TAU};
 
+mod oval;
+
 /// A complex amplitude (re, im).
 pub type Amplitude = [f64; 2];
 
@@ -72,6 +74,8 @@ enum Outline {
         edges: Vec<Edge>,
         centroid: [f64; 2],
         reach: f64,
+        /// The vertices and pieces per side it was made from.
+        made: (Vec<[f64; 2]>, usize),
     },
     Disc {
         centre: [f64; 2],
@@ -196,6 +200,7 @@ impl Pupil {
             })
             .sum::<f64>()
             / 2.0;
+        let made = (vertices.to_vec(), pieces_per_side);
         let mut points = vertices.to_vec();
         if signed < 0.0 {
             points.reverse();
@@ -258,6 +263,7 @@ impl Pupil {
                 edges,
                 centroid: [cx, cy],
                 reach,
+                made,
             },
             weight: [sign, 0.0],
             area,
@@ -362,6 +368,7 @@ impl Pupil {
                     edges,
                     centroid,
                     reach,
+                    ..
                 } => {
                     within(centroid, *reach)
                         && edges.iter().all(|e| {
@@ -396,6 +403,7 @@ impl Pupil {
                     edges,
                     centroid,
                     reach,
+                    ..
                 } => polygon(element.area, *centroid, *reach, q, q2, || {
                     let mut s = [0.0, 0.0];
                     for e in edges {
@@ -582,6 +590,7 @@ impl Pupil {
                     edges,
                     centroid,
                     reach,
+                    ..
                 } => (edges, *centroid, *reach),
                 Outline::Spot { .. } => continue,
                 Outline::Disc { centre, radius } => {
