@@ -10,7 +10,7 @@
 
 use super::canvas::{Canvas, Patch, Quads};
 use super::passage::{coarse, found, front, may_pass, search, Square};
-use super::trace::{Arrival, Layout, Path, Route, Vector};
+use super::trace::{Arrival, Layout, Path, Ray, Route, Vector};
 use crate::control::Cancel;
 
 /// A sensor of `width`×`height` pixels of `pitch_mm`, the optical axis
@@ -308,16 +308,23 @@ impl<'l, 'a> Bundle<'l, 'a> {
     /// mean of the others).
     fn rim(&self, i: usize, j: usize, area: f64, visit: &mut impl FnMut(&[(Vector, f64); 4], f64)) {
         let side = RIM + 1;
-        let mut rays = Vec::with_capacity(side * side);
-        for v in 0..side {
-            for u in 0..side {
-                let (x, y) = (
+        let starts: Vec<Ray> = (0..side * side)
+            .map(|k| {
+                let (u, v) = (k % side, k / side);
+                self.collimated(
                     i as f64 + u as f64 / RIM as f64,
                     j as f64 + v as f64 / RIM as f64,
-                );
-                rays.push(self.layout.follow(&self.route, self.collimated(x, y)));
-            }
-        }
+                )
+            })
+            .collect();
+        // Side by side, then clipped: a ray every aperture passes lands
+        // where it would clipped along the way.
+        let rays: Vec<Option<(Vector, f64)>> = self
+            .layout
+            .follow_unclipped_all(&self.route, &starts)
+            .into_iter()
+            .map(|a| a.filter(|a| self.passes(a)).map(|a| (a.at, a.weight)))
+            .collect();
         let piece = area / (RIM * RIM) as f64;
         for v in 0..RIM {
             for u in 0..RIM {

@@ -540,9 +540,11 @@ impl<'a> Layout<'a> {
     fn advance(&self, nm: f64, step: &Step, lane: &mut Lane, clip: bool) -> Option<()> {
         let ray = &lane.ray;
         let semi = if clip { step.semi } else { f64::INFINITY };
-        let point = match step.curvature_y {
-            None => hit(ray, step.z, step.curvature, semi)?,
-            Some(cy) => hit_toric(ray, step.z, (step.curvature, cy), semi)?,
+        let point = match (step.curvature, step.curvature_y) {
+            (c, None) => hit(ray, step.z, c, semi)?,
+            (0.0, Some(c)) => hit_cylinder(ray, step.z, (c, [0.0, 1.0]), semi)?,
+            (c, Some(0.0)) => hit_cylinder(ray, step.z, (c, [1.0, 0.0]), semi)?,
+            (cx, Some(cy)) => hit_toric(ray, step.z, (cx, cy), semi)?,
         };
         let across = point[0] * point[0] + point[1] * point[1];
         lane.margin = lane.margin.min(1.0 - across * step.reach);
@@ -554,9 +556,13 @@ impl<'a> Layout<'a> {
         }
         let (n_in, n_out) = step.indices;
         // The normal, turned to point along the ray.
-        let mut normal = match step.curvature_y {
-            None => normal(point, step.z, step.curvature),
-            Some(cy) => {
+        let mut normal = match (step.curvature, step.curvature_y) {
+            (c, None) => normal(point, step.z, c),
+            // (centre − point)/R across the curved way: unit on the
+            // cylinder.
+            (0.0, Some(c)) => [0.0, -c * point[1], 1.0 - c * (point[2] - step.z)],
+            (c, Some(0.0)) => [-c * point[0], 0.0, 1.0 - c * (point[2] - step.z)],
+            (_, Some(cy)) => {
                 let (_, hx, hy) = sag(point[0], point[1], (step.curvature, cy))?;
                 let norm = (hx * hx + hy * hy + 1.0).sqrt();
                 [-hx / norm, -hy / norm, 1.0 / norm]
@@ -646,6 +652,39 @@ fn hit(ray: &Ray, z: f64, curvature: f64, semi: f64) -> Option<Vector> {
     let root = b + b.signum() * discriminant.sqrt();
     let t = if root != 0.0 { c / root } else { return None };
     // Behind the ray: the surfaces overlap where it passes.
+    if !(t.is_finite() && t >= -1e-9) {
+        return None;
+    }
+    let at = add(ray.point, scale(d, t));
+    (at[0] * at[0] + at[1] * at[1] <= semi * semi).then_some(at)
+}
+
+/// Where `ray` meets the cylinder of curvature `c` across the axis that
+/// `across` picks ([1, 0]: curved across x, [0, 1]: across y) whose
+/// vertex is at `z`, within `semi` of the axis: [`hit`]'s quadric with
+/// the other way's terms dropped, c(x² + z²) − 2z = 0 for [1, 0], so that
+/// t² has c(d_x² + d_z²) rather than c.
+fn hit_cylinder(ray: &Ray, z: f64, (c, across): (f64, [f64; 2]), semi: f64) -> Option<Vector> {
+    let p = [
+        ray.point[0] * across[0],
+        ray.point[1] * across[1],
+        ray.point[2] - z,
+    ];
+    let d = ray.direction;
+    let d_in = [d[0] * across[0], d[1] * across[1], d[2]];
+    let a = c * dot(d_in, d_in);
+    let b = d[2] - c * dot(p, d_in);
+    let constant = c * dot(p, p) - 2.0 * p[2];
+    let discriminant = b * b - a * constant;
+    if discriminant < 0.0 {
+        return None;
+    }
+    let root = b + b.signum() * discriminant.sqrt();
+    let t = if root != 0.0 {
+        constant / root
+    } else {
+        return None;
+    };
     if !(t.is_finite() && t >= -1e-9) {
         return None;
     }
