@@ -273,17 +273,17 @@ def write(name, rows):
         out.write(pixels.tobytes())
 
 
-def scene(sky, ground, horizon, spot):
-    """Sky above the horizon and ground below (cd/m², RGB), and a round
-    white source (x, y, radius, cd/m²)."""
-    x0, y0, radius, value = spot
+def scene(sky, ground, horizon, *spots):
+    """Sky above the horizon and ground below (cd/m², RGB), and round
+    white sources (x, y, radius, cd/m²)."""
     rows = []
     for y in range(height):
         row = array("f", sky(y) if y < horizon else ground) * width
-        if abs(y - y0) <= radius:
-            for x in range(max(0, int(x0 - radius)), min(width, int(x0 + radius) + 1)):
-                if (x - x0) ** 2 + (y - y0) ** 2 <= radius * radius:
-                    row[3 * x:3 * x + 3] = array("f", [value] * 3)
+        for x0, y0, radius, value in spots:
+            if abs(y - y0) <= radius:
+                for x in range(max(0, int(x0 - radius)), min(width, int(x0 + radius) + 1)):
+                    if (x - x0) ** 2 + (y - y0) ** 2 <= radius * radius:
+                        row[3 * x:3 * x + 3] = array("f", [value] * 3)
         rows.append(row)
     return rows
 
@@ -296,6 +296,8 @@ for k, x in enumerate((150, 360, 600, 810)):
 # 960 px wide) in a blue sky of 3000–8000 cd/m² over a meadow of 1000.
 sky = lambda y: [(8000 - 5000 * y / 380) * c for c in (0.75, 0.95, 1.3)]
 write("sun", scene(sky, [900.0, 1100.0, 500.0], 380, (250, 110, 6.0, 1.6e9)))
+# Two headlamps, for the anamorphic streak.
+write("headlamps", scene(night, [0.05, 0.045, 0.04], 380, (330, 290, 1.5, 2e5), (600, 290, 1.5, 2e5)))
 PY
 ghosts "moving" 4 7
 for k in 0 1 2; do
@@ -309,31 +311,10 @@ ghosts "sun" 11 7
   "$work/crossing1.png=nearer the centre, they close in" \
   "$work/crossing2.png=past it, they cross over" \
   "$work/sun.png=the sun by day at f/11"
-# The anamorphic streak: two headlamps through the rear anamorphic (a
-# Super 35 camera at 100 mm, f/2.8, its stop squeezed alike) and through
-# the double-Gauss at the same focal length, and the demo street through
-# the anamorphic, with its ghosts alone.
-python3 - "$work" <<'PY'
-import sys
-from array import array
-work, width, height = sys.argv[1], 960, 540
-rows = []
-for y in range(height):
-    row = array("f", [0.01 + 0.02 * y / height] * 3 if y < 380 else [0.05, 0.045, 0.04]) * width
-    for x0 in (330, 600):
-        for x in range(x0 - 1, x0 + 2):
-            if (x - x0) ** 2 + (y - 290) ** 2 <= 2.25:
-                row[3 * x:3 * x + 3] = array("f", [2e5] * 3)
-    rows.append(row)
-pixels = array("f")
-for row in reversed(rows):
-    pixels.extend(row)
-if sys.byteorder == "big":
-    pixels.byteswap()
-with open(f"{work}/headlamps.pfm", "wb") as out:
-    out.write(b"PF\n%d %d\n-1.0\n" % (width, height))
-    out.write(pixels.tobytes())
-PY
+# The anamorphic streak: the two headlamps written above through the
+# rear anamorphic (a Super 35 camera at 100 mm, f/2.8, its stop squeezed
+# alike) and through the double-Gauss at the same focal length, and the
+# demo street through the anamorphic, with its ghosts alone.
 cine() { # cine NAME LENS SQUEEZE
   printf '[camera]\nsensor_width_mm = 24.9\nfocal_length_mm = 100.0\nf_number = 2.8\n' >"$work/$1.toml"
   printf '\n[[effect]]\ntype = "ghosts"\nlens = "%s"\n' "$2" >>"$work/$1.toml"

@@ -95,7 +95,7 @@ pub use convolve::{Composing, Device};
 pub use error::{Error, Result};
 pub use image::{Image, Layout, Shape};
 pub use kernel::{Extent, Kernel, Sending};
-pub use optics::{Aperture, Bloom, Corona, Effect, Filter, Halation, Measured, Vos};
+pub use optics::{Aperture, Bloom, Corona, Effect, Eye, Filter, Halation, Measured, Vos};
 pub use pipeline::{
     Applied, ApplyOptions, Arithmetic, DisplayWindow, Frame, FrameOptions, GhostSummary,
     GlareLayer, Method, Plan, ScaleSource, Session, Stage,

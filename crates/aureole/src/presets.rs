@@ -32,6 +32,8 @@ pub const PRESETS: &[Preset] = presets!(
     "paper-fig6c",
     "paper-fig6d",
     "human-eye-vos",
+    "human-eye-cie-25",
+    "human-eye-cie-70",
     "camera-f8-7blade",
     "camera-f8-7blade-ghosts",
     "camera-f11-6blade",

@@ -6,24 +6,9 @@
 use aureole::lens::trace::{Layout, Path, Ray};
 use aureole::lens::{Lens, D_LINE_NM};
 
-const TORIC: &str = r#"
-name = "a toric singlet"
-[[surface]]
-stop = true
-thickness = 5.0
-semi_aperture = 10.0
-[[surface]]
-radius = 60.0
-radius_y = 90.0
-thickness = 6.0
-n_d = 1.6
-semi_aperture = 14.0
-[[surface]]
-radius = -150.0
-radius_y = "flat"
-thickness = 100.0
-semi_aperture = 14.0
-"#;
+/// A singlet with a torus and a cylinder: the same file optiland traces
+/// (tests/reference/optiland_anamorphic.py).
+const TORIC: &str = include_str!("reference/toric-singlet.toml");
 
 const ANAMORPHIC: &str = "anamorphic-rear-1.3x-f1.8";
 

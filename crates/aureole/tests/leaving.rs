@@ -145,6 +145,14 @@ fn vos_glare_leaves_a_strip() {
 }
 
 #[test]
+fn cie_eye_glare_leaves_a_strip() {
+    leaves(
+        "eye",
+        &config("type = \"eye\"\nage = 70\npigmentation = 1.0"),
+    );
+}
+
+#[test]
 fn an_aperture_leaves_a_strip() {
     leaves("aperture", &config("type = \"aperture\"\nblades = 6"));
 }

@@ -82,6 +82,11 @@ fn around(image: &Image, (x, y): (usize, usize)) -> [[f64; 12]; 3] {
 /// differed by 3.1 % for the bloom and 1.05 % for the aperture. The worst
 /// differences are printed (`--nocapture`).
 fn same_look(effect: &str) {
+    same_look_within(effect, [0.002; 3]);
+}
+
+/// [`same_look`], each ring's energy held within `tolerance`.
+fn same_look_within(effect: &str, tolerance: [f64; 3]) {
     let (small, large) = (glare(effect, 1), glare(effect, 2));
     let (mut rings, mut sectors) = ([0.0f64; 3], [0.0f64; 3]);
     for (x, y, _) in LAMPS {
@@ -104,7 +109,7 @@ fn same_look(effect: &str) {
     // aperture's middle ring).
     for ring in 0..3 {
         assert!(
-            rings[ring] <= 0.002,
+            rings[ring] <= tolerance[ring],
             "ring {ring}: energy off by {:.4}",
             rings[ring]
         );
@@ -148,6 +153,20 @@ fn halation_looks_the_same_at_1080p_and_at_4k() {
 #[ignore = "Vos's rings differ by 7 % between 1080p and 4K: its core is a pixel, not an angle"]
 fn the_eyes_glare_looks_the_same_at_1080p_and_at_4k() {
     same_look("type = \"vos\"\nepsilon = 0.05\nexponent = 2.0");
+}
+
+/// The CIE's eye keeps unspread only what its PSF puts within the centre
+/// pixel's angle, so a finer pixel keeps less, as the eye does: the rings
+/// agree where Vos's were 7 % apart. The nearest ring (4 to 16 px) is
+/// 0.49 % apart: the centre is kept a point, so a 1080p pixel's light
+/// leaves its centre rather than its whole square, which moves the light
+/// of its first few pixels (docs/physics.md §5).
+#[test]
+fn the_cie_eyes_glare_looks_the_same_at_1080p_and_at_4k() {
+    same_look_within(
+        "type = \"eye\"\nage = 70\npigmentation = 1.0",
+        [0.005, 0.002, 0.002],
+    );
 }
 
 /// The kernel of `effect` for an image `image_width` wide, `side` px square.

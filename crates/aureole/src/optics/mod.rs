@@ -16,6 +16,7 @@
 pub mod aperture;
 pub mod bloom;
 pub mod corona;
+pub mod eye;
 pub mod halation;
 pub mod measured;
 pub(crate) mod shape;
@@ -25,6 +26,7 @@ pub(crate) mod whole;
 pub use aperture::{Aperture, Filter};
 pub use bloom::Bloom;
 pub use corona::{Corona, RayFactors};
+pub use eye::Eye;
 pub use halation::Halation;
 pub use measured::Measured;
 pub use vos::Vos;
@@ -263,6 +265,8 @@ effects! {
     Corona(Corona),
     /// Human-eye glare after Vos (paper §3).
     Vos(Vos),
+    /// The eye's disability glare by the CIE's general equation.
+    Eye(Eye),
     /// Diffraction on the stop and on filters, computed from the pupil
     /// (paper §2).
     Aperture(Aperture),

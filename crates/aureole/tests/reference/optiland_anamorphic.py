@@ -24,24 +24,7 @@ from optiland.rays import RealRays
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 D_LINE_UM = 0.5875618
-TORIC = """
-name = "a toric singlet"
-[[surface]]
-stop = true
-thickness = 5.0
-semi_aperture = 10.0
-[[surface]]
-radius = 60.0
-radius_y = 90.0
-thickness = 6.0
-n_d = 1.6
-semi_aperture = 14.0
-[[surface]]
-radius = -150.0
-radius_y = "flat"
-thickness = 100.0
-semi_aperture = 14.0
-"""
+TORIC = (pathlib.Path(__file__).parent / "toric-singlet.toml").read_text()
 CASES = [
     ("anamorphic-rear-1.3x-f1.8", (ROOT / "lenses" / "anamorphic-rear-1.3x-f1.8.toml").read_text(), 40.0),
     ("toric singlet", TORIC, 10.0),
