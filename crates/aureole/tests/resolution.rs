@@ -147,8 +147,8 @@ fn halation_looks_the_same_at_1080p_and_at_4k() {
 /// leaves the centre pixel unspread and normalises the rest over the
 /// pixels; a pixel half as wide takes in more of the near light, and every
 /// ring around a lamp gets 7 % less at 4K than at 1080p. The cure is an
-/// angle, not a pixel, for the unspread core (the CIE equation's 0.1°,
-/// issue 46).
+/// angle, not a pixel, for the unspread core: the CIE's eye (below) has
+/// one, Vos's k/θⁿ none.
 #[test]
 #[ignore = "Vos's rings differ by 7 % between 1080p and 4K: its core is a pixel, not an angle"]
 fn the_eyes_glare_looks_the_same_at_1080p_and_at_4k() {
