@@ -129,11 +129,8 @@ struct Step {
     event: (usize, bool, bool),
     /// Its vertex, mm.
     z: f64,
-    /// 1/R, mm⁻¹; 0 for a plane. Across the x–z plane where the surface
-    /// is anamorphic.
-    curvature: f64,
-    /// 1/R across the y–z plane, where the surface is anamorphic.
-    curvature_y: Option<f64>,
+    /// Its shape.
+    figure: Figure,
     /// Its clear semi-aperture, mm.
     semi: f64,
     /// 1/semi², mm⁻².
@@ -372,12 +369,10 @@ impl<'a> Layout<'a> {
                     .find(|(at, _)| *at == nm)
                     .and_then(|(_, tables)| tables[s][usize::from(!forwards)].clone());
                 let semi = surface.semi_aperture * mm;
-                let (cx, cy) = surface.curvatures();
                 Step {
                     event: (s, forwards, reflect),
                     z: self.vertices[s],
-                    curvature: cx / mm,
-                    curvature_y: (!surface.is_round()).then_some(cy / mm),
+                    figure: Figure::of(surface, mm),
                     semi,
                     reach: 1.0 / (semi * semi),
                     stop: surface.stop,
@@ -540,12 +535,7 @@ impl<'a> Layout<'a> {
     fn advance(&self, nm: f64, step: &Step, lane: &mut Lane, clip: bool) -> Option<()> {
         let ray = &lane.ray;
         let semi = if clip { step.semi } else { f64::INFINITY };
-        let point = match (step.curvature, step.curvature_y) {
-            (c, None) => hit(ray, step.z, c, semi)?,
-            (0.0, Some(c)) => hit_cylinder(ray, step.z, (c, [0.0, 1.0]), semi)?,
-            (c, Some(0.0)) => hit_cylinder(ray, step.z, (c, [1.0, 0.0]), semi)?,
-            (cx, Some(cy)) => hit_toric(ray, step.z, (cx, cy), semi)?,
-        };
+        let point = step.figure.hit(ray, step.z, semi)?;
         let across = point[0] * point[0] + point[1] * point[1];
         lane.margin = lane.margin.min(1.0 - across * step.reach);
         if step.stop {
@@ -556,18 +546,7 @@ impl<'a> Layout<'a> {
         }
         let (n_in, n_out) = step.indices;
         // The normal, turned to point along the ray.
-        let mut normal = match (step.curvature, step.curvature_y) {
-            (c, None) => normal(point, step.z, c),
-            // (centre − point)/R across the curved way: unit on the
-            // cylinder.
-            (0.0, Some(c)) => [0.0, -c * point[1], 1.0 - c * (point[2] - step.z)],
-            (c, Some(0.0)) => [-c * point[0], 0.0, 1.0 - c * (point[2] - step.z)],
-            (_, Some(cy)) => {
-                let (_, hx, hy) = sag(point[0], point[1], (step.curvature, cy))?;
-                let norm = (hx * hx + hy * hy + 1.0).sqrt();
-                [-hx / norm, -hy / norm, 1.0 / norm]
-            }
-        };
+        let mut normal = step.figure.normal(point, step.z)?;
         if dot(normal, ray.direction) < 0.0 {
             normal = scale(normal, -1.0);
         }
@@ -633,76 +612,106 @@ impl Lane {
     }
 }
 
-/// Where `ray` meets the surface of `curvature` whose vertex is at `z`,
-/// within `semi` of the axis: the intersection nearer the vertex (the
-/// sphere's other side is another surface), or `None`.
-fn hit(ray: &Ray, z: f64, curvature: f64, semi: f64) -> Option<Vector> {
-    // In the vertex's frame the surface is c(x² + y² + z²) − 2z = 0; along
-    // p + t d that is c t² − 2t(d_z − c p·d) + (c p·p − 2p_z) = 0, whose
-    // root near the vertex is written without the difference of nearly
-    // equal terms (Spencer and Murty).
-    let p = [ray.point[0], ray.point[1], ray.point[2] - z];
-    let d = ray.direction;
-    let b = d[2] - curvature * dot(p, d);
-    let c = curvature * dot(p, p) - 2.0 * p[2];
-    let discriminant = b * b - curvature * c;
+/// A surface's shape, in mm.
+#[derive(Debug, Clone, Copy)]
+enum Figure {
+    /// Turned about the axis: 1/R, mm⁻¹ (0 a plane).
+    Round(f64),
+    /// A cylinder: 1/R across the axis that the mask keeps ([1, 0]: curved
+    /// across x, [0, 1]: across y).
+    Cylinder(f64, [f64; 2]),
+    /// A torus: 1/R across x and across y.
+    Torus(f64, f64),
+}
+
+impl Figure {
+    /// `surface`'s, its lengths `mm` per unit.
+    fn of(surface: &super::Surface, mm: f64) -> Figure {
+        let (cx, cy) = surface.curvatures();
+        match (cx / mm, cy / mm) {
+            (c, _) if surface.is_round() => Figure::Round(c),
+            (0.0, c) => Figure::Cylinder(c, [0.0, 1.0]),
+            (c, 0.0) => Figure::Cylinder(c, [1.0, 0.0]),
+            (cx, cy) => Figure::Torus(cx, cy),
+        }
+    }
+
+    /// Where `ray` meets it, its vertex at `z`, within `semi` of the axis:
+    /// the intersection nearer the vertex (a sphere's other side is
+    /// another surface), or `None`.
+    fn hit(&self, ray: &Ray, z: f64, semi: f64) -> Option<Vector> {
+        // In the vertex's frame a quadric of these is c(x² + y² + z²) −
+        // 2z = 0, a cylinder's without the other way's term; along p + t d
+        // that is a t² − 2t(d_z − c p·d) + (c p·p − 2p_z) = 0, with a = c
+        // for a sphere (d is a unit vector) and c(d_x² + d_z²) for a
+        // cylinder curved across x.
+        let p = [ray.point[0], ray.point[1], ray.point[2] - z];
+        let d = ray.direction;
+        let t = match *self {
+            Figure::Round(c) => near_root(c, d[2] - c * dot(p, d), c * dot(p, p) - 2.0 * p[2])?,
+            Figure::Cylinder(c, [mx, my]) => {
+                let p = [p[0] * mx, p[1] * my, p[2]];
+                let d = [d[0] * mx, d[1] * my, d[2]];
+                near_root(
+                    c * dot(d, d),
+                    d[2] - c * dot(p, d),
+                    c * dot(p, p) - 2.0 * p[2],
+                )?
+            }
+            Figure::Torus(cx, cy) => newton(p, d, (cx, cy))?,
+        };
+        // Behind the ray: the surfaces overlap where it passes.
+        if !(t.is_finite() && t >= -1e-9) {
+            return None;
+        }
+        let at = add(ray.point, scale(d, t));
+        (at[0] * at[0] + at[1] * at[1] <= semi * semi).then_some(at)
+    }
+
+    /// The unit normal at `point` (on it), its vertex at `z`, +z at the
+    /// vertex; `None` beyond a torus's rim.
+    fn normal(&self, point: Vector, z: f64) -> Option<Vector> {
+        // (centre − point)/R across the curved ways: a unit vector with no
+        // square root taken, since the point lies on the surface.
+        let quadric = |c: f64, [mx, my]: [f64; 2]| {
+            [
+                -c * mx * point[0],
+                -c * my * point[1],
+                1.0 - c * (point[2] - z),
+            ]
+        };
+        Some(match *self {
+            Figure::Round(c) => quadric(c, [1.0, 1.0]),
+            Figure::Cylinder(c, mask) => quadric(c, mask),
+            Figure::Torus(cx, cy) => {
+                let (_, hx, hy) = sag(point[0], point[1], (cx, cy))?;
+                let norm = (hx * hx + hy * hy + 1.0).sqrt();
+                [-hx / norm, -hy / norm, 1.0 / norm]
+            }
+        })
+    }
+}
+
+/// The root of a t² − 2b t + c = 0 near the vertex (t = c / (b ± √(b² −
+/// a c))), written without the difference of nearly equal terms (Spencer
+/// and Murty); `None` where the line misses.
+fn near_root(a: f64, b: f64, c: f64) -> Option<f64> {
+    let discriminant = b * b - a * c;
     if discriminant < 0.0 {
         return None;
     }
     let root = b + b.signum() * discriminant.sqrt();
-    let t = if root != 0.0 { c / root } else { return None };
-    // Behind the ray: the surfaces overlap where it passes.
-    if !(t.is_finite() && t >= -1e-9) {
-        return None;
-    }
-    let at = add(ray.point, scale(d, t));
-    (at[0] * at[0] + at[1] * at[1] <= semi * semi).then_some(at)
+    (root != 0.0).then(|| c / root)
 }
 
-/// Where `ray` meets the cylinder of curvature `c` across the axis that
-/// `across` picks ([1, 0]: curved across x, [0, 1]: across y) whose
-/// vertex is at `z`, within `semi` of the axis: [`hit`]'s quadric with
-/// the other way's terms dropped, c(x² + z²) − 2z = 0 for [1, 0], so that
-/// t² has c(d_x² + d_z²) rather than c.
-fn hit_cylinder(ray: &Ray, z: f64, (c, across): (f64, [f64; 2]), semi: f64) -> Option<Vector> {
-    let p = [
-        ray.point[0] * across[0],
-        ray.point[1] * across[1],
-        ray.point[2] - z,
-    ];
-    let d = ray.direction;
-    let d_in = [d[0] * across[0], d[1] * across[1], d[2]];
-    let a = c * dot(d_in, d_in);
-    let b = d[2] - c * dot(p, d_in);
-    let constant = c * dot(p, p) - 2.0 * p[2];
-    let discriminant = b * b - a * constant;
-    if discriminant < 0.0 {
-        return None;
-    }
-    let root = b + b.signum() * discriminant.sqrt();
-    let t = if root != 0.0 {
-        constant / root
-    } else {
-        return None;
-    };
-    if !(t.is_finite() && t >= -1e-9) {
-        return None;
-    }
-    let at = add(ray.point, scale(d, t));
-    (at[0] * at[0] + at[1] * at[1] <= semi * semi).then_some(at)
-}
-
-/// Where `ray` meets the anamorphic surface of curvatures (c_x, c_y)
-/// whose vertex is at `z`, within `semi` of the axis, or `None`. A torus
-/// meets a line in up to four points, so no closed form picks the one
-/// near the vertex: Newton's method along the ray, from where it crosses
-/// the vertex's plane, converges to it in a few steps wherever the
-/// surface is a lens's (its slope well below 1).
-fn hit_toric(ray: &Ray, z: f64, curvatures: (f64, f64), semi: f64) -> Option<Vector> {
-    let p = [ray.point[0], ray.point[1], ray.point[2] - z];
-    let d = ray.direction;
+/// Where the line p + t d (in the vertex's frame) meets the torus of
+/// curvatures (c_x, c_y): t, or `None`. A torus meets a line in up to four
+/// points, so no closed form picks the one near the vertex: Newton's
+/// method along the ray, from where it crosses the vertex's plane,
+/// converges to it in a few steps wherever the surface is a lens's (its
+/// slope well below 1).
+fn newton(p: Vector, d: Vector, curvatures: (f64, f64)) -> Option<f64> {
     let mut t = -p[2] / d[2];
-    let mut converged = false;
     for _ in 0..32 {
         if !t.is_finite() {
             return None;
@@ -714,15 +723,10 @@ fn hit_toric(ray: &Ray, z: f64, curvatures: (f64, f64), semi: f64) -> Option<Vec
         // Quadratic convergence: the step after one this small is at the
         // rounding of the coordinates.
         if step.abs() <= 1e-12 * (1.0 + t.abs()) {
-            converged = true;
-            break;
+            return Some(t);
         }
     }
-    if !(converged && t.is_finite() && t >= -1e-9) {
-        return None;
-    }
-    let at = add(ray.point, scale(d, t));
-    (at[0] * at[0] + at[1] * at[1] <= semi * semi).then_some(at)
+    None
 }
 
 /// An anamorphic surface's sag at (x, y) from its vertex's plane, and its
@@ -744,17 +748,6 @@ fn sag(x: f64, y: f64, (cx, cy): (f64, f64)) -> Option<(f64, f64, f64)> {
     }
     let rx = kx.sqrt();
     Some((sy + c * x * x / (1.0 + rx), c * x / rx, cy * y / ry / rx))
-}
-
-/// The surface's unit normal at `point` (on it), +z at the vertex:
-/// (centre − point)/R, a unit vector with no square root taken, since the
-/// point lies on the sphere.
-fn normal(point: Vector, z: f64, curvature: f64) -> Vector {
-    [
-        -curvature * point[0],
-        -curvature * point[1],
-        1.0 - curvature * (point[2] - z),
-    ]
 }
 
 /// Snell's law in vector form: `d` refracted at a surface of unit normal
