@@ -229,6 +229,9 @@ pub struct GhostOptics {
     radius: f64,
     /// The f-number traced at.
     pub f_number: f64,
+    /// The focal lengths across x and y, mm (the two differ for an
+    /// anamorphic lens).
+    pub focal_mm: (f64, f64),
     /// The pixel pitch, mm.
     pub pitch_mm: f64,
     /// The wavelengths, each with its weight in R, G and B.
@@ -257,9 +260,10 @@ impl GhostOptics {
             })?;
         let mut lens = lens.clone();
         let paraxial = lens.paraxial()?;
+        let across = lens.paraxial_x()?;
         // The stop's diffraction and the ghosts are one lens's: an
         // anamorphic lens squeezes both.
-        let squeeze = lens.squeeze()?;
+        let squeeze = paraxial.focal_length / across.focal_length;
         if let Some(stated) = aperture.map(|a| a.squeeze) {
             if (stated / squeeze - 1.0).abs() > 0.005 {
                 return Err(Error::Lens {
@@ -281,11 +285,14 @@ impl GhostOptics {
         let radius = open * paraxial.f_number / f_number;
         let round = Aperture::new(0);
         let pupil = aperture.unwrap_or(&round).stop(radius);
+        let mm = lens.mm_per_unit;
+        let focal_mm = (across.focal_length * mm, paraxial.focal_length * mm);
         Ok(GhostOptics {
             lens,
             stop: pupil,
             radius,
             f_number,
+            focal_mm,
             pitch_mm,
             light: ghost::light(spectral),
         })

@@ -506,7 +506,12 @@ fn draw(
 /// and `y` degrees above it (as seen through the lens: tan x and tan y
 /// its image's offsets over the focal length), +z into the lens.
 pub fn direction(x: f64, y: f64) -> Vector {
-    let (tx, ty) = (libm::tan(x.to_radians()), libm::tan(y.to_radians()));
+    towards((libm::tan(x.to_radians()), libm::tan(y.to_radians())))
+}
+
+/// The unit direction whose tangents right of the axis and above it are
+/// (tx, ty), +z into the lens.
+pub(crate) fn towards((tx, ty): (f64, f64)) -> Vector {
     let norm = (tx * tx + ty * ty + 1.0).sqrt();
     [tx / norm, ty / norm, 1.0 / norm]
 }

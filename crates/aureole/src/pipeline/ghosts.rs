@@ -14,7 +14,7 @@ use crate::error::Result;
 use crate::image::{Image, Layout as Planes, PixelLuminance};
 use crate::lens::canvas::Canvas;
 use crate::lens::effect::{GhostOptics, Ghosts};
-use crate::lens::ghost::{trace, Sensor, Traced};
+use crate::lens::ghost::{towards, trace, Sensor, Traced};
 use crate::lens::trace::{Layout, Path, Vector};
 
 /// Where a frame's display window lies in its pixels: a frame with
@@ -135,17 +135,9 @@ fn sources(image: &Image, level: f64) -> Vec<Source> {
 /// Newton steps from the paraxial guess, so that the ghosts line up with
 /// the source's own image whatever the lens's distortion.
 fn aim(layout: &Layout, focal_mm: (f64, f64), target: (f64, f64), nm: f64) -> Vector {
-    let direction = |(a, b): (f64, f64)| {
-        let norm = (a * a + b * b + 1.0).sqrt();
-        [a / norm, b / norm, 1.0 / norm]
-    };
     let lands = |t: (f64, f64)| {
         layout
-            .trace(
-                Path::Direct,
-                layout.collimated(direction(t), (0.0, 0.0)),
-                nm,
-            )
+            .trace(Path::Direct, layout.collimated(towards(t), (0.0, 0.0)), nm)
             .map(|(at, _)| (at[0], at[1]))
     };
     // The image is upright in the frame as the camera shows it: a source
@@ -162,7 +154,7 @@ fn aim(layout: &Layout, focal_mm: (f64, f64), target: (f64, f64), nm: f64) -> Ve
             break;
         }
     }
-    direction(t)
+    towards(t)
 }
 
 /// `source`'s ghosts (`drawn`) painted on `canvas` and their light taken
@@ -218,12 +210,6 @@ pub(crate) fn add_ghosts(
     let sensor: Sensor = optics.sensor((image.width, image.height), window.centre());
     let found = sources(image, ghosts.threshold / scale);
     let traced = found.len().min(ghosts.sources as usize);
-    // An anamorphic lens's two focal lengths: each way its own.
-    let mm = optics.lens.mm_per_unit;
-    let focal_mm = (
-        optics.lens.paraxial_x()?.focal_length * mm,
-        optics.lens.paraxial()?.focal_length * mm,
-    );
     let green = optics.light[optics.light.len() / 2].0;
     let mut scene = image.clone();
     // Every source's ghosts on one canvas, its levels added up once.
@@ -243,7 +229,8 @@ pub(crate) fn add_ghosts(
                     (source.centre.0 - sensor.centre.0) * sensor.pitch_mm,
                     (sensor.centre.1 - source.centre.1) * sensor.pitch_mm,
                 );
-                let field = aim(&layout, focal_mm, target, green);
+                // An anamorphic lens's two focal lengths: each way its own.
+                let field = aim(&layout, optics.focal_mm, target, green);
                 trace(
                     &layout,
                     field,
