@@ -471,3 +471,38 @@ fn star_filters_give_two_rays_per_family_of_lines() {
         );
     }
 }
+
+#[test]
+fn an_anamorphic_lens_moves_a_filters_orders_in_across_x_and_lists_them_to_the_reach() {
+    // Lines along y (angle 90°) put their orders along x, at m/d cycles
+    // per mm; a lens squeezed s times is the filter stretched s times
+    // (docs/physics.md §6): m/(s d) across x. Every order that lands
+    // within the reach at 380 nm is listed, squeezed or not.
+    let camera = CameraGeometry {
+        sensor_width_mm: Some(36.0),
+        focal_length_mm: Some(50.0),
+        f_number: Some(8.0),
+    };
+    let (spacing_mm, reach_mm, focal) = (0.2, 5.0, 50.0);
+    for squeeze in [1.0, 2.0] {
+        let aperture = Aperture {
+            filters: vec![aureole::Filter {
+                angle_deg: 90.0,
+                spacing_um: 1e3 * spacing_mm,
+                width_um: 10.0,
+            }],
+            squeeze,
+            ..Aperture::new(0)
+        };
+        let orders = aperture.optics(&camera, reach_mm, 0).unwrap().orders;
+        let mut along: Vec<f64> = orders.iter().map(|(nu, _)| nu[0]).collect();
+        along.sort_by(f64::total_cmp);
+        let step = along
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold(f64::MAX, f64::min);
+        assert!((step * spacing_mm * squeeze - 1.0).abs() < 1e-9, "{step}");
+        let farthest = along.last().unwrap() * 380e-6 * focal;
+        assert!(farthest >= reach_mm, "s {squeeze}: {farthest} mm");
+    }
+}

@@ -562,7 +562,7 @@ impl Model for Aperture {
         if self.filters.is_empty() {
             return 0;
         }
-        let reach_mm = orders_reach(pitch_mm, context.kernel_size);
+        let reach_mm = self.filter_reach(orders_reach(pitch_mm, context.kernel_size));
         let moved = self
             .filters
             .iter()
@@ -650,23 +650,27 @@ impl Aperture {
             .ok_or_else(|| need("f_number", "the pupil's diameter is f/N"))?;
         let diameter = focal / n;
         // An anamorphic lens's pattern is a round one's of the stop and
-        // the filter stretched along x (pupil/oval.rs): their lines' orders
-        // lie that much closer across x.
-        let mut pupil = self.pupil(diameter / 2.0, seed)?;
-        let mut orders = self.orders(focal, reach_mm);
-        if self.squeeze != 1.0 {
-            pupil = pupil.stretched(self.squeeze);
-            for (nu, _) in &mut orders {
-                nu[0] /= self.squeeze;
-            }
-        }
+        // the filter stretched along x (pupil/oval.rs; its orders in
+        // `orders`).
+        let pupil = self.pupil(diameter / 2.0, seed)?;
         Ok(Optics {
-            pupil,
+            pupil: if self.squeeze == 1.0 {
+                pupil
+            } else {
+                pupil.stretched(self.squeeze)
+            },
             diameter_mm: diameter,
             stretch: self.squeeze,
             focal_mm: focal,
-            orders,
+            orders: self.orders(focal, self.filter_reach(reach_mm)),
         })
+    }
+
+    /// How far out the filter's orders are listed to land within
+    /// `reach_mm` of the centre: farther by the squeeze, which moves them
+    /// in across x.
+    fn filter_reach(&self, reach_mm: f64) -> f64 {
+        reach_mm * self.squeeze.max(1.0)
     }
 
     /// The stop alone, of circumradius `radius` mm: its blades, their
@@ -776,6 +780,9 @@ impl Aperture {
     /// of width e every d transmits T = Σ c_m e^(2πi m s/d) with
     /// c₀ = 1 − e/d, c_m = −(e/d)·sinc(πme/d). Orders are kept alone or in
     /// pairs of families (triple products are weaker than 10⁻⁶ of the light).
+    /// An anamorphic lens's filter is stretched with its stop along x
+    /// (pupil/oval.rs), so that its orders lie `squeeze` times closer
+    /// across x; `reach_mm` is [`Aperture::filter_reach`]'s.
     fn orders(&self, focal: f64, reach_mm: f64) -> Vec<([f64; 2], f64)> {
         // (frequency shift, weight, families with a non-zero order)
         let mut orders = vec![([0.0, 0.0], 1.0, 0u8)];
@@ -797,7 +804,11 @@ impl Aperture {
             let steps: Vec<(f64, [f64; 2], bool)> = (-count..=count)
                 .map(|m| {
                     let shift = m as f64 / d;
-                    (coefficient(m).powi(2), [shift * c, shift * s], m != 0)
+                    (
+                        coefficient(m).powi(2),
+                        [shift * c / self.squeeze, shift * s],
+                        m != 0,
+                    )
                 })
                 .collect();
             // An order already moved by two families stays where it is
