@@ -6,6 +6,9 @@
 use aureole::lens::trace::{Layout, Path, Ray};
 use aureole::lens::{Lens, D_LINE_NM};
 
+mod moments;
+use moments::moments;
+
 /// A singlet with a torus and a cylinder: the same file optiland traces
 /// (tests/reference/optiland_anamorphic.py).
 const TORIC: &str = include_str!("reference/toric-singlet.toml");
@@ -167,29 +170,6 @@ fn the_shipped_anamorphic_is_its_patents_prime_with_both_planes_focused_together
     // The stop is in front of the cylinders: both planes see one pupil.
     assert!((x.entrance_pupil - y.entrance_pupil).abs() < 1e-9);
     assert!((x.entrance_pupil_radius - y.entrance_pupil_radius).abs() < 1e-9);
-}
-
-/// The centroid of a plane's light (mm), its RMS extents along x and y
-/// about it (mm), and the light.
-fn moments(plane: &[f64], sensor: &aureole::lens::ghost::Sensor) -> [f64; 5] {
-    let (mut sum, mut x, mut y, mut xx, mut yy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for (k, v) in plane.iter().enumerate() {
-        let px = ((k % sensor.width) as f64 + 0.5 - 0.5 * sensor.width as f64) * sensor.pitch_mm;
-        let py = (0.5 * sensor.height as f64 - (k / sensor.width) as f64 - 0.5) * sensor.pitch_mm;
-        sum += v;
-        x += v * px;
-        y += v * py;
-        xx += v * px * px;
-        yy += v * py * py;
-    }
-    let (x, y) = (x / sum, y / sum);
-    [
-        x,
-        y,
-        (xx / sum - x * x).max(0.0).sqrt(),
-        (yy / sum - y * y).max(0.0).sqrt(),
-        sum,
-    ]
 }
 
 /// Each ghost of `lens` of a source in direction `field` drawn alone on

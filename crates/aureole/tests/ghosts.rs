@@ -6,6 +6,8 @@
 use aureole::lens::trace::{Layout, Path, Ray};
 use aureole::lens::Lens;
 
+mod moments;
+
 fn shipped(name: &str) -> Lens {
     let path = format!("{}/lenses/{name}.toml", env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(&path).unwrap();
@@ -315,23 +317,8 @@ fn a_stack_of_plates_throws_ghosts_of_the_light_its_reflections_say() {
 /// The centroid of a plane's light (mm on the image plane), its RMS
 /// radius about it (mm) and the light.
 fn centroid(plane: &[f64], sensor: &aureole::lens::ghost::Sensor) -> (f64, f64, f64, f64) {
-    let (mut sum, mut x, mut y, mut r2) = (0.0, 0.0, 0.0, 0.0);
-    for (k, v) in plane.iter().enumerate() {
-        let (col, row) = (
-            (k % sensor.width) as f64 + 0.5,
-            (k / sensor.width) as f64 + 0.5,
-        );
-        let (px, py) = (
-            (col - 0.5 * sensor.width as f64) * sensor.pitch_mm,
-            (0.5 * sensor.height as f64 - row) * sensor.pitch_mm,
-        );
-        sum += v;
-        x += v * px;
-        y += v * py;
-        r2 += v * (px * px + py * py);
-    }
-    let (x, y) = (x / sum, y / sum);
-    (x, y, (r2 / sum - x * x - y * y).max(0.0).sqrt(), sum)
+    let [x, y, wide, tall, sum] = moments::moments(plane, sensor);
+    (x, y, libm::hypot(wide, tall), sum)
 }
 
 #[test]
