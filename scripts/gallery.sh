@@ -340,4 +340,18 @@ done
   "$work/recipe-sun-through-trees.png=sun-through-trees" "$work/recipe-astro-spikes.png=astro-spikes" \
   "$work/recipe-star-filter.png=star-filter" "$work/recipe-candleglass-f32-8blade.png=candleglass-f32-8blade"
 
+# Glare figures: an office with a sunlit window rendered by Radiance
+# (pyradiance's rpict, the scene of the evalglare comparison test), its two
+# glare sources marked. Without pyradiance the picture is left as it is.
+py=target/pyvenv/bin/python
+if [ -x "$py" ] && "$py" -c 'import pyradiance' 2>/dev/null; then
+  "$py" - "$work" <<'PY'
+import sys
+sys.path.insert(0, "crates/aureole-py/tests")
+from glare_scenes import radiance_bin, render
+render(radiance_bin(), "office-sun", sys.argv[1], 400)
+PY
+  "$aureole" -q glare "$work/office-sun.hdr" -c "$out/glare-office-marked.png" > /dev/null
+fi
+
 ls -la "$out"

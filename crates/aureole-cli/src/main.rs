@@ -25,6 +25,7 @@ mod demo;
 mod device;
 mod display_args;
 mod failure;
+mod glare;
 mod info;
 mod input;
 mod interrupt;
@@ -67,6 +68,8 @@ enum Command {
     Apply(apply::Args),
     /// Render a built-in night street through the camera: aureole with nothing else.
     Demo(demo::Args),
+    /// Rate a view's glare as evalglare does: E_v, DGP, DGI, UGR, VCP, CGI and the glare sources of a fisheye or perspective HDR picture.
+    Glare(glare::Args),
     /// Describe an image: size, channels, luminance range, bright pixels.
     Info(info::Args),
     /// Describe a lens prescription (aureole's TOML, pbrt's .dat, lentil's JSON, an Optical Bench .txt): focal length, back focus, pupil, surfaces; -o writes it as TOML, --ghosts renders one source's ghosts.
@@ -123,6 +126,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Apply(args) => apply::run(args, sub("apply"), cli.quiet),
         Command::Demo(args) => demo::run(args, sub("demo"), cli.quiet),
+        Command::Glare(args) => glare::run(args, cli.quiet),
         Command::Info(args) => info::run(args, cli.quiet),
         Command::Lens(args) => lens::run(args, cli.quiet),
         Command::Psf(args) => psf::run(args, sub("psf"), cli.quiet),

@@ -49,6 +49,7 @@ pub mod limits;
 pub mod measured;
 #[cfg(feature = "plot")]
 pub mod plot;
+pub mod rating;
 pub mod read;
 pub mod spares;
 pub mod write;

@@ -436,7 +436,7 @@ fn radiance_exposure_colour_correction_and_primaries_are_honoured_and_kept() {
     // halved, on other primaries.
     let edited = with_header_lines(
         &plain,
-        b"EXPOSURE=2\nCOLORCORR=0.5 1 1\nPRIMARIES=0.68 0.32 0.265 0.69 0.15 0.06 0.3127 0.329\n",
+        b"EXPOSURE=2\nCOLORCORR=0.5 1 1\nPRIMARIES=0.68 0.32 0.265 0.69 0.15 0.06 0.3127 0.329\nVIEW= -vta -vh 180 -vv 180\nVIEW= -vv 170\n",
     );
     let exposed = dir.path().join("exposed.hdr");
     std::fs::write(&exposed, &edited).unwrap();
@@ -461,6 +461,11 @@ fn radiance_exposure_colour_correction_and_primaries_are_honoured_and_kept() {
     );
     let p3 = loaded.image.primaries.expect("the header's primaries");
     assert_eq!(p3.green, [0.265, 0.69]);
+    // Every VIEW line, in order: a later option overrides an earlier one.
+    assert_eq!(
+        loaded.original.radiance_view(),
+        Some("-vta -vh 180 -vv 180 -vv 170")
+    );
 
     // Written back, the header says the same and the pixels read the same.
     let back = dir.path().join("back.hdr");
@@ -477,6 +482,10 @@ fn radiance_exposure_colour_correction_and_primaries_are_honoured_and_kept() {
         "{text}"
     );
     assert!(text.contains("PRIMARIES=0.68 0.32"), "{text}");
+    assert!(
+        text.contains("VIEW= -vta -vh 180 -vv 180 -vv 170\n"),
+        "{text}"
+    );
     let again = read_image(&back, Limits::NONE).unwrap();
     for c in 0..3 {
         assert!((first(&again, c) - first(&loaded, c)).abs() < 0.02 * first(&loaded, c));

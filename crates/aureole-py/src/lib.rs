@@ -6,6 +6,7 @@
 mod arrays;
 mod camera;
 mod files;
+mod glare;
 mod run;
 
 use pyo3::prelude::*;
@@ -37,6 +38,7 @@ fn _aureole(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(files::read, module)?)?;
     module.add_function(wrap_pyfunction!(files::write, module)?)?;
     module.add_function(wrap_pyfunction!(files::render, module)?)?;
+    module.add_function(wrap_pyfunction!(glare::glare, module)?)?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -68,6 +68,15 @@ pub enum Error {
         message: String,
     },
 
+    /// A picture's view (projection, field of view) that cannot be used.
+    #[error("view {view:?}: {message}")]
+    View {
+        /// The view as given (Radiance's options, or the config's words).
+        view: String,
+        /// What is wrong and what is allowed.
+        message: String,
+    },
+
     /// A preset name that is not built in.
     #[error("unknown preset {name:?}{}; the presets are: {available}", suggestion.map(|s| format!(" (did you mean {s:?}?)")).unwrap_or_default())]
     UnknownPreset {

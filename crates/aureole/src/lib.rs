@@ -84,9 +84,11 @@ pub mod memory;
 pub mod optics;
 pub mod pipeline;
 pub mod presets;
+pub mod rating;
 pub mod schema;
 mod sending;
 pub mod units;
+pub mod view;
 
 pub use camera::CameraGeometry;
 pub use config::{Config, ConfigFile};
@@ -101,3 +103,4 @@ pub use pipeline::{
     GlareLayer, Method, Plan, ScaleSource, Session, Stage,
 };
 pub use units::{Length, Unit};
+pub use view::{Projection, View};

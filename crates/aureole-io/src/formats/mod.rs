@@ -8,6 +8,7 @@ pub(crate) mod exr;
 pub mod pfm;
 pub(crate) mod picture;
 pub(crate) mod radiance;
+pub use radiance::STANDARD_PRIMARIES as RADIANCE_PRIMARIES;
 
 use std::path::Path;
 
@@ -109,6 +110,17 @@ pub struct Original {
 }
 
 impl Original {
+    /// Whether the file was a Radiance picture.
+    pub fn is_radiance(&self) -> bool {
+        self.radiance.is_some()
+    }
+
+    /// A Radiance picture's view options (its `VIEW=` lines), as
+    /// [`aureole::View::from_radiance`] reads them.
+    pub fn radiance_view(&self) -> Option<&str> {
+        self.radiance.as_ref().and_then(|h| h.view.as_deref())
+    }
+
     /// The parts, layers and channels of the file, a line each, for a
     /// person; empty for a format without them.
     pub fn describe(&self) -> Vec<String> {

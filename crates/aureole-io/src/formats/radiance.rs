@@ -26,7 +26,19 @@ pub(crate) struct Header {
     correction: [f32; 3],
     /// `PRIMARIES` as written, passed through.
     primaries: Option<String>,
+    /// The `VIEW` lines' options, in order (a later option overrides).
+    pub(crate) view: Option<String>,
 }
+
+/// Radiance's own primaries, which a picture without a `PRIMARIES` line
+/// is in (`color.h`'s `STDPRIMS`): its luminance is 0.265 R + 0.670 G +
+/// 0.065 B, as `evalglare` and `pvalue -b` weigh it.
+pub const STANDARD_PRIMARIES: Primaries = Primaries {
+    red: [0.640, 0.330],
+    green: [0.290, 0.600],
+    blue: [0.150, 0.060],
+    white: [1.0 / 3.0, 1.0 / 3.0],
+};
 
 /// Decodes a Radiance file: the pixels through the `image` crate, then the
 /// header's exposure and colour correction undone.
@@ -87,10 +99,17 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
                 .push("the header's PRIMARIES are degenerate: luminance uses Rec.709".into());
         }
     }
+    let views: Vec<&str> = meta
+        .custom_attributes
+        .iter()
+        .filter(|(k, _)| k == "VIEW")
+        .map(|(_, v)| v.trim())
+        .collect();
     decoded.original.radiance = Some(Header {
         exposure,
         correction,
         primaries: primaries_text,
+        view: (!views.is_empty()).then(|| views.join(" ")),
     });
     Ok(decoded)
 }
@@ -170,6 +189,11 @@ pub(crate) fn encode(path: &Path, planes: LinearPlanes) -> Result<Vec<Note>> {
         }
         if let Some(p) = &h.primaries {
             lines += &format!("PRIMARIES={p}\n");
+        }
+        // The view stays true of the result: glare figures and Radiance's
+        // tools read it.
+        if let Some(v) = &h.view {
+            lines += &format!("VIEW= {v}\n");
         }
         let format_line = b"FORMAT=32-bit_rle_rgbe\n";
         let at = bytes

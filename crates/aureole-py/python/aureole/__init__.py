@@ -13,6 +13,6 @@ stops a long call within a second. Bad parameters raise ValueError with the
 library's one-line message, unreadable files OSError.
 """
 
-from ._aureole import Camera, __version__, lenses, presets, read, render, write
+from ._aureole import Camera, __version__, glare, lenses, presets, read, render, write
 
-__all__ = ["Camera", "lenses", "presets", "read", "write", "render", "__version__"]
+__all__ = ["Camera", "glare", "lenses", "presets", "read", "write", "render", "__version__"]

@@ -143,3 +143,25 @@ def render(
     scale: float = 1.0,
 ) -> npt.NDArray[np.uint8]:
     """`image` as uint8 sRGB (H, W, 3) for a display."""
+
+def glare(
+    source: Union[ImageLike, Path],
+    *,
+    view: Optional[str] = None,
+    projection: Optional[str] = None,
+    fov: Optional[float] = None,
+    fov_vertical: Optional[float] = None,
+    input_scale: Optional[float] = None,
+    threshold: Optional[float] = None,
+    multiple: Optional[float] = None,
+    task: Optional[tuple[float, float, float]] = None,
+    search: float = 0.2,
+    peak: Optional[float] = 50000.0,
+    layer: Optional[str] = None,
+    part: Optional[str] = None,
+) -> dict[str, Any]:
+    """The glare figures of a view as `evalglare` defines them (E_v,
+    DGP, DGI, UGR, VCP, CGI, background luminance and the glare sources),
+    the dict `aureole glare --json` prints. `source` is a picture file
+    (a Radiance picture's VIEW header gives its view) or a luminance array
+    with `view` (Radiance's options) or `projection` and `fov`."""
