@@ -95,4 +95,8 @@ rm -rf "$probe"
 } >> bench/RESULTS.md
 # The --max-memory estimate against the measured peaks of whole runs.
 { echo "## Memory: the estimate against measured peaks"; echo; python3 bench/memory.py target/release/aureole; echo; } >> bench/RESULTS.md
+# Glare figures against Radiance's evalglare (pyradiance in the tests' venv).
+if [ -x target/pyvenv/bin/python ] && target/pyvenv/bin/python -c 'import pyradiance' 2>/dev/null; then
+  { echo "## Glare figures against evalglare (\`bench/glare.py\`, medians of 5)"; echo; target/pyvenv/bin/python bench/glare.py target/release/aureole; echo; } >> bench/RESULTS.md
+fi
 cat bench/RESULTS.md

@@ -352,6 +352,26 @@ from glare_scenes import radiance_bin, render
 render(radiance_bin(), "office-sun", sys.argv[1], 400)
 PY
   "$aureole" -q glare "$work/office-sun.hdr" -c "$out/glare-office-marked.png" > /dev/null
+  # The guide's night street for architects: the same street seen through
+  # a 90° perspective, as a camera at f/8 records it and as a 25- and a
+  # 70-year-old see it (the CIE's eye), one exposure for all three.
+  "$py" - "$work" <<'PY'
+import sys
+sys.path.insert(0, "crates/aureole-py/tests")
+from glare_scenes import radiance_bin, render
+render(radiance_bin(), "night-street", sys.argv[1], 960, view="-vtv -vh 90 -vv 58.7", height=540)
+PY
+  printf '[camera]\nsensor_width_mm = 36.0\nfocal_length_mm = 18.0\n' > "$work/lens-18mm.toml"
+  for preset in camera-f8-7blade human-eye-cie-25 human-eye-cie-70; do
+    "$aureole" -q apply "$work/night-street.hdr" -o "$work/street-$preset.png" --preset "$preset" \
+      --config "$work/lens-18mm.toml" --input-scale 179 --exposure 7.5
+  done
+  figures=$("$aureole" -q glare "$work/night-street.hdr" --json | "$py" -c \
+    'import json, sys; f = json.load(sys.stdin); print("DGP %.2f, UGR %.0f" % (f["dgp"], f["ugr"]))')
+  "$montage" "$out/guide-glare-observers.jpg" --columns 3 --width 480 --quality 85 \
+    "$work/street-camera-f8-7blade.png=camera f/8: $figures" \
+    "$work/street-human-eye-cie-25.png=a 25-year-old (CIE 146)" \
+    "$work/street-human-eye-cie-70.png=a 70-year-old with light eyes"
 fi
 
 ls -la "$out"

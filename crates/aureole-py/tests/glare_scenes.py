@@ -164,10 +164,16 @@ SCENES = {
 }
 
 
-def render(bindir, name, out_dir, size=400):
+def render(bindir, name, out_dir, size=400, view=None, height=None):
     """Renders scene `name` to `out_dir/name.hdr` (a `size`² angular
-    fisheye with its VIEW in the header); returns the path."""
-    sky_args, geometry, view, ambient = SCENES[name]
+    fisheye with its VIEW in the header, or `size` × `height` through
+    `view`, Radiance's options with the scene's position and direction);
+    returns the path."""
+    sky_args, geometry, scene_view, ambient = SCENES[name]
+    if view is None:
+        view = scene_view
+    else:
+        view = " ".join(w for w in scene_view.split() if not w.startswith("-vt")) + " " + view
     work = Path(out_dir)
     scene = geometry()
     if sky_args:
@@ -177,7 +183,7 @@ def render(bindir, name, out_dir, size=400):
     (work / f"{name}.oct").write_bytes(octree)
     picture = run(
         bindir,
-        ["rpict", *view.split(), "-x", str(size), "-y", str(size), "-ps", "1", "-dj", "0", "-ds", ".1",
+        ["rpict", *view.split(), "-x", str(size), "-y", str(height or size), "-ps", "1", "-dj", "0", "-ds", ".1",
          *ambient, f"{name}.oct"],
         work,
     )
