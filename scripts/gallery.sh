@@ -342,36 +342,56 @@ done
 
 # Glare figures: an office with a sunlit window rendered by Radiance
 # (pyradiance's rpict, the scene of the evalglare comparison test), its two
-# glare sources marked. Without pyradiance the picture is left as it is.
+# glare sources marked. Without pyradiance the pictures are left as they are.
 py=target/pyvenv/bin/python
 if [ -x "$py" ] && "$py" -c 'import pyradiance' 2>/dev/null; then
-  "$py" - "$work" <<'PY'
+  # Renders a scene of the test: NAME FOLDER SIZE [VIEW HEIGHT].
+  scene() {
+    mkdir -p "$2"
+    "$py" - "$@" <<'PY'
 import sys
 sys.path.insert(0, "crates/aureole-py/tests")
 from glare_scenes import radiance_bin, render
-render(radiance_bin(), "office-sun", sys.argv[1], 400)
+name, folder, size = sys.argv[1], sys.argv[2], int(sys.argv[3])
+view, height = (sys.argv[4], int(sys.argv[5])) if len(sys.argv) > 5 else (None, None)
+render(radiance_bin(), name, folder, size, view=view, height=height)
 PY
+  }
+  # A view's DGP and UGR, for a caption.
+  figures() {
+    "$aureole" -q glare "$1" --json | "$py" -c \
+      'import json, sys; f = json.load(sys.stdin); print("DGP %.2f, UGR %.0f" % (f["dgp"], f["ugr"]))'
+  }
+  scene office-sun "$work" 400
   "$aureole" -q glare "$work/office-sun.hdr" -c "$out/glare-office-marked.png" > /dev/null
   # The guide's night street for architects: the same street seen through
   # a 90° perspective, as a camera at f/8 records it and as a 25- and a
   # 70-year-old see it (the CIE's eye), one exposure for all three.
-  "$py" - "$work" <<'PY'
-import sys
-sys.path.insert(0, "crates/aureole-py/tests")
-from glare_scenes import radiance_bin, render
-render(radiance_bin(), "night-street", sys.argv[1], 960, view="-vtv -vh 90 -vv 58.7", height=540)
-PY
+  scene night-street "$work" 960 "-vtv -vh 90 -vv 58.7" 540
   printf '[camera]\nsensor_width_mm = 36.0\nfocal_length_mm = 18.0\n' > "$work/lens-18mm.toml"
   for preset in camera-f8-7blade human-eye-cie-25 human-eye-cie-70; do
     "$aureole" -q apply "$work/night-street.hdr" -o "$work/street-$preset.png" --preset "$preset" \
       --config "$work/lens-18mm.toml" --input-scale 179 --exposure 7.5
   done
-  figures=$("$aureole" -q glare "$work/night-street.hdr" --json | "$py" -c \
-    'import json, sys; f = json.load(sys.stdin); print("DGP %.2f, UGR %.0f" % (f["dgp"], f["ugr"]))')
   "$montage" "$out/guide-glare-observers.jpg" --columns 3 --width 480 --quality 85 \
-    "$work/street-camera-f8-7blade.png=camera f/8: $figures" \
+    "$work/street-camera-f8-7blade.png=camera f/8: $(figures "$work/night-street.hdr")" \
     "$work/street-human-eye-cie-25.png=a 25-year-old (CIE 146)" \
     "$work/street-human-eye-cie-70.png=a 70-year-old with light eyes"
+  # The same street as a 180° fisheye, the eye spread over the sphere of
+  # its directions (the view from the picture's VIEW header).
+  scene night-street "$work/fisheye" 600
+  fisheye="$work/fisheye/night-street.hdr"
+  # The scene itself: a bloom with a threshold no pixel reaches.
+  "$aureole" -q apply "$fisheye" -o "$work/fisheye-scene.png" --config "$work/lens-18mm.toml" \
+    --preset paper-fig4-bloom --input-scale 179 --exposure 7.5 --threshold 1e12
+  for preset in human-eye-cie-25 human-eye-cie-70; do
+    "$aureole" -q apply "$fisheye" -o "$work/fisheye-$preset.png" --preset "$preset" \
+      --input-scale 179 --exposure 7.5 --threshold 500
+  done
+  "$montage" "$out/guide-glare-fisheye.jpg" --columns 3 --width 400 --quality 85 \
+    "$work/fisheye-scene.png=the scene: $(figures "$fisheye")" \
+    "$work/fisheye-human-eye-cie-25.png=a 25-year-old" \
+    "$work/fisheye-human-eye-cie-70.png=a 70-year-old, light eyes"
 fi
 
 ls -la "$out"

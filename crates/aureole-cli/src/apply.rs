@@ -197,6 +197,37 @@ impl Args {
     }
 }
 
+/// A Radiance picture's fisheye view (its `VIEW=` header: -vta, -vth or
+/// -vts) for a chain of the eye alone whose `[camera]` gives no
+/// projection: the eye is then spread over the sphere of the view's
+/// directions.
+fn header_view(
+    config: &mut aureole::Config,
+    path: &std::path::Path,
+    quiet: bool,
+) -> Result<(), Failure> {
+    let eye_alone = matches!(config.effects.as_slice(), [aureole::Effect::Eye(_)]);
+    if !eye_alone || config.camera.projection.is_some() {
+        return Ok(());
+    }
+    let Some(text) = aureole_io::formats::read_radiance_view(path) else {
+        return Ok(());
+    };
+    let view = aureole::View::from_radiance(&text)
+        .map_err(|e| Failure::Usage(anyhow::anyhow!("{}: {e}", path.display())))?;
+    if view.projection == aureole::Projection::Perspective {
+        return Ok(());
+    }
+    config.camera.take_view(&view);
+    if !quiet {
+        say!(
+            "aureole: note: {}: the header's VIEW ({view}) spreads the eye over the sphere of its directions",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
 pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure> {
     let pairs = batch::pairs(
         &args.inputs,
@@ -226,7 +257,10 @@ pub fn run(args: &Args, matches: &ArgMatches, quiet: bool) -> Result<(), Failure
             Session::with_kernel(kernel)
         }
         None => {
-            let (config, defaulted) = args.chain.compose_or_default(matches, quiet)?;
+            let (mut config, defaulted) = args.chain.compose_or_default(matches, quiet)?;
+            if let Some(job) = jobs.first() {
+                header_view(&mut config, job.file(), quiet)?;
+            }
             if defaulted && !quiet {
                 say!(
                     "aureole: note: no --preset or --config: using the default camera, preset {}",

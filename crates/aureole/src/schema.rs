@@ -180,6 +180,36 @@ pub const CAMERA: &[Parameter] = &[
         allowed: "a finite number of at least 0.5",
         about: "the stop: diffraction widens as it closes",
     },
+    Parameter {
+        name: "projection",
+        kind: Kind::Text,
+        low: None,
+        high: None,
+        default: Default::Required,
+        unit: "",
+        allowed: "perspective, equidistant (angular), equisolid, stereographic or orthographic (hemispherical)",
+        about: "a wide view's projection (a fisheye): the eye's glare is then spread over the sphere of directions",
+    },
+    Parameter {
+        name: "field_of_view_deg",
+        kind: Kind::Angle,
+        low: Some((0.0, false)),
+        high: Some((360.0, true)),
+        default: Default::Required,
+        unit: "°",
+        allowed: "an angle above 0° and at most the projection's widest (360° for a fisheye, 179° for a perspective)",
+        about: "the angle the image's width spans, with projection",
+    },
+    Parameter {
+        name: "field_of_view_vertical_deg",
+        kind: Kind::Angle,
+        low: Some((0.0, false)),
+        high: Some((360.0, true)),
+        default: Default::Required,
+        unit: "°",
+        allowed: "an angle above 0° and at most the projection's widest",
+        about: "the angle the image's height spans (default: the same scale as across)",
+    },
 ];
 
 #[cfg(test)]

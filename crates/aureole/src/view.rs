@@ -24,12 +24,14 @@ pub enum Projection {
     Perspective,
     /// The angular fisheye: r = θ (Radiance `-vta`), the one daylight glare
     /// studies render.
+    #[serde(alias = "angular")]
     Equidistant,
     /// The equal-area fisheye: r = 2 sin(θ/2); most photographic fisheyes.
     Equisolid,
     /// r = 2 tan(θ/2) (Radiance's planisphere, `-vts`).
     Stereographic,
     /// r = sin θ (Radiance's hemispherical fisheye, `-vth`).
+    #[serde(alias = "hemispherical")]
     Orthographic,
 }
 
@@ -84,6 +86,13 @@ impl Projection {
             Projection::Stereographic => 2.0 * libm::tan(theta / 2.0),
             Projection::Orthographic => libm::sin(theta),
         }
+    }
+
+    /// θ at radius `r` of the image plane, `None` beyond the projection's
+    /// edge.
+    pub fn angle_at(self, r: f64) -> Option<f64> {
+        self.angle_and_density(r)
+            .map(|(cos, sin, _)| libm::atan2(sin, cos))
     }
 
     /// (θ, dΩ/dA): the angle off the axis at radius `r` of the image plane
@@ -369,6 +378,42 @@ impl Pixels {
             direction: [sin * ux, sin * uy, cos],
             solid_angle: density * self.step_x * self.step_y,
         })
+    }
+
+    /// [`Pixels::sight`], or where the projection shows nothing, the sight
+    /// at the nearest point of its rim: the directions of a coarse grid
+    /// whose cells straddle a fisheye's edge.
+    pub fn sight_nearest(&self, x: f64, y: f64) -> Sight {
+        if let Some(s) = self.sight(x, y) {
+            return s;
+        }
+        let (px, py) = self.plane(x, y);
+        let r = (px * px + py * py).sqrt();
+        let edge = match self.projection {
+            Projection::Equidistant => PI,
+            Projection::Equisolid => 2.0,
+            Projection::Orthographic => 1.0,
+            Projection::Perspective | Projection::Stereographic => r,
+        } * (1.0 - 1e-9);
+        let k = if r > 0.0 { edge / r } else { 0.0 };
+        let (cos, sin, density) = self
+            .projection
+            .angle_and_density(r * k)
+            .unwrap_or((1.0, 0.0, 1.0));
+        let (ux, uy) = if r > 0.0 {
+            (px / r, py / r)
+        } else {
+            (0.0, 0.0)
+        };
+        Sight {
+            direction: [sin * ux, sin * uy, cos],
+            solid_angle: density * self.step_x * self.step_y,
+        }
+    }
+
+    /// The picture's size in pixels.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
     }
 
     /// The sight of pixel (column, row), from the top left.

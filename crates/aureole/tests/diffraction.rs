@@ -42,6 +42,7 @@ fn camera_config(aperture: Aperture) -> Config {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(F),
             f_number: Some(8.0),
+            ..CameraGeometry::default()
         },
         effects: vec![Effect::Aperture(aperture)],
         ..Config::default()
@@ -482,6 +483,7 @@ fn an_anamorphic_lens_moves_a_filters_orders_in_across_x_and_lists_them_to_the_r
         sensor_width_mm: Some(36.0),
         focal_length_mm: Some(50.0),
         f_number: Some(8.0),
+        ..CameraGeometry::default()
     };
     let (spacing_mm, reach_mm, focal) = (0.2, 5.0, 50.0);
     for squeeze in [1.0, 2.0] {

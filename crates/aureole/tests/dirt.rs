@@ -26,6 +26,7 @@ fn config(f_number: f64, aperture: Aperture) -> Config {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(F),
             f_number: Some(f_number),
+            ..CameraGeometry::default()
         },
         effects: vec![Effect::Aperture(aperture)],
         ..Config::default()

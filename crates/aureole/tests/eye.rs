@@ -86,6 +86,7 @@ fn kernel(eye: Eye, size: usize) -> Kernel {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: None,
+            ..CameraGeometry::default()
         },
         effects: vec![Effect::Eye(eye)],
         ..Config::default()

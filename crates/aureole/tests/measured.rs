@@ -17,6 +17,7 @@ fn config(effects: Vec<Effect>) -> Config {
             sensor_width_mm: Some(SENSOR),
             focal_length_mm: Some(50.0),
             f_number: Some(8.0),
+            ..CameraGeometry::default()
         },
         effects,
         ..Config::default()

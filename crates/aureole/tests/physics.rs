@@ -67,6 +67,7 @@ fn camera(sensor_mm: f64, focal_mm: f64) -> CameraGeometry {
         sensor_width_mm: Some(sensor_mm),
         focal_length_mm: Some(focal_mm),
         f_number: None,
+        ..CameraGeometry::default()
     }
 }
 

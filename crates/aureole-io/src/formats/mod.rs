@@ -8,7 +8,7 @@ pub(crate) mod exr;
 pub mod pfm;
 pub(crate) mod picture;
 pub(crate) mod radiance;
-pub use radiance::STANDARD_PRIMARIES as RADIANCE_PRIMARIES;
+pub use radiance::{read_view as read_radiance_view, STANDARD_PRIMARIES as RADIANCE_PRIMARIES};
 
 use std::path::Path;
 

@@ -114,6 +114,33 @@ pub(crate) fn decode(bytes: &[u8], limits: Limits) -> std::result::Result<Decode
     Ok(decoded)
 }
 
+/// The view options of the Radiance picture at `path` (its `VIEW=` lines,
+/// in order), read from its header alone; `None` for another file or a
+/// picture without one.
+pub fn read_view(path: &Path) -> Option<String> {
+    use std::io::{BufRead, Read};
+    let file = std::fs::File::open(path).ok()?;
+    // A header is a few lines; a file whose first 64 KiB hold no end of
+    // header is not read further.
+    let mut reader = std::io::BufReader::new(file.take(1 << 16));
+    let mut line = String::new();
+    reader.read_line(&mut line).ok()?;
+    if !(line.starts_with("#?RADIANCE") || line.starts_with("#?RGBE")) {
+        return None;
+    }
+    let mut views = Vec::new();
+    loop {
+        line.clear();
+        if reader.read_line(&mut line).ok()? == 0 || line.trim().is_empty() {
+            break;
+        }
+        if let Some(view) = line.strip_prefix("VIEW=") {
+            views.push(view.trim().to_string());
+        }
+    }
+    (!views.is_empty()).then(|| views.join(" "))
+}
+
 /// `PRIMARIES= rx ry gx gy bx by wx wy`; `None` when absent or all zero.
 fn parse_primaries(text: &str) -> Option<Primaries> {
     let v: Vec<f32> = text

@@ -126,8 +126,19 @@ impl Eye {
     /// The light of the equation over the hemisphere, ∫ L/E dΩ, by
     /// Simpson's rule in ln θ (the terms vary over decades of θ).
     pub fn hemisphere(&self) -> f64 {
+        self.light_within(90.0)
+    }
+
+    /// The light of the equation over the whole sphere of directions
+    /// about its source, its terms carried on past 100° to 180°.
+    pub fn sphere(&self) -> f64 {
+        self.light_within(180.0)
+    }
+
+    /// ∫ L/E dΩ within `degrees` of the source.
+    fn light_within(&self, degrees: f64) -> f64 {
         const STEPS: usize = 8192;
-        let (low, high) = (libm::log(1e-6), libm::log(90.0));
+        let (low, high) = (libm::log(1e-6), libm::log(degrees));
         let h = (high - low) / STEPS as f64;
         let at = |k: usize| {
             let theta = libm::exp(low + h * k as f64);

@@ -134,6 +134,7 @@ mod tests {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: None,
+            ..CameraGeometry::default()
         };
         for exponent in [1.5, 2.0, 2.7, 3.0] {
             let vos = Vos {
@@ -155,6 +156,7 @@ mod tests {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: None,
+            ..CameraGeometry::default()
         };
         let shape = Vos {
             epsilon: 0.05,

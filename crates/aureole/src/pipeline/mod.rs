@@ -10,6 +10,7 @@ mod options;
 mod plan;
 mod precision;
 mod session;
+pub mod sphere;
 mod splat;
 mod threshold;
 

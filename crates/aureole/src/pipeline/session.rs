@@ -5,7 +5,7 @@
 
 use super::cost::Estimate;
 use super::ghosts::{self, DisplayWindow, GhostSummary};
-use super::options::{Applied, ApplyOptions};
+use super::options::{Applied, ApplyOptions, Arithmetic, Method};
 use super::plan::{DoubleRefused, Plan};
 use super::threshold::Threshold;
 use crate::config::Config;
@@ -454,6 +454,11 @@ impl Session {
         progress: &mut dyn FnMut(Stage, f64),
     ) -> Result<Applied> {
         let image = frame.image();
+        if let Some(config) = self.config() {
+            if let Some(view) = config.camera.view(image.width, image.height)? {
+                return self.spread_on_sphere(frame, options, &view, progress);
+            }
+        }
         let size = (image.width, image.height);
         if self.plan.as_ref().is_some_and(|p| p.size() != size) {
             self.release_plan();
@@ -467,6 +472,65 @@ impl Session {
         let mut control = Control::new(&self.cancel, &mut report);
         let recycled = std::mem::take(&mut self.recycled);
         plan.apply_with(image, frame.scale(), options, recycled, &mut control)
+    }
+
+    /// `frame` through the eye over the sphere of directions `view` gives
+    /// its pixels ([`super::sphere`]): a wide view, where no one kernel
+    /// in pixels holds. The chain must be the eye alone.
+    fn spread_on_sphere(
+        &mut self,
+        frame: &Frame,
+        options: &ApplyOptions,
+        view: &crate::view::View,
+        progress: &mut dyn FnMut(Stage, f64),
+    ) -> Result<Applied> {
+        let config = self.config().ok_or(Error::NoEffect)?;
+        let eye = match config.effects.as_slice() {
+            [Effect::Eye(eye)] => eye.clone(),
+            [] => return Err(Error::NoEffect),
+            _ => {
+                return Err(Error::View {
+                    view: view.to_string(),
+                    message: "a wide view ([camera] projection) spreads the eye alone (one [[effect]] type = \"eye\"); the other effects are a lens's, whose kernels are in pixels of a perspective sensor: remove them, or the projection".into(),
+                })
+            }
+        };
+        let threshold = options.threshold.unwrap_or(config.threshold);
+        progress(Stage::Convolving, 0.0);
+        let spread = super::sphere::spread_eye(
+            frame.image(),
+            frame.scale(),
+            view,
+            &eye,
+            threshold,
+            options.knee,
+            &self.cancel,
+        )?;
+        progress(Stage::Convolving, 1.0);
+        let input = frame.image();
+        let mut image = spread.image;
+        if options.glare_only {
+            super::options::subtract_input(&mut image.planes, &input.planes);
+        }
+        // The pixels of a wide view cover unequal solid angles: the light
+        // kept is the flux's (Σ Y·ω), reported on the input's Σ Y.
+        let energy_in = input.total_luminance();
+        let kept = if spread.energy_in > 0.0 {
+            spread.energy_out / spread.energy_in
+        } else {
+            1.0
+        };
+        Ok(Applied {
+            image,
+            energy_in,
+            energy_out: energy_in * kept,
+            spread_pixels: spread.spread_pixels,
+            threshold,
+            method: Method::Splat,
+            arithmetic: Arithmetic::Single,
+            device: "the CPU, over the sphere of a wide view".to_string(),
+            ghosts: None,
+        })
     }
 
     /// A session for the chain's first `effects` effects, with this one's

@@ -530,6 +530,7 @@ mod tests {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: Some(f_number),
+            ..Default::default()
         };
         aperture.optics(&camera, 1.0, 0).unwrap()
     }

@@ -757,6 +757,7 @@ mod tests {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: Some(8.0),
+            ..Default::default()
         };
         let optics = aperture.optics(&camera, 1.0, 0).unwrap();
         let spectrum = crate::optics::aperture::spectrum::Light::Spectral.wavelengths();
@@ -863,6 +864,7 @@ mod tests {
             sensor_width_mm: Some(36.0),
             focal_length_mm: Some(50.0),
             f_number: Some(8.0),
+            ..Default::default()
         };
         let bladed = crate::optics::Aperture::new(7)
             .optics(&camera, 1.0, 0)
