@@ -215,3 +215,24 @@ fn a_narrow_perspective_view_gets_the_cameras_kernel() {
         );
     }
 }
+
+#[test]
+fn a_view_whose_pixels_differ_too_much_is_refused_in_one_line() {
+    let image = scene(64);
+    let wide = View::new(Projection::Perspective, 160.0);
+    let message = spread_eye(&image, 1.0, &wide, &eye(25.0), 100.0, 0.0, &Cancel::new())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("differ") && !message.contains('\n'),
+        "{message}"
+    );
+    for projection in [
+        Projection::Equidistant,
+        Projection::Equisolid,
+        Projection::Stereographic,
+    ] {
+        let view = View::new(projection, 180.0);
+        assert!(spread_eye(&image, 1.0, &view, &eye(25.0), 100.0, 0.0, &Cancel::new()).is_ok());
+    }
+}

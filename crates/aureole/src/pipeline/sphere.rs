@@ -23,7 +23,7 @@ use rayon::prelude::*;
 
 use super::threshold::spread_fraction;
 use crate::control::Cancel;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::image::{Image, Layout, PixelLuminance};
 use crate::optics::Eye;
 use crate::view::{Pixels, View};
@@ -31,6 +31,9 @@ use crate::view::{Pixels, View};
 /// A band begins this many of its cells from the light (and its window
 /// reaches full height at twice that).
 const BAND_START: f64 = 4.0;
+/// The most the widest and the narrowest angle between neighbouring
+/// pixels may differ (an equidistant fisheye's are 1.6 apart at 180°).
+const MOST_UNEQUAL: f64 = 6.0;
 /// The coarsest grid has at most this many cells across.
 const TOP_CELLS: usize = 24;
 /// Pixels this close (in pixels, each way) to a bright one average the
@@ -403,6 +406,18 @@ pub fn spread_eye(
     let (w, h) = (image.width, image.height);
     let pixels = view.pixels(w, h);
     let (narrowest, widest) = spacing(&pixels);
+    // The bands reach as many pixels as the narrowest spacing packs into
+    // their angle: a view whose pixels differ too much would cost without
+    // bound.
+    if widest > MOST_UNEQUAL * narrowest {
+        return Err(Error::View {
+            view: view.to_string(),
+            message: format!(
+                "its pixels' angles differ {:.0}-fold across the picture (at most {MOST_UNEQUAL:.0} for the eye over the sphere): a perspective wider than about 110° or a fisheye near 360°; give a narrower view, or the perspective as a camera ([camera] sensor_width_mm and focal_length_mm)",
+                widest / narrowest
+            ),
+        });
+    }
     let psf = Psf {
         eye,
         norm: 1.0 / eye.sphere(),
