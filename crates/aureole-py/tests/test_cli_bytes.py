@@ -94,3 +94,29 @@ def test_glare_layers_sum_to_the_glare_and_match_the_command_line(cli, street, t
     assert not (tmp_path / "py.png").exists()
     with pytest.raises(ValueError, match="ask for the layers or for the glare alone"):
         camera.apply(image, layers=True, glare_only=True)
+
+
+FISHEYE_EYE = """
+[camera]
+projection = "equidistant"
+field_of_view_deg = 180
+
+[[effect]]
+type = "eye"
+age = 70
+pigmentation = 1.0
+"""
+
+
+def test_the_eye_over_a_fisheye_is_the_command_lines(cli, street, tmp_path):
+    """A wide view's eye, spread over the sphere, gives the same bytes
+    from Python as from the command line."""
+    _, pfm = street
+    config = tmp_path / "fisheye.toml"
+    config.write_text(FISHEYE_EYE)
+    out = tmp_path / "out.pfm"
+    run(cli, "apply", pfm, "-o", out, "--config", config, "--threshold", "300")
+    expected, _ = aureole.read(out)
+    image, meta = aureole.read(pfm)
+    got = aureole.Camera.from_toml(FISHEYE_EYE).apply(image, threshold=300.0, input_scale=meta["scale"])
+    assert got.tobytes() == expected.tobytes()
