@@ -34,6 +34,8 @@ const BAND_START: f64 = 4.0;
 /// The most the widest and the narrowest angle between neighbouring
 /// pixels may differ (an equidistant fisheye's are 1.6 apart at 180°).
 const MOST_UNEQUAL: f64 = 6.0;
+/// A reach that bounds nothing (the coarsest band's, every cell).
+const UNBOUNDED: i64 = i64::MAX / 4;
 /// The coarsest grid has at most this many cells across.
 const TOP_CELLS: usize = 24;
 /// Pixels this close (in pixels, each way) to a bright one average the
@@ -83,6 +85,9 @@ struct Light {
     row: u32,
     direction: [f64; 3],
     light: [f64; 3],
+    /// A bright pixel's pixels each way within which the first band
+    /// reaches, from the spacing about it (a cell's is unused).
+    reach: i64,
 }
 
 /// Lights sorted by row and column, and where each row's begin.
@@ -308,26 +313,30 @@ fn stencils(
 
 /// The bright light gathered into cells of 2ˡ × 2ˡ pixels.
 fn gather(bright: &[Light], level: u32, height_cells: usize) -> Rows {
-    let mut cells: std::collections::BTreeMap<(u32, u32), ([f64; 3], [f64; 3])> =
-        std::collections::BTreeMap::new();
+    type Sums = ([f64; 3], [f64; 3], i64);
+    let mut cells: std::collections::BTreeMap<(u32, u32), Sums> = std::collections::BTreeMap::new();
     for l in bright {
         let key = (l.row >> level, l.column >> level);
-        let entry = cells.entry(key).or_insert(([0.0; 3], [0.0; 3]));
+        let entry = cells.entry(key).or_insert(([0.0; 3], [0.0; 3], 0));
         let weight: f64 = l.light.iter().sum();
         for c in 0..3 {
             entry.0[c] += l.light[c];
             entry.1[c] += l.direction[c] * weight;
         }
+        entry.2 = entry.2.max(l.reach);
     }
     let lights = cells
         .into_iter()
-        .map(|((row, column), (light, d))| {
+        .map(|((row, column), (light, d, reach))| {
             let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(1e-300);
             Light {
                 column,
                 row,
                 direction: [d[0] / n, d[1] / n, d[2] / n],
                 light,
+                // A band reaches as many of its cells as the first band
+                // reaches pixels, and the centroid lies anywhere in its cell.
+                reach: reach.saturating_add(1),
             }
         })
         .collect();
@@ -369,6 +378,15 @@ fn coarse_band(
             let directions: Vec<[f64; 3]> = (0..wl).map(centre).collect();
             let mut sums = vec![[0.0f64; 3]; wl];
             for cell in near {
+                // The coarsest band takes every angle: no cell's reach bounds it.
+                let reach = if reach >= UNBOUNDED {
+                    reach
+                } else {
+                    reach.min(cell.reach)
+                };
+                if (cy as i64 - i64::from(cell.row)).abs() > reach {
+                    continue;
+                }
                 let lo = (i64::from(cell.column) - reach).max(0);
                 let hi = (i64::from(cell.column) + reach).min(wl as i64 - 1);
                 for cx in (lo..=hi).map(|c| c as usize) {
@@ -426,6 +444,29 @@ pub fn spread_eye(
     let y = PixelLuminance::of(image);
     let channels = image.planes.len().min(3);
     let value = |c: usize, i: usize| f64::from(image.planes[c.min(channels - 1)][i]);
+    let mut top = 0u32;
+    while w.max(h).div_ceil(1 << top) > TOP_CELLS {
+        top += 1;
+    }
+    // The first band reaches 8 of the first grid's widest cells; in pixels,
+    // as many as the spacing about a bright pixel packs into that angle,
+    // less a margin for the spacing's change across it.
+    let first_band = 2.0 * psf.start(1);
+    let reach = (first_band / narrowest).ceil() as i64 + 1;
+    let direct_reach = if top == 0 { UNBOUNDED } else { reach };
+    let local_reach = |column: usize, row: usize, here: [f64; 3]| -> i64 {
+        let step = |c: usize, r: usize| pixels.pixel(c, r).map(|s| angle(s.direction, here));
+        let across =
+            step(column + 1, row).or_else(|| column.checked_sub(1).and_then(|c| step(c, row)));
+        let down =
+            step(column, row + 1).or_else(|| row.checked_sub(1).and_then(|r| step(column, r)));
+        match (across, down) {
+            (Some(a), Some(b)) if a.min(b) > 0.0 => {
+                ((first_band / (0.85 * a.min(b))).ceil() as i64 + 1).min(direct_reach)
+            }
+            _ => direct_reach,
+        }
+    };
     // The bright pixels, and what each keeps.
     let found: Vec<Vec<(Light, f64)>> = (0..h)
         .into_par_iter()
@@ -450,6 +491,11 @@ pub fn spread_eye(
                         row: row as u32,
                         direction: s.direction,
                         light,
+                        reach: if top == 0 {
+                            direct_reach
+                        } else {
+                            local_reach(column, row, s.direction)
+                        },
                     },
                     frac * (1.0 - keep),
                 ));
@@ -471,19 +517,14 @@ pub fn spread_eye(
         h,
     );
     let bright = Rows::new(found.iter().map(|(l, _)| *l).collect(), h);
-    let mut top = 0u32;
-    while w.max(h).div_ceil(1 << top) > TOP_CELLS {
-        top += 1;
-    }
     // Bands of the grids, coarsest first.
-    let reach = (2.0 * psf.start(1) / narrowest).ceil() as i64 + 1;
     let mut grids = Vec::new();
     for level in 1..=top {
         let size = 1usize << level;
         let cells = gather(&bright.lights, level, h.div_ceil(size));
         // A band reaches 4× its start, 16 of the widest cells: as many of
         // the narrowest as that angle holds, on every level.
-        let reach_cells = if level == top { i64::MAX / 4 } else { reach };
+        let reach_cells = if level == top { UNBOUNDED } else { reach };
         let table = Table::new(&psf, level, top, narrowest / 4.0);
         grids.push((
             level,
@@ -493,7 +534,6 @@ pub fn spread_eye(
     }
     let block = ((STENCIL_ANGLE / widest) as u32).clamp(1, STENCIL_BLOCK);
     let stencils = stencils(&pixels, &psf, &bright, block);
-    let direct_reach = if top == 0 { i64::MAX / 4 } else { reach };
     let direct = Table::new(&psf, 0, top, narrowest / 4.0);
     let side = (2 * STENCIL + 1) as usize;
     let rows: Vec<(Vec<f32>, f64, f64)> = (0..h)
@@ -510,9 +550,14 @@ pub fn spread_eye(
                     .collect();
                 for l in near {
                     let dy = row as i64 - i64::from(l.row);
-                    let stencil = &stencils[&(l.column / block, l.row / block)];
-                    let lo = (i64::from(l.column) - direct_reach).max(0);
-                    let hi = (i64::from(l.column) + direct_reach).min(w as i64 - 1);
+                    if dy.abs() > l.reach {
+                        continue;
+                    }
+                    // Only rows within the stencil of the light look it up.
+                    let stencil = (dy.abs() <= STENCIL)
+                        .then(|| &stencils[&(l.column / block, l.row / block)]);
+                    let lo = (i64::from(l.column) - l.reach).max(0);
+                    let hi = (i64::from(l.column) + l.reach).min(w as i64 - 1);
                     for column in lo..=hi {
                         let dx = column - i64::from(l.column);
                         if dx == 0 && dy == 0 {
@@ -521,10 +566,11 @@ pub fn spread_eye(
                         let Some(d) = directions[column as usize] else {
                             continue;
                         };
-                        let weight = if dx.abs() <= STENCIL && dy.abs() <= STENCIL {
-                            stencil[((dy + STENCIL) as usize) * side + (dx + STENCIL) as usize]
-                        } else {
-                            direct.at(d, l.direction)
+                        let weight = match stencil {
+                            Some(weights) if dx.abs() <= STENCIL => {
+                                weights[((dy + STENCIL) as usize) * side + (dx + STENCIL) as usize]
+                            }
+                            _ => direct.at(d, l.direction),
                         };
                         for (v, light) in veil[column as usize].iter_mut().zip(l.light) {
                             *v += light * weight;
