@@ -92,17 +92,20 @@ fn projection_name(text: &str) -> Result<Projection, String> {
     })
 }
 
-/// The view given on the command line, if any.
-fn given_view(args: &Args) -> Result<Option<View>, Failure> {
+/// The view given on the command line, if any, and the option it came
+/// from.
+fn given_view(args: &Args) -> Result<Option<(View, &'static str)>, Failure> {
     let usage = |e: aureole::Error| Failure::Usage(anyhow!("{}: {e}", args.input.display()));
     if let Some(text) = &args.view {
-        return View::from_radiance(text).map(Some).map_err(usage);
+        return View::from_radiance(text)
+            .map(|v| Some((v, "--view")))
+            .map_err(usage);
     }
     Ok(match (args.projection, args.fov) {
         (Some(projection), Some(fov)) => {
             let mut view = View::new(projection, fov);
             view.vertical_deg = args.fov_vertical.unwrap_or(fov);
-            Some(view)
+            Some((view, "--projection"))
         }
         _ => None,
     })
@@ -132,8 +135,7 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
         .map_err(|e| input::failure(&args.input, e))?;
     let radiance = loaded.original.is_radiance();
     let frame_options = rated::frame_options(&mut loaded, args.source.input_scale);
-    let given = given_view(args)?;
-    let view = rated::view_of(&loaded.original, given).ok_or_else(|| {
+    let view = rated::view_of(&loaded.original, given_view(args)?).ok_or_else(|| {
         Failure::Usage(anyhow!(
             "{}: the picture says nothing of its view (no VIEW= header line): give --view \"-vta -vh 180 -vv 180\", or --projection equisolid --fov 180",
             args.input.display()
@@ -141,13 +143,6 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     })?;
     let (view, view_source) =
         view.map_err(|e| Failure::Usage(anyhow!("{}: {e}", args.input.display())))?;
-    let view_source = if args.view.is_some() {
-        "--view"
-    } else if given.is_some() {
-        "--projection"
-    } else {
-        view_source
-    };
     let frame = input::read_loaded(&args.input, loaded, &frame_options, quiet)?.frame;
     let options = options(args);
     let rating = rating::rate(

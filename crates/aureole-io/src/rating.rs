@@ -35,15 +35,15 @@ pub fn frame_options(loaded: &mut Loaded, input_scale: Option<f64>) -> FrameOpti
     }
 }
 
-/// The view to rate `original`'s picture through: `given`, else its
-/// Radiance `VIEW=` header; with where it came from, in words. `None`
-/// when neither says.
+/// The view to rate `original`'s picture through: `given` (with where it
+/// came from, in words), else its Radiance `VIEW=` header. `None` when
+/// neither says.
 pub fn view_of(
     original: &Original,
-    given: Option<View>,
+    given: Option<(View, &'static str)>,
 ) -> Option<aureole::Result<(View, &'static str)>> {
-    if let Some(view) = given {
-        return Some(view.check().map(|()| (view, "as given")));
+    if let Some((view, words)) = given {
+        return Some(view.check().map(|()| (view, words)));
     }
     let header = original.radiance_view()?;
     Some(View::from_radiance(header).map(|v| (v, "the header's VIEW")))

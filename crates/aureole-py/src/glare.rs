@@ -97,7 +97,7 @@ pub fn glare<'py>(
             .detach(|| read_image_with(&path, Limits::default_for_machine(), &choice))
             .map_err(file_error)?;
         let frame_options = frame_options(&mut loaded, input_scale);
-        let (view, _) = view_of(&loaded.original, given)
+        let (view, _) = view_of(&loaded.original, given.map(|v| (v, "as given")))
             .ok_or_else(|| {
                 PyValueError::new_err(format!(
                     "{}: the picture says nothing of its view (no VIEW= header line): give view=\"-vta -vh 180 -vv 180\", or projection and fov",

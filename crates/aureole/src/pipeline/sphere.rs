@@ -26,7 +26,7 @@ use crate::control::Cancel;
 use crate::error::{Error, Result};
 use crate::image::{Image, Layout, PixelLuminance};
 use crate::optics::Eye;
-use crate::view::{Pixels, View};
+use crate::view::{Pixels, Sight, View};
 
 /// A band begins this many of its cells from the light (and its window
 /// reaches full height at twice that).
@@ -107,6 +107,11 @@ impl Rows {
             starts[r] = starts[r].min(starts[r + 1]);
         }
         Rows { lights, starts }
+    }
+
+    /// Where row `row`'s lights lie in `lights`.
+    fn row(&self, row: usize) -> std::ops::Range<usize> {
+        self.starts[row]..self.starts[row + 1]
     }
 
     /// The lights of rows `from..=to` (clamped).
@@ -504,19 +509,10 @@ pub fn spread_eye(
         })
         .collect();
     cancel.check()?;
-    let found: Vec<(Light, f64)> = found.into_iter().flatten().collect();
-    // Sorted by row and column, as `Rows` sorts the lights.
-    let spreads = Rows::new(
-        found
-            .iter()
-            .map(|(l, s)| Light {
-                light: [*s, 0.0, 0.0],
-                ..*l
-            })
-            .collect(),
-        h,
-    );
-    let bright = Rows::new(found.iter().map(|(l, _)| *l).collect(), h);
+    // Found row by row, left to right: in the order `Rows` keeps, so the
+    // share each spreads lies beside its light.
+    let (lights, spreads): (Vec<Light>, Vec<f64>) = found.into_iter().flatten().unzip();
+    let bright = Rows::new(lights, h);
     // Bands of the grids, coarsest first.
     let mut grids = Vec::new();
     for level in 1..=top {
@@ -536,18 +532,20 @@ pub fn spread_eye(
     let stencils = stencils(&pixels, &psf, &bright, block);
     let direct = Table::new(&psf, 0, top, narrowest / 4.0);
     let side = (2 * STENCIL + 1) as usize;
-    let rows: Vec<(Vec<f32>, f64, f64)> = (0..h)
+    let weights: Vec<f64> = match image.layout {
+        Layout::Rgb => image.luminance_weights().map(f64::from).to_vec(),
+        Layout::Luminance => vec![1.0],
+    };
+    let rows: Vec<(Vec<Vec<f32>>, f64, f64)> = (0..h)
         .into_par_iter()
         .map(|row| {
             let mut veil = vec![[0.0f64; 3]; w];
             if cancel.is_cancelled() {
                 return (Vec::new(), 0.0, 0.0);
             }
+            let sights: Vec<Option<Sight>> = (0..w).map(|c| pixels.pixel(c, row)).collect();
             let near = bright.between(row as i64 - direct_reach, row as i64 + direct_reach);
             if !near.is_empty() {
-                let directions: Vec<Option<[f64; 3]>> = (0..w)
-                    .map(|c| pixels.pixel(c, row).map(|s| s.direction))
-                    .collect();
                 for l in near {
                     let dy = row as i64 - i64::from(l.row);
                     if dy.abs() > l.reach {
@@ -563,7 +561,7 @@ pub fn spread_eye(
                         if dx == 0 && dy == 0 {
                             continue;
                         }
-                        let Some(d) = directions[column as usize] else {
+                        let Some(d) = sights[column as usize].map(|s| s.direction) else {
                             continue;
                         };
                         let weight = match stencil {
@@ -596,31 +594,23 @@ pub fn spread_eye(
                 }
             }
             // The picture: what stays, and the veil.
-            let mut out = Vec::with_capacity(w * channels);
-            let (mut energy_in, mut energy_out) = (0.0, 0.0);
-            let weights = image.luminance_weights();
             let mut spread_here = vec![0.0; w];
-            for l in spreads.between(row as i64, row as i64) {
-                spread_here[l.column as usize] = l.light[0];
+            for k in bright.row(row) {
+                spread_here[bright.lights[k].column as usize] = spreads[k];
             }
+            let mut out = vec![Vec::with_capacity(w); channels];
+            let (mut energy_in, mut energy_out) = (0.0, 0.0);
             for (column, v) in veil.iter().enumerate() {
                 let i = row * w + column;
-                let spread = spread_here[column];
-                let omega = pixels.pixel(column, row).map_or(0.0, |s| s.solid_angle);
-                let mut y_in = 0.0;
-                let mut y_out = 0.0;
-                for c in 0..channels {
+                let (mut y_in, mut y_out) = (0.0, 0.0);
+                for (c, plane) in out.iter_mut().enumerate() {
                     let input = value(c, i);
-                    let result = input * (1.0 - spread) + v[c];
-                    let wt = if image.layout == Layout::Rgb {
-                        f64::from(weights[c])
-                    } else {
-                        1.0
-                    };
-                    y_in += wt * input;
-                    y_out += wt * result;
-                    out.push(result as f32);
+                    let result = input * (1.0 - spread_here[column]) + v[c];
+                    y_in += weights[c] * input;
+                    y_out += weights[c] * result;
+                    plane.push(result as f32);
                 }
+                let omega = sights[column].map_or(0.0, |s| s.solid_angle);
                 energy_in += y_in * omega;
                 energy_out += y_out * omega;
             }
@@ -628,17 +618,24 @@ pub fn spread_eye(
         })
         .collect();
     cancel.check()?;
-    let mut result = image.clone();
     let (mut energy_in, mut energy_out) = (0.0, 0.0);
-    for (row, (values, e_in, e_out)) in rows.into_iter().enumerate() {
+    let mut planes = vec![Vec::with_capacity(w * h); channels];
+    for (values, e_in, e_out) in rows {
         energy_in += e_in;
         energy_out += e_out;
-        for column in 0..w {
-            for c in 0..channels {
-                result.planes[c][row * w + column] = values[column * channels + c];
-            }
+        for (plane, row) in planes.iter_mut().zip(values) {
+            plane.extend_from_slice(&row);
         }
     }
+    let result = Image {
+        width: w,
+        height: h,
+        layout: image.layout,
+        planes,
+        alpha: image.alpha.clone(),
+        white_luminance: image.white_luminance,
+        primaries: image.primaries,
+    };
     Ok(Spread {
         image: result,
         energy_in,

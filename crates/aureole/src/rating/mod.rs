@@ -396,15 +396,8 @@ fn find_sources(
     let limit = options.peak_limit.filter(|l| max > *l);
     let (peaks, peak_groups) = match limit {
         Some(limit) => {
-            let runs = sources::runs(
-                w,
-                h,
-                |c, r| {
-                    let l = luminance_at(&y, scale, r * w + c);
-                    l > threshold && l >= limit && ahead(c, r)
-                },
-                cancel,
-            )?;
+            // The peaks are source pixels: found among them alone.
+            let runs = sources::within(&bright, |c, r| luminance_at(&y, scale, r * w + c) >= limit);
             let groups = sources::group(&runs, h, pixels, join, cancel)?;
             (runs, groups)
         }

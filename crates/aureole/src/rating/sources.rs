@@ -91,6 +91,32 @@ pub fn runs(
     Ok(rows.into_iter().flatten().collect())
 }
 
+/// The pixels of `runs` for which `keep(column, row)` holds, as runs in
+/// the same order: a subset found without looking at the rest of the
+/// picture.
+pub fn within(runs: &[Run], keep: impl Fn(usize, usize) -> bool) -> Vec<Run> {
+    let mut found = Vec::new();
+    for run in runs {
+        let mut start = None;
+        for column in run.start..=run.end {
+            let inside = column < run.end && keep(column as usize, run.row as usize);
+            match (inside, start) {
+                (true, None) => start = Some(column),
+                (false, Some(s)) => {
+                    found.push(Run {
+                        row: run.row,
+                        start: s,
+                        end: column,
+                    });
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+    }
+    found
+}
+
 /// Where each row's runs begin in `runs` (sorted by row): `rows[r]..rows[r + 1]`.
 fn row_index(runs: &[Run], height: usize) -> Vec<usize> {
     let mut first = vec![runs.len(); height + 1];
@@ -300,6 +326,20 @@ mod tests {
         assert_eq!(groups, vec![0, 1, 2]);
         let (_, groups) = find(&mask, &pixels, 11.5f64.to_radians());
         assert_eq!(groups, vec![0, 0, 0]);
+    }
+
+    #[test]
+    fn the_pixels_within_runs_are_found_among_them_alone() {
+        let mask = ["##.####", ".###..#"];
+        let pixels = View::new(Projection::Equidistant, 7.0).pixels(7, 2);
+        let (runs, _) = find(&mask, &pixels, 0.1f64.to_radians());
+        // Every second column: each run splits where it skips.
+        let even = within(&runs, |c, _| c % 2 == 0);
+        let starts: Vec<(u32, u32, u32)> = even.iter().map(|r| (r.row, r.start, r.end)).collect();
+        assert_eq!(
+            starts,
+            vec![(0, 0, 1), (0, 4, 5), (0, 6, 7), (1, 2, 3), (1, 6, 7)]
+        );
     }
 
     #[test]
