@@ -1,0 +1,256 @@
+//! The parameters' values at a frame's time, and the camera they make:
+//! the preset, the config file and the controls composed as the command
+//! line composes `--preset` and `--config`.
+
+use std::ffi::{c_char, c_int, CStr, CString};
+use std::path::PathBuf;
+
+use aureole::{ApplyOptions, Config, ConfigFile, Device, Effect};
+
+use crate::abi::{self, Handle, OfxTime};
+use crate::describe::{self, param};
+use crate::host::{Failure, Result, Suites};
+
+/// What the plugin writes to its output.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Output {
+    /// The image with its glare.
+    Image,
+    /// The light that moved (output − input).
+    GlareOnly,
+    /// One layer, as `aureole apply --layers` names it.
+    Layer(String),
+}
+
+/// The camera controls, when they set the camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Controls {
+    pub sensor_width_mm: f64,
+    pub focal_length_mm: f64,
+    pub f_number: f64,
+    pub blades: u32,
+    pub rotation_deg: f64,
+}
+
+/// Every parameter's value at one time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    pub preset: Option<&'static str>,
+    pub config: Option<PathBuf>,
+    pub controls: Option<Controls>,
+    pub threshold: Option<f64>,
+    pub knee: f64,
+    pub input_scale: f64,
+    pub output: Output,
+    pub device: Device,
+}
+
+/// Reads parameters of one effect instance.
+struct Reader<'a> {
+    params: Handle,
+    suites: &'a Suites,
+    time: OfxTime,
+}
+
+impl Reader<'_> {
+    fn handle(&self, name: &str) -> Result<Handle> {
+        let cname = CString::new(name).unwrap_or_default();
+        let mut handle = std::ptr::null_mut();
+        // SAFETY: the suite's contract.
+        let status = unsafe {
+            (self.suites.parameter.param_get_handle)(
+                self.params,
+                cname.as_ptr(),
+                &mut handle,
+                std::ptr::null_mut(),
+            )
+        };
+        if status != abi::STAT_OK || handle.is_null() {
+            return Err(Failure::status(
+                if status == abi::STAT_OK {
+                    abi::STAT_ERR_BAD_HANDLE
+                } else {
+                    status
+                },
+                format!("the host has no parameter {name}"),
+            ));
+        }
+        Ok(handle)
+    }
+
+    /// Reads one value of the C type `T` into `value`.
+    fn value<T>(&self, name: &str, value: &mut T) -> Result<()> {
+        let handle = self.handle(name)?;
+        // SAFETY: the parameter's type says what the variadic pointer
+        // points to: f64 for doubles, int for integers, booleans and
+        // choices, char* for strings.
+        let status = unsafe {
+            (self.suites.parameter.param_get_value_at_time)(handle, self.time, value as *mut T)
+        };
+        if status != abi::STAT_OK {
+            return Err(Failure::status(status, format!("the value of {name}")));
+        }
+        Ok(())
+    }
+
+    fn double(&self, name: &str) -> Result<f64> {
+        let mut v = 0.0f64;
+        self.value(name, &mut v).map(|()| v)
+    }
+
+    fn int(&self, name: &str) -> Result<c_int> {
+        let mut v: c_int = 0;
+        self.value(name, &mut v).map(|()| v)
+    }
+
+    fn string(&self, name: &str) -> Result<String> {
+        let mut v: *const c_char = std::ptr::null();
+        self.value(name, &mut v)?;
+        if v.is_null() {
+            return Ok(String::new());
+        }
+        // SAFETY: the host's string, valid until its next call.
+        Ok(unsafe { CStr::from_ptr(v) }.to_string_lossy().into_owned())
+    }
+
+    fn choice<'o>(&self, name: &str, options: &[&'o str]) -> Result<&'o str> {
+        let index = self.int(name)?;
+        usize::try_from(index)
+            .ok()
+            .and_then(|i| options.get(i).copied())
+            .ok_or_else(|| {
+                Failure::said(format!(
+                    "aureole: {name} = {index}: allowed 0 to {}",
+                    options.len() - 1
+                ))
+            })
+    }
+}
+
+impl Settings {
+    /// The values of `effect`'s parameters at `time`.
+    pub fn read(effect: Handle, suites: &Suites, time: OfxTime) -> Result<Settings> {
+        let mut params = std::ptr::null_mut();
+        // SAFETY: the suite's contract.
+        let status = unsafe { (suites.effect.get_param_set)(effect, &mut params) };
+        if status != abi::STAT_OK || params.is_null() {
+            return Err(Failure::status(
+                abi::STAT_ERR_BAD_HANDLE,
+                "the effect's parameter set",
+            ));
+        }
+        let r = Reader {
+            params,
+            suites,
+            time,
+        };
+        let presets = describe::preset_options();
+        let preset = Some(r.choice(param::PRESET, &presets)?).filter(|p| *p != describe::NO_PRESET);
+        let config = Some(r.string(param::CONFIG)?)
+            .filter(|c| !c.trim().is_empty())
+            .map(PathBuf::from);
+        let controls = if r.int(param::CAMERA_HERE)? != 0 {
+            let blades = r.int(param::BLADES)?;
+            Some(Controls {
+                sensor_width_mm: r.double(param::SENSOR_WIDTH)?,
+                focal_length_mm: r.double(param::FOCAL_LENGTH)?,
+                f_number: r.double(param::F_NUMBER)?,
+                blades: u32::try_from(blades).map_err(|_| {
+                    Failure::said(format!(
+                        "aureole: blades = {blades}: allowed 0 (a circular stop) or 3 to 64"
+                    ))
+                })?,
+                rotation_deg: r.double(param::ROTATION)?,
+            })
+        } else {
+            None
+        };
+        let threshold = Some(r.double(param::THRESHOLD)?).filter(|t| *t >= 0.0);
+        let output = match r.choice(param::OUTPUT, &describe::OUTPUTS)? {
+            o if o == describe::OUTPUTS[0] => Output::Image,
+            o if o == describe::OUTPUTS[1] => Output::GlareOnly,
+            _ => Output::Layer(r.string(param::LAYER)?.trim().to_string()),
+        };
+        let device =
+            Device::parse(r.choice(param::DEVICE, &describe::DEVICES)?).unwrap_or(Device::Cpu);
+        Ok(Settings {
+            preset,
+            config,
+            controls,
+            threshold,
+            knee: r.double(param::KNEE)?,
+            input_scale: r.double(param::INPUT_SCALE)?,
+            output,
+            device,
+        })
+    }
+
+    /// The options a frame is applied with.
+    pub fn options(&self) -> ApplyOptions {
+        ApplyOptions {
+            threshold: self.threshold,
+            knee: self.knee,
+            glare_only: self.output == Output::GlareOnly,
+            ..ApplyOptions::default()
+        }
+    }
+
+    /// The composed camera: the preset, the config file, then the controls.
+    pub fn camera(&self) -> Result<ConfigFile> {
+        let said = |e: aureole::Error| Failure::said(one_line(&format!("aureole: {e}")));
+        let mut file = ConfigFile::default();
+        if let Some(name) = self.preset {
+            file = file.then(
+                aureole::presets::find(name)
+                    .and_then(|p| p.config())
+                    .map_err(said)?,
+            );
+        }
+        if let Some(path) = &self.config {
+            let mut loaded = ConfigFile::load(path).map_err(said)?;
+            aureole_io::measured::resolve(&mut loaded, aureole_io::atomic::folder_of(path));
+            file = file.then(loaded);
+        }
+        if self.preset.is_none() && self.config.is_none() {
+            return Err(Failure::said(
+                "aureole: no preset and no config file: choose a preset or name a config",
+            ));
+        }
+        if let Some(c) = self.controls {
+            let most = aureole::optics::aperture::MAX_BLADES;
+            if c.blades != 0 && !(3..=most).contains(&c.blades) {
+                return Err(Failure::said(format!(
+                    "aureole: blades = {}: allowed 0 (a circular stop) or 3 to {most}",
+                    c.blades
+                )));
+            }
+            let text = format!(
+                "[camera]\nsensor_width_mm = {:?}\nfocal_length_mm = {:?}\nf_number = {:?}\n",
+                c.sensor_width_mm, c.focal_length_mm, c.f_number
+            );
+            file = file.then(ConfigFile::parse(&text, "the camera controls").map_err(said)?);
+            for effect in &mut file.effects {
+                if let Effect::Aperture(stop) = effect {
+                    stop.blades = c.blades;
+                    stop.rotation_deg = c.rotation_deg;
+                }
+                effect.validate().map_err(said)?;
+            }
+        }
+        Ok(file)
+    }
+
+    /// The camera ready to apply: its measured PSFs read.
+    pub fn config(&self) -> Result<Config> {
+        let mut config = Config::compose([self.camera()?]);
+        let limits = aureole_io::limits::Limits::default_for_machine();
+        aureole_io::measured::load(&mut config.effects, limits)
+            .map_err(|e| Failure::said(one_line(&format!("aureole: {e}"))))?;
+        Ok(config)
+    }
+}
+
+/// A message on one line, as a host's message box shows it.
+pub fn one_line(message: &str) -> String {
+    message.split_whitespace().collect::<Vec<_>>().join(" ")
+}
