@@ -8,7 +8,7 @@ use std::ffi::{c_char, c_int, c_void, CStr, CString};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
-use aureole_ofx::abi::{self, names, Handle, OfxRectD, OfxStatus, OfxTime};
+use aureole_ofx_abi::{self as abi, names, Handle, OfxRectD, OfxStatus, OfxTime};
 
 use crate::props::{live, register, unregister, Kind, PropSet, Value};
 use crate::Picture;

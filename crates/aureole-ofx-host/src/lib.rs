@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use aureole_ofx::abi::{self, names, Handle, OfxHost, OfxPlugin, OfxRectD, OfxStatus};
+use aureole_ofx_abi::{self as abi, names, Handle, OfxHost, OfxPlugin, OfxRectD, OfxStatus};
 
 pub use effect::images_held;
 use effect::{new_clip, new_param, Effect, Lending};

@@ -11,7 +11,7 @@
 
 use std::ffi::{c_char, c_int, c_uint, c_void, CStr};
 
-use aureole_ofx::abi::{self, names, Handle, OfxRangeD, OfxStatus, OfxTime};
+use aureole_ofx_abi::{self as abi, names, Handle, OfxRangeD, OfxStatus, OfxTime};
 
 use crate::effect::{new_param, Param, ParamSet};
 use crate::props::{live, Kind, Value};

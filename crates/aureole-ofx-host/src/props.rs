@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use std::ffi::{c_char, c_double, c_int, c_void, CStr, CString};
 use std::sync::Mutex;
 
-use aureole_ofx::abi::{self, Handle, OfxStatus};
+use aureole_ofx_abi::{self as abi, Handle, OfxStatus};
 
 /// What the host's objects are, to check a handle's kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -7,7 +7,7 @@ use std::ffi::{c_char, c_int, c_uint, c_void, CStr};
 use std::sync::{Condvar, Mutex};
 use std::thread::ThreadId;
 
-use aureole_ofx::abi::{self, Handle, OfxStatus, ThreadFunction};
+use aureole_ofx_abi::{self as abi, Handle, OfxStatus, ThreadFunction};
 
 use crate::effect::Effect;
 use crate::props::{live, register, unregister, Kind};

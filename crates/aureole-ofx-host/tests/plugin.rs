@@ -9,7 +9,7 @@ mod support;
 use std::ffi::CStr;
 use std::time::{Duration, Instant};
 
-use aureole_ofx::abi::{self, names};
+use aureole_ofx_abi::{self as abi, names};
 use aureole_ofx_host::{images_held, Picture, Plugin, PropSet, Setting, Value};
 use support::{cli_apply, first_difference, instance, loaded, night, option, serial};
 
@@ -358,6 +358,68 @@ fn a_squeezed_plate_gets_round_glare_on_its_own_pixels() {
         let expected = if i % 4 == 3 { *p } else { p + g };
         assert_eq!(v.to_bits(), expected.to_bits(), "sample {i}");
     }
+}
+
+#[test]
+fn the_projects_frame_inside_an_overscan_is_the_optical_axis() {
+    let _serial = serial();
+    // A source with 32 px of overscan left and 16 below the project's
+    // frame: the ghosts line up on the frame's centre, as `aureole apply`
+    // lines them up on an EXR's display window.
+    let (w, h) = (320, 192);
+    let source = night(w, h, 1);
+    let project = aureole_ofx_host::Project {
+        x: 32.0,
+        y: 16.0,
+        width: 256.0,
+        height: 160.0,
+        pixel_aspect: 1.0,
+    };
+    let plugin = loaded(names::CONTEXT_FILTER);
+    let effect = plugin
+        .instance(names::CONTEXT_FILTER, project)
+        .expect("an instance");
+    effect
+        .set(
+            "preset",
+            Setting::Int(option(&plugin, "preset", "camera-f8-7blade-ghosts")),
+        )
+        .expect("preset");
+    effect.set("output", Setting::Int(1)).expect("glare only");
+    let rendered = effect.render(1.0, &source, [1.0, 1.0]).expect("render");
+
+    let preset = aureole::presets::find("camera-f8-7blade-ghosts")
+        .and_then(|p| p.config())
+        .expect("preset");
+    let mut session = aureole::Session::new(aureole::Config::compose([preset]));
+    // Rows top first: the frame's top is 16 + 160 = 176 px up, 16 rows down.
+    let window = aureole::DisplayWindow {
+        x: 32,
+        y: 16,
+        width: 256,
+        height: 160,
+    };
+    let frame = aureole::Frame::new(
+        support::image_of(&source),
+        &aureole::FrameOptions {
+            input_scale: Some(1.0),
+            sanitize: false,
+        },
+    )
+    .expect("a frame")
+    .with_display_window(window);
+    let options = aureole::ApplyOptions {
+        glare_only: true,
+        ..Default::default()
+    };
+    let expected = session
+        .apply(&frame, &options, &mut |_, _| {})
+        .expect("applied");
+    assert!(expected.ghosts.is_some_and(|g| g.traced > 0));
+    assert_eq!(
+        first_difference(&rendered, &support::picture_of(&expected.image, 4)),
+        None
+    );
 }
 
 #[test]

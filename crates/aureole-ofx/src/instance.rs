@@ -5,12 +5,21 @@
 //! once would hold two 4K plans.
 
 use std::ffi::c_void;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 use aureole::{Config, Device, Session};
 
 use crate::abi::{self, names, Handle};
 use crate::host::{effect_props, Failure, Result, Suites};
+
+/// How many instances the host holds.
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+
+/// Whether the host holds no instance.
+pub fn none_live() -> bool {
+    LIVE.load(Ordering::Relaxed) == 0
+}
 
 /// The session of the camera last rendered.
 pub struct Kept {
@@ -42,7 +51,9 @@ impl Instance {
             .inspect_err(|_| {
                 // SAFETY: made just above and never handed out.
                 drop(unsafe { Box::from_raw(state) });
-            })
+            })?;
+        LIVE.fetch_add(1, Ordering::Relaxed);
+        Ok(())
     }
 
     /// `kOfxActionDestroyInstance`: the state taken back and freed.
@@ -59,6 +70,7 @@ impl Instance {
         // SAFETY: the pointer `create` gave the host, taken back once: the
         // property now holds null.
         drop(unsafe { Box::from_raw(state.cast::<Instance>()) });
+        LIVE.fetch_sub(1, Ordering::Relaxed);
         Ok(())
     }
 

@@ -8,10 +8,10 @@
 //! status: what went wrong is posted through the message suite in one
 //! line, and a panic never crosses into the host.
 
-pub mod abi;
 mod describe;
 mod host;
 mod instance;
+mod memory;
 mod render;
 mod settings;
 
@@ -19,6 +19,7 @@ use std::ffi::{c_int, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use abi::{names, Handle, OfxHost, OfxPlugin, OfxStatus};
+pub use aureole_ofx_abi as abi;
 use host::{Failure, Result};
 
 pub use describe::{param, DEVICES, NO_PRESET, OUTPUTS};
@@ -26,6 +27,9 @@ pub use describe::{param, DEVICES, NO_PRESET, OUTPUTS};
 /// The plugin's identifier, stable across versions: hosts save projects
 /// with it.
 pub const IDENTIFIER: &CStr = c"org.aureole.glare";
+
+#[global_allocator]
+static MEMORY: memory::Reusing = memory::Reusing::new();
 
 static PLUGIN: OfxPlugin = OfxPlugin {
     plugin_api: names::IMAGE_EFFECT_PLUGIN_API.as_ptr(),
@@ -119,6 +123,7 @@ fn dispatch(action: &CStr, effect: Handle, in_args: Handle, out_args: Handle) ->
     match action {
         a if a == names::ACTION_UNLOAD => {
             host::unload();
+            MEMORY.release();
         }
         a if a == names::ACTION_DESCRIBE => {
             on_effect()?;
@@ -135,10 +140,14 @@ fn dispatch(action: &CStr, effect: Handle, in_args: Handle, out_args: Handle) ->
         a if a == names::ACTION_DESTROY_INSTANCE => {
             on_effect()?;
             instance::Instance::destroy(effect, &suites)?;
+            if instance::none_live() {
+                MEMORY.release();
+            }
         }
         a if a == names::ACTION_PURGE_CACHES => {
             on_effect()?;
             instance::Instance::of(effect, &suites)?.purge();
+            MEMORY.release();
         }
         a if a == names::ACTION_GET_REGION_OF_DEFINITION => {
             on_effect()?;

@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aureole_ofx::abi::names;
+use aureole_ofx_abi::names;
 use aureole_ofx_host::{Picture, Plugin, Project, Setting};
 
 fn main() {

@@ -8,7 +8,7 @@ use std::ffi::CStr;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
-use aureole_ofx::abi::names;
+use aureole_ofx_abi::names;
 use aureole_ofx_host::{Instance, Picture, Plugin, Project, Setting};
 
 #[path = "../../../../tests/support/required.rs"]

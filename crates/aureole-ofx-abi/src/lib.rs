@@ -2,10 +2,9 @@
 //! specification's headers (`ofxCore.h`, `ofxProperty.h`, `ofxParam.h`,
 //! `ofxImageEffect.h`, `ofxMemory.h`, `ofxMultiThread.h`, `ofxMessage.h`):
 //! the structs a host and a plugin hand each other and the names they
-//! agree on. The test host in `crates/aureole-ofx-host` uses the same
-//! definitions, so the two cannot drift apart.
-
-#![allow(non_camel_case_types)]
+//! agree on. The plugin (`aureole-ofx`) and the test host
+//! (`aureole-ofx-host`) both use these definitions, so the two cannot
+//! drift apart, and the host links none of the plugin's code.
 
 use std::ffi::{c_char, c_double, c_int, c_uint, c_void, CStr};
 
