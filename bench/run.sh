@@ -99,4 +99,6 @@ rm -rf "$probe"
 if [ -x target/pyvenv/bin/python ] && target/pyvenv/bin/python -c 'import pyradiance' 2>/dev/null; then
   { echo "## Glare figures against evalglare (\`bench/glare.py\`, medians of 5)"; echo; target/pyvenv/bin/python bench/glare.py target/release/aureole; echo; } >> bench/RESULTS.md
 fi
+# The OpenFX plugin in the repository's host against the command line.
+bash bench/ofx.sh >> bench/RESULTS.md
 cat bench/RESULTS.md

@@ -492,6 +492,7 @@ fn an_abort_stops_a_render_within_a_second() {
         refusal.messages.is_empty(),
         "an abort is not an error: {refusal}"
     );
+    eprintln!("the render stopped {stopped:?} after the abort");
     assert!(
         stopped < Duration::from_secs(1),
         "stopped {stopped:?} after the abort"
