@@ -410,37 +410,30 @@ impl PropSnapshot {
         PropSnapshot(set.entries())
     }
 
-    pub fn strings(&self, name: &CStr) -> Vec<String> {
+    fn get(&self, name: &CStr) -> Option<&Value> {
         let name = name.to_string_lossy();
-        self.0
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map_or_else(Vec::new, |(_, v)| match v {
-                Value::Strings(s) => s.iter().map(|s| s.to_string_lossy().into_owned()).collect(),
-                _ => Vec::new(),
-            })
+        self.0.iter().find(|(n, _)| *n == name).map(|(_, v)| v)
+    }
+
+    pub fn strings(&self, name: &CStr) -> Vec<String> {
+        match self.get(name) {
+            Some(Value::Strings(s)) => s.iter().map(|s| s.to_string_lossy().into_owned()).collect(),
+            _ => Vec::new(),
+        }
     }
 
     pub fn ints(&self, name: &CStr) -> Vec<c_int> {
-        let name = name.to_string_lossy();
-        self.0
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map_or_else(Vec::new, |(_, v)| match v {
-                Value::Ints(i) => i.clone(),
-                _ => Vec::new(),
-            })
+        match self.get(name) {
+            Some(Value::Ints(i)) => i.clone(),
+            _ => Vec::new(),
+        }
     }
 
     pub fn doubles(&self, name: &CStr) -> Vec<f64> {
-        let name = name.to_string_lossy();
-        self.0
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map_or_else(Vec::new, |(_, v)| match v {
-                Value::Doubles(d) => d.clone(),
-                _ => Vec::new(),
-            })
+        match self.get(name) {
+            Some(Value::Doubles(d)) => d.clone(),
+            _ => Vec::new(),
+        }
     }
 }
 

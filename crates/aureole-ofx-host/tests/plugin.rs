@@ -210,17 +210,23 @@ fn rings_squeezed(picture: &Picture, squeeze: f64) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// `picture` reduced by 2 × 2 area averages.
-fn halved(picture: &Picture) -> Picture {
-    let (w, h, n) = (picture.width / 2, picture.height / 2, picture.channels);
+/// `picture` reduced by area, each new pixel the mean of `fx` × `fy` old
+/// ones: by 2 × 2 the half-size frame, by 2 × 1 an anamorphic lens's
+/// squeezed plate.
+fn reduced(picture: &Picture, (fx, fy): (usize, usize)) -> Picture {
+    let (w, h, n) = (picture.width / fx, picture.height / fy, picture.channels);
     let mut pixels = vec![0.0f32; w * h * n];
     for y in 0..h {
         for x in 0..w {
             for c in 0..n {
-                let at = |dx: usize, dy: usize| {
-                    picture.pixels[((2 * y + dy) * picture.width + 2 * x + dx) * n + c]
-                };
-                pixels[(y * w + x) * n + c] = (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1)) / 4.0;
+                let mut sum = 0.0;
+                for dy in 0..fy {
+                    for dx in 0..fx {
+                        sum +=
+                            picture.pixels[((fy * y + dy) * picture.width + fx * x + dx) * n + c];
+                    }
+                }
+                pixels[(y * w + x) * n + c] = sum / (fx * fy) as f32;
             }
         }
     }
@@ -263,7 +269,10 @@ fn a_proxy_render_at_half_scale_has_the_full_frames_look() {
         )
         .expect("preset");
     effect.set("output", Setting::Int(1)).expect("glare only");
-    let large = halved(&effect.render(2.0, &full, [1.0, 1.0]).expect("render"));
+    let large = reduced(
+        &effect.render(2.0, &full, [1.0, 1.0]).expect("render"),
+        (2, 2),
+    );
     let small = effect
         .render(3.0, &half, [0.5, 0.5])
         .expect("render at half scale");
@@ -281,51 +290,25 @@ fn a_proxy_render_at_half_scale_has_the_full_frames_look() {
     }
 }
 
-/// `picture` reduced across by 2 × 1 area averages: the squeezed plate of
-/// an anamorphic lens.
-fn squeezed(picture: &Picture) -> Picture {
-    let (w, h, n) = (picture.width / 2, picture.height, picture.channels);
-    let mut pixels = vec![0.0f32; w * h * n];
-    for y in 0..h {
-        for x in 0..w {
-            for c in 0..n {
-                let at = |dx: usize| picture.pixels[(y * picture.width + 2 * x + dx) * n + c];
-                pixels[(y * w + x) * n + c] = (at(0) + at(1)) / 2.0;
-            }
-        }
-    }
-    Picture {
-        width: w,
-        height: h,
-        channels: n,
-        pixels,
-    }
-}
-
 #[test]
 fn a_squeezed_plate_gets_round_glare_on_its_own_pixels() {
     let _serial = serial();
     let (w, h) = (320, 360);
     let wide = night(2 * w, h, 1);
-    let plate = squeezed(&wide);
+    let plate = reduced(&wide, (2, 1));
     let plugin = loaded(names::CONTEXT_FILTER);
     let effect = instance(&plugin, (2 * w, h), "camera-f8-7blade");
     effect.set("output", Setting::Int(1)).expect("glare only");
-    let expected = squeezed(&effect.render(1.0, &wide, [1.0, 1.0]).expect("render"));
+    let expected = reduced(
+        &effect.render(1.0, &wide, [1.0, 1.0]).expect("render"),
+        (2, 1),
+    );
     drop(effect);
     let project = aureole_ofx_host::Project {
         pixel_aspect: 2.0,
         ..aureole_ofx_host::Project::of(2 * w, h)
     };
-    let effect = plugin
-        .instance(names::CONTEXT_FILTER, project)
-        .expect("an anamorphic instance");
-    effect
-        .set(
-            "preset",
-            Setting::Int(option(&plugin, "preset", "camera-f8-7blade")),
-        )
-        .expect("preset");
+    let effect = support::instance_in(&plugin, project, "camera-f8-7blade");
     effect.set("output", Setting::Int(1)).expect("glare only");
     let glare = effect
         .render(1.0, &plate, [1.0, 1.0])
@@ -376,15 +359,7 @@ fn the_projects_frame_inside_an_overscan_is_the_optical_axis() {
         pixel_aspect: 1.0,
     };
     let plugin = loaded(names::CONTEXT_FILTER);
-    let effect = plugin
-        .instance(names::CONTEXT_FILTER, project)
-        .expect("an instance");
-    effect
-        .set(
-            "preset",
-            Setting::Int(option(&plugin, "preset", "camera-f8-7blade-ghosts")),
-        )
-        .expect("preset");
+    let effect = support::instance_in(&plugin, project, "camera-f8-7blade-ghosts");
     effect.set("output", Setting::Int(1)).expect("glare only");
     let rendered = effect.render(1.0, &source, [1.0, 1.0]).expect("render");
 

@@ -40,33 +40,21 @@ fn source_region(effect: Handle, time: f64, suites: &Suites) -> Result<OfxRectD>
     Ok(region)
 }
 
-/// `kOfxImageEffectActionGetRegionOfDefinition`: the source's.
-pub fn region_of_definition(
+/// The source's region of definition at the time `in_args` name, set as
+/// `property` of `out_args`: the effect's own region of definition
+/// (`kOfxImageEffectActionGetRegionOfDefinition`), and the region of
+/// interest on the source (`kOfxImageEffectActionGetRegionsOfInterest`),
+/// whatever part of the output is asked for: a lamp anywhere lights every
+/// pixel.
+pub fn whole_source(
     effect: Handle,
-    in_args: Handle,
-    out_args: Handle,
+    (in_args, out_args): (Handle, Handle),
+    property: &CStr,
     suites: &Suites,
 ) -> Result<()> {
     let time = Props::new(in_args, suites)?.double(names::PROP_TIME, 0)?;
     let r = source_region(effect, time, suites)?;
-    Props::new(out_args, suites)?.set_doubles(
-        names::EFFECT_REGION_OF_DEFINITION,
-        &[r.x1, r.y1, r.x2, r.y2],
-    )
-}
-
-/// `kOfxImageEffectActionGetRegionsOfInterest`: the whole source, whatever
-/// part of the output is asked for: a lamp anywhere lights every pixel.
-pub fn regions_of_interest(
-    effect: Handle,
-    in_args: Handle,
-    out_args: Handle,
-    suites: &Suites,
-) -> Result<()> {
-    let time = Props::new(in_args, suites)?.double(names::PROP_TIME, 0)?;
-    let r = source_region(effect, time, suites)?;
-    Props::new(out_args, suites)?
-        .set_doubles(names::SOURCE_REGION_OF_INTEREST, &[r.x1, r.y1, r.x2, r.y2])
+    Props::new(out_args, suites)?.set_doubles(property, &[r.x1, r.y1, r.x2, r.y2])
 }
 
 /// An image the host lent: released when dropped.

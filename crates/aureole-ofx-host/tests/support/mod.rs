@@ -82,14 +82,20 @@ pub fn option(plugin: &Plugin, name: &str, option: &str) -> i32 {
         .unwrap_or_else(|| panic!("{option} not in {menu:?}")) as i32
 }
 
-/// An instance on a `width` × `height` project with the preset `preset`.
+/// An instance on a `width` × `height` project with the preset `preset`,
+/// on the CPU.
 pub fn instance<'p>(
     plugin: &'p Plugin,
     (width, height): (usize, usize),
     preset: &str,
 ) -> Instance<'p> {
+    instance_in(plugin, Project::of(width, height), preset)
+}
+
+/// An instance on `project` with the preset `preset`, on the CPU.
+pub fn instance_in<'p>(plugin: &'p Plugin, project: Project, preset: &str) -> Instance<'p> {
     let instance = plugin
-        .instance(names::CONTEXT_FILTER, Project::of(width, height))
+        .instance(names::CONTEXT_FILTER, project)
         .expect("an instance");
     instance
         .set("preset", Setting::Int(option(plugin, "preset", preset)))
