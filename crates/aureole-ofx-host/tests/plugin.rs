@@ -49,7 +49,8 @@ fn the_plugin_describes_itself_as_a_host_expects() {
             "preset",
             "config",
             "f_number",
-            "blades",
+            "aperture",
+            "aperture_blades",
             "threshold",
             "knee",
             "input_scale",
@@ -70,6 +71,28 @@ fn the_plugin_describes_itself_as_a_host_expects() {
         .about;
     assert!(f.strings(names::PARAM_HINT)[0].starts_with(about));
     assert_eq!(f.doubles(names::PARAM_MIN), [0.5]);
+    // So do every effect's, as the studio's panels do (a measured PSF's
+    // file is the config's to name).
+    for (kind, parameters) in aureole::config::effect_kinds() {
+        if kind == "image" {
+            continue;
+        }
+        for p in parameters {
+            let name = format!("{kind}_{}", p.name);
+            let control = plugin
+                .param_definition(names::CONTEXT_FILTER, &name)
+                .unwrap_or_else(|| panic!("no control {name}"));
+            assert!(
+                control.strings(names::PARAM_HINT)[0].starts_with(p.about),
+                "{name}"
+            );
+            assert_eq!(
+                control.strings(names::PARAM_PARENT),
+                [format!("{kind}_group")],
+                "{name}"
+            );
+        }
+    }
     let presets = plugin
         .param_definition(names::CONTEXT_FILTER, "preset")
         .expect("preset");
@@ -113,6 +136,43 @@ fn a_sequence_rendered_in_a_hosts_order_is_the_command_lines_bytes() {
             "every image the plugin fetched was released"
         );
     }
+}
+
+#[test]
+fn the_effect_controls_set_the_chain_as_a_config_would() {
+    let _serial = serial();
+    let test = "the_effect_controls_set_the_chain_as_a_config_would";
+    let (w, h) = (256, 144);
+    let source = night(w, h, 1);
+    // The preset's 7-blade stop turned to 5 blades by its controls, and a
+    // bloom it does not have joining the chain after it.
+    let config = tempfile::tempdir().expect("a folder");
+    let file = config.path().join("same.toml");
+    std::fs::write(
+        &file,
+        "[camera]\nsensor_width_mm = 36.0\nfocal_length_mm = 50.0\nf_number = 8.0\n\
+         [[effect]]\ntype = \"aperture\"\nblades = 5\n\
+         [[effect]]\ntype = \"bloom\"\nepsilon = 0.01\nbeta = 2.5\nradius = \"6px\"\n",
+    )
+    .expect("written");
+    let file = file.display().to_string();
+    let Some(expected) = cli_apply(test, &source, &["--config", &file, "--device", "cpu"]) else {
+        return;
+    };
+    let plugin = loaded(names::CONTEXT_FILTER);
+    let effect = instance(&plugin, (w, h), "camera-f8-7blade");
+    for (name, value) in [
+        ("aperture", Setting::Int(1)),
+        ("aperture_blades", Setting::Int(5)),
+        ("bloom", Setting::Int(1)),
+        ("bloom_epsilon", Setting::Double(0.01)),
+        ("bloom_beta", Setting::Double(2.5)),
+        ("bloom_radius", Setting::Text("6px".into())),
+    ] {
+        effect.set(name, value).expect("set");
+    }
+    let rendered = effect.render(1.0, &source, [1.0, 1.0]).expect("render");
+    assert_eq!(first_difference(&rendered, &expected), None);
 }
 
 #[test]
@@ -497,7 +557,7 @@ fn a_bad_config_is_one_message_and_a_failed_status() {
     let plugin = loaded(names::CONTEXT_FILTER);
     let effect = instance(&plugin, (64, 36), "paper-fig5-both");
     let source = night(64, 36, 1);
-    let cases: [(&str, &str, Setting); 6] = [
+    let cases: [(&str, &str, Setting); 7] = [
         (
             "config",
             "epsilon",
@@ -515,7 +575,12 @@ fn a_bad_config_is_one_message_and_a_failed_status() {
         ),
         ("input_scale", "scale", Setting::Double(-2.0)),
         ("knee", "knee", Setting::Double(f64::NAN)),
-        ("blades", "blades", Setting::Int(2)),
+        ("aperture_blades", "blades", Setting::Int(2)),
+        (
+            "bloom_radius",
+            "ten pixels",
+            Setting::Text("ten pixels".into()),
+        ),
     ];
     for (name, said, value) in cases {
         effect
@@ -524,9 +589,12 @@ fn a_bad_config_is_one_message_and_a_failed_status() {
                 Setting::Int(option(&plugin, "preset", "paper-fig5-both")),
             )
             .expect("preset");
-        effect
-            .set("camera_here", Setting::Int(i32::from(name == "blades")))
-            .expect("camera");
+        for kind in ["aperture", "bloom"] {
+            let on = name.starts_with(kind);
+            effect
+                .set(kind, Setting::Int(i32::from(on)))
+                .expect("switch");
+        }
         effect.set(name, value).expect("set");
         let refusal = refused(effect.render(1.0, &source, [1.0, 1.0]), said);
         assert_eq!(refusal.status, abi::STAT_FAILED, "{refusal}");
@@ -547,12 +615,16 @@ fn a_bad_config_is_one_message_and_a_failed_status() {
             .expect("scale");
         effect.set("knee", Setting::Double(0.0)).expect("knee");
     }
-    // No preset and no config: said, not guessed.
-    effect.set("camera_here", Setting::Int(0)).expect("camera");
+    // No preset, no config and no effect: said, not guessed.
+    for kind in ["aperture", "bloom"] {
+        effect.set(kind, Setting::Int(0)).expect("switch");
+    }
     effect.set("preset", Setting::Int(0)).expect("no preset");
     let refusal = refused(effect.render(1.0, &source, [1.0, 1.0]), "no camera");
     assert!(
-        refusal.messages[0].1.contains("no preset and no config"),
+        refusal.messages[0]
+            .1
+            .contains("no preset, no config file and no effect"),
         "{refusal}"
     );
     // A squeezed plate is refused in words.

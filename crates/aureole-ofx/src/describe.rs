@@ -18,8 +18,6 @@ pub mod param {
     pub const SENSOR_WIDTH: &str = "sensor_width_mm";
     pub const FOCAL_LENGTH: &str = "focal_length_mm";
     pub const F_NUMBER: &str = "f_number";
-    pub const BLADES: &str = "blades";
-    pub const ROTATION: &str = "rotation_deg";
     pub const THRESHOLD: &str = "threshold";
     pub const KNEE: &str = "knee";
     pub const INPUT_SCALE: &str = "input_scale";
@@ -133,7 +131,7 @@ fn define(params: Handle, suites: &Suites, what: Define<'_>) -> Result<Props> {
 }
 
 /// A schema parameter's line for a person, with what is allowed.
-fn hint(parameter: &Parameter) -> String {
+pub fn hint(parameter: &Parameter) -> String {
     format!("{} ({})", parameter.about, parameter.allowed)
 }
 
@@ -145,15 +143,8 @@ fn schema(parameters: &[Parameter], name: &str) -> Result<Parameter> {
         .ok_or_else(|| Failure::said(format!("the schema has no parameter {name}")))
 }
 
-fn aperture_parameter(name: &str) -> Result<Parameter> {
-    let (_, parameters) = aureole::config::effect_kinds()
-        .find(|(kind, _)| *kind == "aperture")
-        .ok_or_else(|| Failure::said("the schema has no aperture"))?;
-    schema(parameters, name)
-}
-
 /// A number control: its default, its allowed range and a slider's range.
-fn number(props: &Props, default: f64, range: (f64, f64), slider: (f64, f64)) -> Result<()> {
+pub fn number(props: &Props, default: f64, range: (f64, f64), slider: (f64, f64)) -> Result<()> {
     props.set_double(names::PARAM_DEFAULT, 0, default)?;
     props.set_double(names::PARAM_MIN, 0, range.0)?;
     props.set_double(names::PARAM_MAX, 0, range.1)?;
@@ -230,22 +221,22 @@ fn define_parameters(effect: Handle, suites: &Suites) -> Result<()> {
     config.set_int(names::PARAM_FILE_PATH_EXISTS, 0, 1)?;
     config.set_string(names::PARAM_DEFAULT, 0, "")?;
     camera_controls(&d)?;
+    crate::effects::define(&d)?;
     light_and_output(&d)
 }
 
 /// What defines one parameter: its type, name, label, hint and group.
-type Definer<'a> = dyn Fn(&CStr, &str, &str, String, Option<&str>) -> Result<Props> + 'a;
+pub type Definer<'a> = dyn Fn(&CStr, &str, &str, String, Option<&str>) -> Result<Props> + 'a;
 
 /// The sensor, the lens and the stop, which replace the camera's when on.
 fn camera_controls(d: &Definer<'_>) -> Result<()> {
     use crate::abi::names::{
         PARAM_TYPE_BOOLEAN as BOOLEAN, PARAM_TYPE_DOUBLE as DOUBLE, PARAM_TYPE_GROUP as GROUP,
-        PARAM_TYPE_INTEGER as INTEGER,
     };
     d(
         GROUP,
         "lens",
-        "Camera and stop",
+        "Camera",
         "the camera these controls set when on".into(),
         None,
     )?;
@@ -253,9 +244,8 @@ fn camera_controls(d: &Definer<'_>) -> Result<()> {
         BOOLEAN,
         param::CAMERA_HERE,
         "Set the camera here",
-        "on: the sensor, \
-        lens and stop below replace the preset's and the config's ([camera], and the \
-        blades and rotation of every aperture)"
+        "on: the sensor \
+        and lens below replace the preset's and the config's [camera]"
             .into(),
         Some("lens"),
     )?;
@@ -270,24 +260,6 @@ fn camera_controls(d: &Definer<'_>) -> Result<()> {
         let low = p.low.map_or(0.0, |(v, _)| v);
         number(&props, default, (low, 1e4), (low.max(1.0), 4.0 * default))?;
     }
-    let p = aperture_parameter(param::BLADES)?;
-    let blades = d(INTEGER, param::BLADES, "blades", hint(&p), Some("lens"))?;
-    blades.set_int(names::PARAM_DEFAULT, 0, 7)?;
-    blades.set_int(names::PARAM_MIN, 0, 0)?;
-    blades.set_int(
-        names::PARAM_MAX,
-        0,
-        p.high.map_or(64.0, |(v, _)| v) as c_int,
-    )?;
-    let p = aperture_parameter(param::ROTATION)?;
-    let rotation = d(
-        DOUBLE,
-        param::ROTATION,
-        "rotation °",
-        hint(&p),
-        Some("lens"),
-    )?;
-    number(&rotation, 0.0, (-360.0, 360.0), (0.0, 180.0))?;
     Ok(())
 }
 

@@ -9,6 +9,7 @@
 //! line, and a panic never crosses into the host.
 
 mod describe;
+mod effects;
 mod host;
 mod instance;
 mod memory;

@@ -5,7 +5,7 @@
 use std::ffi::{c_char, c_int, CStr, CString};
 use std::path::PathBuf;
 
-use aureole::{ApplyOptions, Config, ConfigFile, Device, Effect};
+use aureole::{ApplyOptions, Config, ConfigFile, Device};
 
 use crate::abi::{self, Handle, OfxTime};
 use crate::describe::{self, param};
@@ -28,8 +28,6 @@ pub struct Controls {
     pub sensor_width_mm: f64,
     pub focal_length_mm: f64,
     pub f_number: f64,
-    pub blades: u32,
-    pub rotation_deg: f64,
 }
 
 /// Every parameter's value at one time.
@@ -38,6 +36,8 @@ pub struct Settings {
     pub preset: Option<&'static str>,
     pub config: Option<PathBuf>,
     pub controls: Option<Controls>,
+    /// The effects the controls set, by type.
+    pub effects: crate::effects::Overrides,
     pub threshold: Option<f64>,
     pub knee: f64,
     pub input_scale: f64,
@@ -150,21 +150,26 @@ impl Settings {
             .filter(|c| !c.trim().is_empty())
             .map(PathBuf::from);
         let controls = if r.int(param::CAMERA_HERE)? != 0 {
-            let blades = r.int(param::BLADES)?;
             Some(Controls {
                 sensor_width_mm: r.double(param::SENSOR_WIDTH)?,
                 focal_length_mm: r.double(param::FOCAL_LENGTH)?,
                 f_number: r.double(param::F_NUMBER)?,
-                blades: u32::try_from(blades).map_err(|_| {
-                    Failure::said(format!(
-                        "aureole: blades = {blades}: allowed 0 (a circular stop) or 3 to 64"
-                    ))
-                })?,
-                rotation_deg: r.double(param::ROTATION)?,
             })
         } else {
             None
         };
+        let effects = crate::effects::read(
+            |kind| Ok(r.int(kind)? != 0),
+            |name, p| {
+                use aureole::schema::Kind;
+                Ok(match p.kind {
+                    Kind::Number | Kind::Angle => toml::Value::Float(r.double(name)?),
+                    Kind::Whole => toml::Value::Integer(i64::from(r.int(name)?)),
+                    Kind::Flag => toml::Value::Boolean(r.int(name)? != 0),
+                    Kind::Length | Kind::Text => toml::Value::String(r.string(name)?),
+                })
+            },
+        )?;
         let threshold = Some(r.double(param::THRESHOLD)?).filter(|t| *t >= 0.0);
         let output = match r.choice(param::OUTPUT, &describe::OUTPUTS)? {
             o if o == describe::OUTPUTS[0] => Output::Image,
@@ -177,6 +182,7 @@ impl Settings {
             preset,
             config,
             controls,
+            effects,
             threshold,
             knee: r.double(param::KNEE)?,
             input_scale: r.double(param::INPUT_SCALE)?,
@@ -211,32 +217,19 @@ impl Settings {
             aureole_io::measured::resolve(&mut loaded, aureole_io::atomic::folder_of(path));
             file = file.then(loaded);
         }
-        if self.preset.is_none() && self.config.is_none() {
+        if self.preset.is_none() && self.config.is_none() && self.effects.is_empty() {
             return Err(Failure::said(
-                "aureole: no preset and no config file: choose a preset or name a config",
+                "aureole: no preset, no config file and no effect set here: choose a preset, name a config or set an effect",
             ));
         }
         if let Some(c) = self.controls {
-            let most = aureole::optics::aperture::MAX_BLADES;
-            if c.blades != 0 && !(3..=most).contains(&c.blades) {
-                return Err(Failure::said(format!(
-                    "aureole: blades = {}: allowed 0 (a circular stop) or 3 to {most}",
-                    c.blades
-                )));
-            }
             let text = format!(
                 "[camera]\nsensor_width_mm = {:?}\nfocal_length_mm = {:?}\nf_number = {:?}\n",
                 c.sensor_width_mm, c.focal_length_mm, c.f_number
             );
             file = file.then(ConfigFile::parse(&text, "the camera controls").map_err(said)?);
-            for effect in &mut file.effects {
-                if let Effect::Aperture(stop) = effect {
-                    stop.blades = c.blades;
-                    stop.rotation_deg = c.rotation_deg;
-                }
-                effect.validate().map_err(said)?;
-            }
         }
+        let file = crate::effects::apply(file, &self.effects)?;
         Ok(file)
     }
 
