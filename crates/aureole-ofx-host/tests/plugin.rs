@@ -578,7 +578,7 @@ fn a_bad_config_is_one_message_and_a_failed_status() {
         ("aperture_blades", "blades", Setting::Int(2)),
         (
             "bloom_radius",
-            "ten pixels",
+            "`radius`: length \"ten pixels\"",
             Setting::Text("ten pixels".into()),
         ),
     ];

@@ -122,7 +122,10 @@ impl ConfigFile {
                     Some(key) if is_type_error(e.message()) => {
                         format!("`{key}`: {}", plain_types(e.message()))
                     }
-                    _ => with_suggestion(e.message()),
+                    _ => match length_key(&keys, e.message()) {
+                        Some(key) => format!("`{key}`: {}", e.message()),
+                        None => with_suggestion(e.message()),
+                    },
                 };
                 let incomplete = message.starts_with("missing field").then(|| kind.clone());
                 place(
@@ -376,6 +379,22 @@ fn key_holding(table: &toml::Table, message: &str) -> Option<String> {
     }
 }
 
+/// The key of `table` whose length `message` refuses (its words quote the
+/// length, not the key that holds it), when one key holds it.
+fn length_key(table: &toml::Table, message: &str) -> Option<String> {
+    let mut found = table
+        .iter()
+        .filter(|(_, v)| {
+            v.as_str()
+                .is_some_and(|s| message.starts_with(&format!("length {s:?} is not valid")))
+        })
+        .map(|(k, _)| k.clone());
+    match (found.next(), found.next()) {
+        (Some(key), None) => Some(key),
+        _ => None,
+    }
+}
+
 /// Where, in the `[[effect]]` table whose header is at `header`, the key that
 /// `message` names (as serde quotes it: unknown field `radus`) is written;
 /// the header itself when the message names no key found there.
@@ -564,6 +583,18 @@ exponent = 2.0
         let e = error("sead = 3\n");
         assert!(
             e.contains("sead") && e.contains("seed") && e.contains("effect"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_length_refused_names_its_key_and_line() {
+        let e = error(
+            "[[effect]]\ntype = \"bloom\"\nepsilon = 0.1\nbeta = 2.0\nradius = \"ten pixels\"\n",
+        );
+        assert!(e.starts_with("my.toml:5:1: "), "{e}");
+        assert!(
+            e.contains("`radius`: length \"ten pixels\" is not valid"),
             "{e}"
         );
     }
