@@ -41,10 +41,25 @@ impl Drop for ParamSet {
 
 /// A frame the host lends for one time: its pixels and where they lie.
 pub struct Lending {
+    /// The pixels, top row first, or bottom row first when `bottom_up`.
     pub picture: Picture,
+    /// Rows stored bottom row first, handed out with a positive stride (as
+    /// Resolve and Nuke lay images); else top first, with a negative one.
+    pub bottom_up: bool,
     /// The pixel coordinates of the picture's bottom-left corner.
     pub origin: (c_int, c_int),
     pub render_scale: [f64; 2],
+}
+
+/// `picture` with its rows in the other order.
+pub fn flipped(mut picture: Picture) -> Picture {
+    let row = picture.width * picture.channels;
+    let h = picture.height;
+    for y in 0..h / 2 {
+        let (top, rest) = picture.pixels.split_at_mut((h - 1 - y) * row);
+        top[y * row..(y + 1) * row].swap_with_slice(&mut rest[..row]);
+    }
+    picture
 }
 
 /// A clip: its properties, and on an instance the frames it lends.
@@ -265,6 +280,7 @@ fn image_props(frame: &Mutex<Lending>, clip: &Clip) -> Box<PropSet> {
     let mut lending = frame.lock().unwrap_or_else(|p| p.into_inner());
     let (x0, y0) = lending.origin;
     let scale = lending.render_scale;
+    let bottom_up = lending.bottom_up;
     let picture = &mut lending.picture;
     let (w, h, n) = (picture.width, picture.height, picture.channels);
     let stride = (w * n * 4) as c_int;
@@ -284,13 +300,15 @@ fn image_props(frame: &Mutex<Lending>, clip: &Clip) -> Box<PropSet> {
         names::IMAGE_BOUNDS,
         Value::Ints(vec![x0, y0, x0 + w as c_int, y0 + h as c_int]),
     );
-    // The picture is held top row first: the bottom row is the last.
-    let last = picture
-        .pixels
-        .as_mut_ptr()
-        .wrapping_add(w * n * h.saturating_sub(1));
-    props.set(names::IMAGE_DATA, Value::Pointers(vec![last as usize]));
-    props.set(names::IMAGE_ROW_BYTES, Value::Ints(vec![-stride]));
+    // The data pointer is the bottom row's, wherever the rows run.
+    let (bottom, stride) = if bottom_up {
+        (picture.pixels.as_mut_ptr(), stride)
+    } else {
+        let last = w * n * h.saturating_sub(1);
+        (picture.pixels.as_mut_ptr().wrapping_add(last), -stride)
+    };
+    props.set(names::IMAGE_DATA, Value::Pointers(vec![bottom as usize]));
+    props.set(names::IMAGE_ROW_BYTES, Value::Ints(vec![stride]));
     let aspect = clip.props.doubles(names::IMAGE_PIXEL_ASPECT_RATIO);
     props.set(
         names::IMAGE_PIXEL_ASPECT_RATIO,

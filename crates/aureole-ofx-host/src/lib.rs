@@ -383,6 +383,7 @@ impl Plugin {
             plugin: self,
             effect,
             project,
+            bottom_up: std::sync::atomic::AtomicBool::new(false),
         })
     }
 
@@ -516,16 +517,23 @@ fn instantiate(descriptor: &Effect, effect: &Effect) {
     }
 }
 
-/// The picture a lending held, once the plugin has let it go.
+/// The picture a lending held, once the plugin has let it go, top row
+/// first.
 fn take(lending: &Mutex<Lending>) -> Picture {
     let mut lending = lending.lock().unwrap_or_else(|p| p.into_inner());
+    let bottom_up = lending.bottom_up;
     let empty = Picture {
         width: 0,
         height: 0,
         channels: lending.picture.channels,
         pixels: Vec::new(),
     };
-    std::mem::replace(&mut lending.picture, empty)
+    let picture = std::mem::replace(&mut lending.picture, empty);
+    if bottom_up {
+        effect::flipped(picture)
+    } else {
+        picture
+    }
 }
 
 /// A value for a parameter.
@@ -542,6 +550,8 @@ pub struct Instance<'p> {
     plugin: &'p Plugin,
     effect: Box<Effect>,
     project: Project,
+    /// Images laid bottom row first with a positive stride.
+    bottom_up: std::sync::atomic::AtomicBool,
 }
 
 impl Instance<'_> {
@@ -567,6 +577,13 @@ impl Instance<'_> {
             .lock()
             .unwrap_or_else(|p| p.into_inner()) = value;
         Ok(())
+    }
+
+    /// Lays the images it hands out bottom row first with a positive
+    /// stride, as Resolve and Nuke do (`true`), or top row first with a
+    /// negative one, as some hosts do (`false`, the default).
+    pub fn set_rows_bottom_up(&self, bottom_up: bool) {
+        self.bottom_up.store(bottom_up, Ordering::Relaxed);
     }
 
     /// Asks (or stops asking) the plugin to abort what it renders.
@@ -655,9 +672,15 @@ impl Instance<'_> {
             x2: w as f64 / scale[0] * self.project.pixel_aspect,
             y2: h as f64 / scale[1],
         };
+        let bottom_up = self.bottom_up.load(Ordering::Relaxed);
         let lend = |picture: Picture| {
             Arc::new(Mutex::new(Lending {
-                picture,
+                picture: if bottom_up {
+                    effect::flipped(picture)
+                } else {
+                    picture
+                },
+                bottom_up,
                 origin: (0, 0),
                 render_scale: scale,
             }))

@@ -119,7 +119,10 @@ fn a_sequence_rendered_in_a_hosts_order_is_the_command_lines_bytes() {
         let plugin = loaded(names::CONTEXT_FILTER);
         let effect = instance(&plugin, (w, h), preset);
         effect.begin_sequence(1.0, 2.0, [1.0, 1.0]).expect("begin");
-        for time in [1.0, 2.0] {
+        // Rows handed out top first with a negative stride, then bottom
+        // first with a positive one, as Resolve and Nuke lay them.
+        for (time, bottom_up) in [(1.0, false), (2.0, true)] {
+            effect.set_rows_bottom_up(bottom_up);
             let rendered = effect.render(time, &source, [1.0, 1.0]).expect("render");
             assert_eq!(
                 first_difference(&rendered, &expected),
