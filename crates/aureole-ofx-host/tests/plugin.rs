@@ -301,6 +301,26 @@ fn reduced(picture: &Picture, (fx, fy): (usize, usize)) -> Picture {
     }
 }
 
+/// Holds each lamp's `rings` of `b` to `a`'s within 1 %; the worst is
+/// printed (`--nocapture`).
+fn within_a_percent(a: &[[f64; 3]], b: &[[f64; 3]], rings: std::ops::Range<usize>) {
+    let mut worst = 0.0f64;
+    for (a, b) in a.iter().zip(b) {
+        for ring in rings.clone() {
+            let off = (a[ring] - b[ring]).abs() / a[ring];
+            worst = worst.max(off);
+            assert!(
+                off < 0.01,
+                "ring {ring}: {:.3} % ({} against {})",
+                100.0 * off,
+                a[ring],
+                b[ring]
+            );
+        }
+    }
+    eprintln!("rings within {:.3} %", 100.0 * worst);
+}
+
 #[test]
 fn a_proxy_render_at_half_scale_has_the_full_frames_look() {
     let _serial = serial();
@@ -339,18 +359,7 @@ fn a_proxy_render_at_half_scale_has_the_full_frames_look() {
     let small = effect
         .render(3.0, &half, [0.5, 0.5])
         .expect("render at half scale");
-    for (a, b) in rings(&large).iter().zip(rings(&small)) {
-        for ring in 0..3 {
-            let off = (a[ring] - b[ring]).abs() / a[ring];
-            assert!(
-                off < 0.01,
-                "ring {ring}: {:.3} % ({} against {})",
-                100.0 * off,
-                a[ring],
-                b[ring]
-            );
-        }
-    }
+    within_a_percent(&rings(&large), &rings(&small), 0..3);
 }
 
 #[test]
@@ -376,21 +385,10 @@ fn a_squeezed_plate_gets_round_glare_on_its_own_pixels() {
     let glare = effect
         .render(1.0, &plate, [1.0, 1.0])
         .expect("render with pixels twice as wide");
-    for (a, b) in rings_squeezed(&expected, 2.0)
-        .iter()
-        .zip(rings_squeezed(&glare, 2.0))
-    {
-        for ring in 1..3 {
-            let off = (a[ring] - b[ring]).abs() / a[ring];
-            assert!(
-                off < 0.01,
-                "ring {ring}: {:.3} % ({} against {})",
-                100.0 * off,
-                a[ring],
-                b[ring]
-            );
-        }
-    }
+    // Beyond 8 px: within that the desqueezed lamp is two pixels of half
+    // its light, not one.
+    let (a, b) = (rings_squeezed(&expected, 2.0), rings_squeezed(&glare, 2.0));
+    within_a_percent(&a, &b, 1..3);
     // The image itself passes through untouched under its glare.
     effect.set("output", Setting::Int(0)).expect("image");
     let whole = effect.render(2.0, &plate, [1.0, 1.0]).expect("render");
