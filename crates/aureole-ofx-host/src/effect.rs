@@ -381,6 +381,10 @@ unsafe extern "C" fn clip_get_region_of_definition(
     if out.is_null() {
         return abi::STAT_ERR_VALUE;
     }
+    // An input not connected has no region.
+    if clip.props.ints(names::CLIP_CONNECTED).first() == Some(&0) {
+        return abi::STAT_FAILED;
+    }
     // SAFETY: the plugin's out pointer, checked non-null.
     unsafe { out.write(*clip.region.lock().unwrap_or_else(|p| p.into_inner())) };
     abi::STAT_OK

@@ -384,6 +384,7 @@ impl Plugin {
             effect,
             project,
             bottom_up: std::sync::atomic::AtomicBool::new(false),
+            connected: std::sync::atomic::AtomicBool::new(true),
         })
     }
 
@@ -552,6 +553,8 @@ pub struct Instance<'p> {
     project: Project,
     /// Images laid bottom row first with a positive stride.
     bottom_up: std::sync::atomic::AtomicBool,
+    /// Whether the source clip is connected to an input.
+    connected: std::sync::atomic::AtomicBool,
 }
 
 impl Instance<'_> {
@@ -584,6 +587,12 @@ impl Instance<'_> {
     /// negative one, as some hosts do (`false`, the default).
     pub fn set_rows_bottom_up(&self, bottom_up: bool) {
         self.bottom_up.store(bottom_up, Ordering::Relaxed);
+    }
+
+    /// Connects or disconnects the source clip: a render without an input
+    /// has no source image.
+    pub fn set_source_connected(&self, connected: bool) {
+        self.connected.store(connected, Ordering::Relaxed);
     }
 
     /// Asks (or stops asking) the plugin to abort what it renders.
@@ -708,11 +717,18 @@ impl Instance<'_> {
             .set(names::IMAGE_PIXEL_ASPECT_RATIO, aspect.clone());
         *source_clip.region.lock().unwrap_or_else(|p| p.into_inner()) = canonical;
         let lent_source = lend(source);
-        source_clip
-            .frames
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .insert(key, lent_source.clone());
+        let connected = self.connected.load(Ordering::Relaxed);
+        source_clip.props.set(
+            names::CLIP_CONNECTED,
+            Value::Ints(vec![i32::from(connected)]),
+        );
+        if connected {
+            source_clip
+                .frames
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .insert(key, lent_source.clone());
+        }
 
         let args = self.args(time, scale);
         let out = PropSet::new();
@@ -723,12 +739,11 @@ impl Instance<'_> {
                 Some(&out),
             )
             .and_then(|()| {
-                let region = out.doubles(names::EFFECT_REGION_OF_DEFINITION);
+                // The plugin's region, else (its default reply) the
+                // frame's, as a host takes the union of the inputs'.
+                let mut region = out.doubles(names::EFFECT_REGION_OF_DEFINITION);
                 if region.len() != 4 {
-                    return Err(refused(
-                        "the plugin set no region of definition",
-                        abi::STAT_ERR_VALUE,
-                    ));
+                    region = vec![canonical.x1, canonical.y1, canonical.x2, canonical.y2];
                 }
                 args.set(names::EFFECT_REGION_OF_DEFINITION, Value::Doubles(region));
                 let out = PropSet::new();

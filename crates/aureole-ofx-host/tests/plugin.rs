@@ -709,7 +709,8 @@ fn actions_out_of_order_or_without_their_properties_fail_cleanly() {
         call(&plugin, c"OfxActionNoSuchThing", effect.handle(), None),
         abi::STAT_REPLY_DEFAULT
     );
-    // A render with everything but the source image: the host has none.
+    // A render with everything but the images: the source is taken as
+    // black, as OpenFX says, but there is nowhere to write.
     args.set(names::EFFECT_RENDER_WINDOW, Value::Ints(vec![0, 0, 64, 36]));
     assert_eq!(
         call(&plugin, names::ACTION_RENDER, effect.handle(), Some(args)),
@@ -718,8 +719,22 @@ fn actions_out_of_order_or_without_their_properties_fail_cleanly() {
     assert!(effect
         .messages()
         .iter()
-        .any(|(_, m)| m.contains("no Source image")));
+        .any(|(_, m)| m.contains("no Output image")));
     assert_eq!(images_held(), 0);
+    // An input not connected: the output is black and transparent, and
+    // the host's default answers for the regions.
+    effect.set_source_connected(false);
+    let lit = Picture {
+        pixels: vec![5.0; 64 * 36 * 4],
+        ..night(64, 36, 1)
+    };
+    // The output buffer starts lit: the plugin writes the black.
+    let (_, black) = effect
+        .render_buffers(1.0, lit.clone(), lit, [1.0, 1.0])
+        .expect("a render without an input");
+    assert!(black.pixels.iter().all(|&v| v == 0.0));
+    assert!(effect.messages().is_empty());
+    effect.set_source_connected(true);
     // And after all that, the instance renders.
     effect
         .render(1.0, &night(64, 36, 1), [1.0, 1.0])

@@ -154,13 +154,13 @@ fn dispatch(action: &CStr, effect: Handle, in_args: Handle, out_args: Handle) ->
             on_effect()?;
             instance::Instance::of(effect, &suites)?;
             let property = names::EFFECT_REGION_OF_DEFINITION;
-            render::whole_source(effect, (in_args, out_args), property, &suites)?;
+            return render::whole_source(effect, (in_args, out_args), property, &suites);
         }
         a if a == names::ACTION_GET_REGIONS_OF_INTEREST => {
             on_effect()?;
             instance::Instance::of(effect, &suites)?;
             let property = names::SOURCE_REGION_OF_INTEREST;
-            render::whole_source(effect, (in_args, out_args), property, &suites)?;
+            return render::whole_source(effect, (in_args, out_args), property, &suites);
         }
         a if a == names::ACTION_BEGIN_SEQUENCE_RENDER || a == names::ACTION_END_SEQUENCE_RENDER => {
             // The kept plan serves the whole sequence; nothing to set up.

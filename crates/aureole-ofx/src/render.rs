@@ -6,7 +6,7 @@ use std::ffi::{c_int, CStr};
 
 use aureole::{Cancel, DisplayWindow, Frame, FrameOptions, Image, Layout, Stage};
 
-use crate::abi::{self, names, Handle, OfxRectD, OfxRectI};
+use crate::abi::{self, names, Handle, OfxRectD, OfxRectI, OfxStatus};
 use crate::host::{self, Failure, Props, Result, Suites};
 use crate::instance::{self, Instance, Kept};
 use crate::settings::{one_line, Output, Settings};
@@ -45,16 +45,20 @@ fn source_region(effect: Handle, time: f64, suites: &Suites) -> Result<OfxRectD>
 /// (`kOfxImageEffectActionGetRegionOfDefinition`), and the region of
 /// interest on the source (`kOfxImageEffectActionGetRegionsOfInterest`),
 /// whatever part of the output is asked for: a lamp anywhere lights every
-/// pixel.
+/// pixel. With no source connected, the host's default is the answer.
 pub fn whole_source(
     effect: Handle,
     (in_args, out_args): (Handle, Handle),
     property: &CStr,
     suites: &Suites,
-) -> Result<()> {
+) -> Result<OfxStatus> {
     let time = Props::new(in_args, suites)?.double(names::PROP_TIME, 0)?;
-    let r = source_region(effect, time, suites)?;
-    Props::new(out_args, suites)?.set_doubles(property, &[r.x1, r.y1, r.x2, r.y2])
+    let out = Props::new(out_args, suites)?;
+    let Ok(r) = source_region(effect, time, suites) else {
+        return Ok(abi::STAT_REPLY_DEFAULT);
+    };
+    out.set_doubles(property, &[r.x1, r.y1, r.x2, r.y2])?;
+    Ok(abi::STAT_OK)
 }
 
 /// An image the host lent: released when dropped.
@@ -76,17 +80,16 @@ impl Drop for Lent {
 }
 
 impl Lent {
-    fn fetch(effect: Handle, name: &CStr, time: f64, suites: &Suites) -> Result<Lent> {
+    /// The clip `name`'s image at `time`; None where the host has none
+    /// (an input not connected, which OpenFX says to take as black).
+    fn fetch(effect: Handle, name: &CStr, time: f64, suites: &Suites) -> Result<Option<Lent>> {
         let clip = clip(effect, name, suites)?;
         let mut handle = std::ptr::null_mut();
         // SAFETY: the suite's contract; a null region asks for the RoI.
         let status =
             unsafe { (suites.effect.clip_get_image)(clip, time, std::ptr::null(), &mut handle) };
         if status != abi::STAT_OK || handle.is_null() {
-            return Err(Failure::said(format!(
-                "aureole: the host gave no {} image at time {time}",
-                name.to_string_lossy()
-            )));
+            return Ok(None);
         }
         let props = Props::new(handle, suites)?;
         // From here the image is ours to release, whatever else fails.
@@ -135,7 +138,7 @@ impl Lent {
                 ),
             ));
         }
-        Ok(lent)
+        Ok(Some(lent))
     }
 
     fn width(&self) -> usize {
@@ -219,7 +222,15 @@ pub fn render(effect: Handle, in_args: Handle, suites: &Suites) -> Result<()> {
         ));
     }
     let mut settings = Settings::read(effect, suites, time)?;
-    let source = Lent::fetch(effect, names::CLIP_SOURCE, time, suites)?;
+    let Some(source) = Lent::fetch(effect, names::CLIP_SOURCE, time, suites)? else {
+        // No input: black and transparent, as the host takes a missing image.
+        let empty = Image::filled(0, 0, Layout::Rgb, 0.0);
+        return write(
+            &output(effect, time, suites)?,
+            (&empty, OfxRectI::default()),
+            window,
+        );
+    };
     // Light spreads alike in every direction on the sensor: a squeezed
     // plate (pixels `squeeze` times as wide as high) is desqueezed by area
     // for the camera, and only the glare is squeezed back onto it.
@@ -261,11 +272,19 @@ pub fn render(effect: Handle, in_args: Handle, suites: &Suites) -> Result<()> {
     if let Some(original) = original {
         result = squeezed(&result, original, with_image);
     }
-    let output = Lent::fetch(effect, names::CLIP_OUTPUT, time, suites)?;
-    write(&output, (&result, bounds), window);
+    write(&output(effect, time, suites)?, (&result, bounds), window)?;
     // The next frame's result is written into these planes.
     instance.recycle(result);
     Ok(())
+}
+
+/// The output image the host lends for `time`.
+fn output(effect: Handle, time: f64, suites: &Suites) -> Result<Lent> {
+    Lent::fetch(effect, names::CLIP_OUTPUT, time, suites)?.ok_or_else(|| {
+        Failure::said(format!(
+            "aureole: the host gave no Output image at time {time}"
+        ))
+    })
 }
 
 /// The frame spread by the instance's camera, at render scale `scale`.
@@ -365,7 +384,7 @@ fn squeezed(glare: &Image, original: Image, with_image: bool) -> Image {
 /// Writes `result` (the pixels of the source's `bounds`, top row first)
 /// into the output within the render window; what lies outside the
 /// source is black.
-fn write(output: &Lent, (result, bounds): (&Image, OfxRectI), window: OfxRectI) {
+fn write(output: &Lent, (result, bounds): (&Image, OfxRectI), window: OfxRectI) -> Result<()> {
     let (w, h) = (result.width as c_int, result.height as c_int);
     let n = output.components;
     let x1 = window.x1.max(output.bounds.x1);
@@ -397,4 +416,5 @@ fn write(output: &Lent, (result, bounds): (&Image, OfxRectI), window: OfxRectI) 
             }
         }
     }
+    Ok(())
 }
