@@ -37,6 +37,42 @@ pub struct Picture {
     pub pixels: Vec<f32>,
 }
 
+impl Picture {
+    /// The library's `image` as `channels` floats per pixel (3 or 4,
+    /// alpha 1 where it has none).
+    pub fn of_image(image: &aureole::Image, channels: usize) -> Picture {
+        let (w, h) = (image.width, image.height);
+        let mut pixels = vec![0.0f32; w * h * channels];
+        for i in 0..w * h {
+            for c in 0..3 {
+                pixels[i * channels + c] = image.planes[c.min(image.planes.len() - 1)][i];
+            }
+            if channels == 4 {
+                pixels[i * 4 + 3] = image.alpha.as_ref().map_or(1.0, |a| a[i]);
+            }
+        }
+        Picture {
+            width: w,
+            height: h,
+            channels,
+            pixels,
+        }
+    }
+
+    /// The picture as the library's image: planes apart, alpha kept.
+    pub fn to_image(&self) -> aureole::Image {
+        let (w, h, n) = (self.width, self.height, self.channels);
+        let mut image = aureole::Image::filled(w, h, aureole::Layout::Rgb, 0.0);
+        for (c, plane) in image.planes.iter_mut().enumerate() {
+            for (i, v) in plane.iter_mut().enumerate() {
+                *v = self.pixels[i * n + c];
+            }
+        }
+        image.alpha = (n == 4).then(|| (0..w * h).map(|i| self.pixels[i * n + 3]).collect());
+        image
+    }
+}
+
 /// What went wrong between the host and the plugin.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Refusal {
@@ -58,6 +94,18 @@ impl std::fmt::Display for Refusal {
 }
 
 impl std::error::Error for Refusal {}
+
+/// `effect`'s answer to the action `named`: Ok for `kOfxStatOK`, else a
+/// refusal with what the plugin posted.
+fn answered(status: OfxStatus, named: &CStr, effect: &Effect) -> Result<(), Refusal> {
+    if status == abi::STAT_OK {
+        return Ok(());
+    }
+    Err(Refusal {
+        messages: take_messages(effect),
+        ..refused(&named.to_string_lossy(), status)
+    })
+}
 
 fn refused(action: &str, status: OfxStatus) -> Refusal {
     Refusal {
@@ -257,18 +305,13 @@ impl Plugin {
     }
 
     /// `kOfxActionDescribe`, once: the descriptor's properties.
-    pub fn describe(&self) -> Result<Arc<PropSnapshot>, Refusal> {
+    pub fn describe(&self) -> Result<PropSnapshot, Refusal> {
         let descriptor = Effect::new(names::TYPE_IMAGE_EFFECT);
         // SAFETY: a descriptor the host made.
         let status =
             unsafe { self.action(names::ACTION_DESCRIBE, descriptor.handle(), None, None) };
-        if status != abi::STAT_OK {
-            return Err(Refusal {
-                messages: take_messages(&descriptor),
-                ..refused("OfxActionDescribe", status)
-            });
-        }
-        let snapshot = Arc::new(PropSnapshot::of(&descriptor.props));
+        answered(status, names::ACTION_DESCRIBE, &descriptor)?;
+        let snapshot = PropSnapshot::of(&descriptor.props);
         *self.descriptor.lock().unwrap_or_else(|p| p.into_inner()) = Some(descriptor);
         Ok(snapshot)
     }
@@ -294,12 +337,7 @@ impl Plugin {
                 None,
             )
         };
-        if status != abi::STAT_OK {
-            return Err(Refusal {
-                messages: take_messages(&descriptor),
-                ..refused("OfxImageEffectActionDescribeInContext", status)
-            });
-        }
+        answered(status, names::ACTION_DESCRIBE_IN_CONTEXT, &descriptor)?;
         let clips = descriptor
             .clips
             .lock()
@@ -373,12 +411,7 @@ impl Plugin {
         // SAFETY: an instance the host made.
         let status =
             unsafe { self.action(names::ACTION_CREATE_INSTANCE, effect.handle(), None, None) };
-        if status != abi::STAT_OK {
-            return Err(Refusal {
-                messages: take_messages(&effect),
-                ..refused("OfxActionCreateInstance", status)
-            });
-        }
+        answered(status, names::ACTION_CREATE_INSTANCE, &effect)?;
         Ok(Instance {
             plugin: self,
             effect,
@@ -620,33 +653,38 @@ impl Instance<'_> {
     ) -> Result<(), Refusal> {
         // SAFETY: the instance the host made.
         let status = unsafe { self.plugin.action(action, self.handle(), in_args, out_args) };
-        if status == abi::STAT_OK || status == abi::STAT_REPLY_DEFAULT {
-            Ok(())
+        // What the plugin leaves to the host is the host's default.
+        let status = if status == abi::STAT_REPLY_DEFAULT {
+            abi::STAT_OK
         } else {
-            Err(Refusal {
-                messages: self.messages(),
-                ..refused(&action.to_string_lossy(), status)
-            })
-        }
+            status
+        };
+        answered(status, action, &self.effect)
     }
 
     /// `kOfxImageEffectActionBeginSequenceRender` over frames
     /// `first..=last` at `scale`.
     pub fn begin_sequence(&self, first: f64, last: f64, scale: [f64; 2]) -> Result<(), Refusal> {
-        let args = self.args(first, scale);
-        args.set(names::EFFECT_FRAME_RANGE, Value::Doubles(vec![first, last]));
-        args.set(names::EFFECT_FRAME_STEP, Value::Doubles(vec![1.0]));
-        args.set(names::PROP_IS_INTERACTIVE, Value::Ints(vec![0]));
-        self.call(names::ACTION_BEGIN_SEQUENCE_RENDER, Some(&args), None)
+        self.sequence(names::ACTION_BEGIN_SEQUENCE_RENDER, (first, last), scale)
     }
 
     /// `kOfxImageEffectActionEndSequenceRender`.
     pub fn end_sequence(&self, first: f64, last: f64, scale: [f64; 2]) -> Result<(), Refusal> {
+        self.sequence(names::ACTION_END_SEQUENCE_RENDER, (first, last), scale)
+    }
+
+    /// A sequence action over frames `first..=last`, not interactive.
+    fn sequence(
+        &self,
+        action: &CStr,
+        (first, last): (f64, f64),
+        scale: [f64; 2],
+    ) -> Result<(), Refusal> {
         let args = self.args(first, scale);
         args.set(names::EFFECT_FRAME_RANGE, Value::Doubles(vec![first, last]));
         args.set(names::EFFECT_FRAME_STEP, Value::Doubles(vec![1.0]));
         args.set(names::PROP_IS_INTERACTIVE, Value::Ints(vec![0]));
-        self.call(names::ACTION_END_SEQUENCE_RENDER, Some(&args), None)
+        self.call(action, Some(&args), None)
     }
 
     /// Renders `source` (the frame at `time`, already at render scale

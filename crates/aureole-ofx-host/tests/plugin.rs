@@ -110,7 +110,7 @@ fn a_sequence_rendered_in_a_hosts_order_is_the_command_lines_bytes() {
     for (preset, channels) in [("camera-f8-7blade", 4), ("paper-fig5-both", 3)] {
         let mut source = night(w, h, 1);
         if channels == 3 {
-            source = support::picture_of(&support::image_of(&source), 3);
+            source = Picture::of_image(&source.to_image(), 3);
         }
         let Some(expected) = cli_apply(test, &source, &["--preset", preset, "--device", "cpu"])
         else {
@@ -436,7 +436,7 @@ fn the_projects_frame_inside_an_overscan_is_the_optical_axis() {
         height: 160,
     };
     let frame = aureole::Frame::new(
-        support::image_of(&source),
+        source.to_image(),
         &aureole::FrameOptions {
             input_scale: Some(1.0),
             sanitize: false,
@@ -453,7 +453,7 @@ fn the_projects_frame_inside_an_overscan_is_the_optical_axis() {
         .expect("applied");
     assert!(expected.ghosts.is_some_and(|g| g.traced > 0));
     assert_eq!(
-        first_difference(&rendered, &support::picture_of(&expected.image, 4)),
+        first_difference(&rendered, &Picture::of_image(&expected.image, 4)),
         None
     );
 }

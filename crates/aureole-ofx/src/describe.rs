@@ -1,7 +1,7 @@
 //! What the plugin tells a host it is (`kOfxActionDescribe`) and what it
 //! needs in each context (`kOfxImageEffectActionDescribeInContext`): its
-//! clips and its parameters. The camera's and the stop's parameters are
-//! the library's schema, as the studio's panels show them.
+//! clips and its parameters. The camera's and every effect's parameters
+//! are the library's schema, as the studio's panels show them.
 
 use std::ffi::{c_int, CStr, CString};
 
@@ -99,32 +99,32 @@ pub fn describe_in_context(effect: Handle, in_args: Handle, suites: &Suites) -> 
     define_parameters(effect, suites)
 }
 
-/// A parameter to define: its type, name, label and how to fill it in.
-struct Define<'a> {
-    kind: &'a CStr,
-    name: &'a str,
-    label: &'a str,
+/// Defines the parameter `name` of type `kind` in `params`, with its
+/// label, its line of help and the group it belongs to.
+fn define(
+    (params, suites): (Handle, &Suites),
+    kind: &CStr,
+    name: &str,
+    label: &str,
     hint: String,
-    parent: Option<&'a str>,
-}
-
-fn define(params: Handle, suites: &Suites, what: Define<'_>) -> Result<Props> {
-    let name = CString::new(what.name).unwrap_or_default();
+    parent: Option<&str>,
+) -> Result<Props> {
+    let cname = CString::new(name).unwrap_or_default();
     let mut handle = std::ptr::null_mut();
     // SAFETY: the suite's contract.
     let status = unsafe {
-        (suites.parameter.param_define)(params, what.kind.as_ptr(), name.as_ptr(), &mut handle)
+        (suites.parameter.param_define)(params, kind.as_ptr(), cname.as_ptr(), &mut handle)
     };
     if status != crate::abi::STAT_OK {
         return Err(Failure::status(
             status,
-            format!("the host could not define the parameter {}", what.name),
+            format!("the host could not define the parameter {name}"),
         ));
     }
     let props = Props::new(handle, suites)?;
-    props.set_string(names::PROP_LABEL, 0, what.label)?;
-    props.set_string(names::PARAM_HINT, 0, &what.hint)?;
-    if let Some(parent) = what.parent {
+    props.set_string(names::PROP_LABEL, 0, label)?;
+    props.set_string(names::PARAM_HINT, 0, &hint)?;
+    if let Some(parent) = parent {
         props.set_string(names::PARAM_PARENT, 0, parent)?;
     }
     Ok(props)
@@ -175,17 +175,7 @@ fn define_parameters(effect: Handle, suites: &Suites) -> Result<()> {
         return Err(Failure::status(status, "the effect's parameter set"));
     }
     let d = |kind: &CStr, name: &str, label: &str, hint: String, parent: Option<&str>| {
-        define(
-            params,
-            suites,
-            Define {
-                kind,
-                name,
-                label,
-                hint,
-                parent,
-            },
-        )
+        define((params, suites), kind, name, label, hint, parent)
     };
 
     let presets = preset_options();
@@ -228,7 +218,7 @@ fn define_parameters(effect: Handle, suites: &Suites) -> Result<()> {
 /// What defines one parameter: its type, name, label, hint and group.
 pub type Definer<'a> = dyn Fn(&CStr, &str, &str, String, Option<&str>) -> Result<Props> + 'a;
 
-/// The sensor, the lens and the stop, which replace the camera's when on.
+/// The sensor and the lens, which replace the camera's when on.
 fn camera_controls(d: &Definer<'_>) -> Result<()> {
     use crate::abi::names::{
         PARAM_TYPE_BOOLEAN as BOOLEAN, PARAM_TYPE_DOUBLE as DOUBLE, PARAM_TYPE_GROUP as GROUP,

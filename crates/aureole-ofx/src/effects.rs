@@ -13,7 +13,6 @@ use aureole::ConfigFile;
 use crate::abi::names;
 use crate::describe::{hint, number, Definer};
 use crate::host::{Failure, Result};
-use crate::settings::one_line;
 
 /// The effect types with controls: all but a measured PSF, whose file
 /// is the config's to name.
@@ -26,18 +25,6 @@ pub fn control(kind: &str, p: &Parameter) -> String {
     format!("{kind}_{}", p.name)
 }
 
-/// A parameter's value where the schema has none: the example preset's
-/// (the first preset with the effect, as the studio's panels start from).
-fn example(kind: &str, name: &str) -> Option<toml::Value> {
-    let preset = aureole::presets::find(aureole::presets::example_of(kind)?).ok()?;
-    let table: toml::Table = toml::from_str(preset.toml).ok()?;
-    let effects = table.get("effect")?.as_array()?;
-    let effect = effects
-        .iter()
-        .find(|e| e.get("type").and_then(toml::Value::as_str) == Some(kind))?;
-    effect.get(name).cloned()
-}
-
 /// What `p` starts at: its default, else the example preset's value.
 fn default(kind: &str, p: &Parameter) -> Option<toml::Value> {
     match p.default {
@@ -45,7 +32,7 @@ fn default(kind: &str, p: &Parameter) -> Option<toml::Value> {
         Default::Number(v) => Some(toml::Value::Float(v)),
         Default::Length(text) | Default::Text(text) => Some(toml::Value::String(text.into())),
         Default::Flag(flag) => Some(toml::Value::Boolean(flag)),
-        Default::Required => example(kind, p.name),
+        Default::Required => aureole::presets::example_table(kind)?.get(p.name).cloned(),
     }
 }
 
@@ -170,7 +157,7 @@ pub fn apply(file: ConfigFile, overrides: &Overrides) -> Result<ConfigFile> {
     if overrides.is_empty() {
         return Ok(file);
     }
-    let said = |e: String| Failure::said(one_line(&format!("aureole: the effect controls: {e}")));
+    let said = |e: String| Failure::library(format!("the effect controls: {e}"));
     let mut table: toml::Table =
         toml::from_str(&file.to_toml()).map_err(|e| said(e.to_string()))?;
     let effects = table
@@ -191,6 +178,5 @@ pub fn apply(file: ConfigFile, overrides: &Overrides) -> Result<ConfigFile> {
             effects.push(toml::Value::Table(set.clone()));
         }
     }
-    ConfigFile::parse(&table.to_string(), "the effect controls")
-        .map_err(|e| Failure::said(one_line(&format!("aureole: {e}"))))
+    ConfigFile::parse(&table.to_string(), "the effect controls").map_err(Failure::library)
 }

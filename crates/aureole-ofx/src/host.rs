@@ -25,6 +25,13 @@ impl Failure {
         }
     }
 
+    /// The library's (or a file's) error, on one line as a host's message
+    /// box shows it.
+    pub fn library(error: impl std::fmt::Display) -> Failure {
+        let line = format!("aureole: {error}");
+        Failure::said(line.split_whitespace().collect::<Vec<_>>().join(" "))
+    }
+
     /// A failure in the dialogue with the host, returned as its status.
     pub fn status(status: OfxStatus, what: impl Into<String>) -> Failure {
         Failure {
@@ -298,7 +305,7 @@ pub fn post(effect: Handle, kind: &CStr, text: &str) {
         (messages.message)(
             effect,
             kind.as_ptr(),
-            c"org.aureole.glare".as_ptr(),
+            crate::IDENTIFIER.as_ptr(),
             c"%s".as_ptr(),
             line.as_ptr(),
         );

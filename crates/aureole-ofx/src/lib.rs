@@ -23,8 +23,6 @@ use abi::{names, Handle, OfxHost, OfxPlugin, OfxStatus};
 pub use aureole_ofx_abi as abi;
 use host::{Failure, Result};
 
-pub use describe::{param, DEVICES, NO_PRESET, OUTPUTS};
-
 /// The plugin's identifier, stable across versions: hosts save projects
 /// with it.
 pub const IDENTIFIER: &CStr = c"org.aureole.glare";

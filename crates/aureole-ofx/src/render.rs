@@ -9,7 +9,7 @@ use aureole::{Cancel, DisplayWindow, Frame, FrameOptions, Image, Layout, Stage};
 use crate::abi::{self, names, Handle, OfxRectD, OfxRectI, OfxStatus};
 use crate::host::{self, Failure, Props, Result, Suites};
 use crate::instance::{self, Instance, Kept};
-use crate::settings::{one_line, Output, Settings};
+use crate::settings::{self, Output, Settings};
 
 /// A clip of the instance `effect` by name.
 fn clip(effect: Handle, name: &CStr, suites: &Suites) -> Result<Handle> {
@@ -246,7 +246,7 @@ pub fn render(effect: Handle, in_args: Handle, suites: &Suites) -> Result<()> {
     let with_image = settings.output == Output::Image;
     let (image, original) = if (squeeze - 1.0).abs() > 1e-9 {
         let square = (libm::round(width as f64 * squeeze) as usize).max(1);
-        if settings.output == Output::Image {
+        if with_image {
             settings.output = Output::GlareOnly;
         }
         (image.resampled(square, height), Some(image))
@@ -261,7 +261,7 @@ pub fn render(effect: Handle, in_args: Handle, suites: &Suites) -> Result<()> {
             sanitize: false,
         },
     )
-    .map_err(|e| Failure::said(one_line(&format!("aureole: {e}"))))?;
+    .map_err(Failure::library)?;
     let bounds = source.bounds;
     if let Some(window) = display_window(effect, (bounds, squeeze), square, scale, suites) {
         frame = frame.with_display_window(window);
@@ -301,14 +301,14 @@ fn spread(
             status: abi::STAT_FAILED,
             message: None,
         },
-        other => Failure::said(one_line(&format!("aureole: {other}"))),
+        other => Failure::library(other),
     };
     let camera = settings.camera()?;
     let key = format!("{}\n{:?}\n{scale}", camera.to_toml(), settings.device);
     let mut kept = instance.kept.lock().unwrap_or_else(|p| p.into_inner());
     if kept.as_ref().is_none_or(|k| k.key != key) {
         *kept = None;
-        let config = settings.config()?.with_pixels_scaled(scale);
+        let config = settings::ready(camera)?.with_pixels_scaled(scale);
         *kept = Some(Kept {
             key,
             session: instance::session(config, settings.device),

@@ -203,17 +203,16 @@ impl Settings {
 
     /// The composed camera: the preset, the config file, then the controls.
     pub fn camera(&self) -> Result<ConfigFile> {
-        let said = |e: aureole::Error| Failure::said(one_line(&format!("aureole: {e}")));
         let mut file = ConfigFile::default();
         if let Some(name) = self.preset {
             file = file.then(
                 aureole::presets::find(name)
                     .and_then(|p| p.config())
-                    .map_err(said)?,
+                    .map_err(Failure::library)?,
             );
         }
         if let Some(path) = &self.config {
-            let mut loaded = ConfigFile::load(path).map_err(said)?;
+            let mut loaded = ConfigFile::load(path).map_err(Failure::library)?;
             aureole_io::measured::resolve(&mut loaded, aureole_io::atomic::folder_of(path));
             file = file.then(loaded);
         }
@@ -227,23 +226,18 @@ impl Settings {
                 "[camera]\nsensor_width_mm = {:?}\nfocal_length_mm = {:?}\nf_number = {:?}\n",
                 c.sensor_width_mm, c.focal_length_mm, c.f_number
             );
-            file = file.then(ConfigFile::parse(&text, "the camera controls").map_err(said)?);
+            file = file
+                .then(ConfigFile::parse(&text, "the camera controls").map_err(Failure::library)?);
         }
         let file = crate::effects::apply(file, &self.effects)?;
         Ok(file)
     }
-
-    /// The camera ready to apply: its measured PSFs read.
-    pub fn config(&self) -> Result<Config> {
-        let mut config = Config::compose([self.camera()?]);
-        let limits = aureole_io::limits::Limits::default_for_machine();
-        aureole_io::measured::load(&mut config.effects, limits)
-            .map_err(|e| Failure::said(one_line(&format!("aureole: {e}"))))?;
-        Ok(config)
-    }
 }
 
-/// A message on one line, as a host's message box shows it.
-pub fn one_line(message: &str) -> String {
-    message.split_whitespace().collect::<Vec<_>>().join(" ")
+/// The composed `camera` ready to apply: its measured PSFs read.
+pub fn ready(camera: ConfigFile) -> Result<Config> {
+    let mut config = Config::compose([camera]);
+    let limits = aureole_io::limits::Limits::default_for_machine();
+    aureole_io::measured::load(&mut config.effects, limits).map_err(Failure::library)?;
+    Ok(config)
 }

@@ -79,20 +79,7 @@ pub fn schema() -> Value {
 }
 
 fn example(kind: &str) -> Value {
-    let Some(preset) =
-        aureole::presets::example_of(kind).and_then(|n| aureole::presets::find(n).ok())
-    else {
-        return Value::Null;
-    };
-    let Ok(table) = toml::from_str::<toml::Table>(preset.toml) else {
-        return Value::Null;
-    };
-    let effects = table.get("effect").and_then(toml::Value::as_array);
-    let found = effects.and_then(|e| {
-        e.iter()
-            .find(|t| t.get("type").and_then(toml::Value::as_str) == Some(kind))
-    });
-    found
+    aureole::presets::example_table(kind)
         .and_then(|t| serde_json::to_value(t).ok())
         .unwrap_or(Value::Null)
 }

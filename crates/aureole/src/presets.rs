@@ -85,6 +85,20 @@ pub fn example_of(kind: &str) -> Option<&'static str> {
         .map(|p| p.name)
 }
 
+/// The `[[effect]]` table of type `kind` in its example preset
+/// ([`example_of`]), as the preset writes it: what a front end's panel
+/// for the effect starts from.
+pub fn example_table(kind: &str) -> Option<toml::Table> {
+    let preset = find(example_of(kind)?).ok()?;
+    let table: toml::Table = toml::from_str(preset.toml).ok()?;
+    let effects = table.get("effect")?.as_array()?;
+    effects
+        .iter()
+        .filter_map(toml::Value::as_table)
+        .find(|t| t.get("type").and_then(toml::Value::as_str) == Some(kind))
+        .cloned()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

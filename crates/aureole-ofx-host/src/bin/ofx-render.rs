@@ -41,19 +41,7 @@ fn run() -> Result<(), String> {
         .map_err(|e| e.to_string())?
         .image;
     let (w, h) = (image.width, image.height);
-    let mut pixels = vec![0.0f32; w * h * 4];
-    for i in 0..w * h {
-        for c in 0..3 {
-            pixels[i * 4 + c] = image.planes[c.min(image.planes.len() - 1)][i];
-        }
-        pixels[i * 4 + 3] = image.alpha.as_ref().map_or(1.0, |a| a[i]);
-    }
-    let source = Picture {
-        width: w,
-        height: h,
-        channels: 4,
-        pixels,
-    };
+    let source = Picture::of_image(&image, 4);
 
     let plugin = Plugin::load(&bundle).map_err(|e| e.to_string())?;
     plugin.describe().map_err(|e| e.to_string())?;
@@ -101,11 +89,8 @@ fn run() -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     if let (Some(path), Some(picture)) = (output, rendered) {
         let mut result = image.clone();
-        for (c, plane) in result.planes.iter_mut().enumerate() {
-            plane
-                .iter_mut()
-                .enumerate()
-                .for_each(|(i, v)| *v = picture.pixels[i * 4 + c]);
+        for (plane, rendered) in result.planes.iter_mut().zip(picture.to_image().planes) {
+            *plane = rendered;
         }
         aureole_io::write::write_linear(&path, &result, Default::default())
             .map_err(|e| e.to_string())?;

@@ -144,39 +144,6 @@ pub fn night(width: usize, height: usize, factor: usize) -> Picture {
     }
 }
 
-/// `picture` as the library's image: planes apart, alpha kept.
-pub fn image_of(picture: &Picture) -> aureole::Image {
-    let (w, h, n) = (picture.width, picture.height, picture.channels);
-    let mut image = aureole::Image::filled(w, h, aureole::Layout::Rgb, 0.0);
-    for (c, plane) in image.planes.iter_mut().enumerate() {
-        for (i, v) in plane.iter_mut().enumerate() {
-            *v = picture.pixels[i * n + c];
-        }
-    }
-    image.alpha = (n == 4).then(|| (0..w * h).map(|i| picture.pixels[i * n + 3]).collect());
-    image
-}
-
-/// The library's image as a picture of `channels` per pixel.
-pub fn picture_of(image: &aureole::Image, channels: usize) -> Picture {
-    let (w, h) = (image.width, image.height);
-    let mut pixels = vec![0.0f32; w * h * channels];
-    for i in 0..w * h {
-        for c in 0..3 {
-            pixels[i * channels + c] = image.planes[c.min(image.planes.len() - 1)][i];
-        }
-        if channels == 4 {
-            pixels[i * 4 + 3] = image.alpha.as_ref().map_or(1.0, |a| a[i]);
-        }
-    }
-    Picture {
-        width: w,
-        height: h,
-        channels,
-        pixels,
-    }
-}
-
 /// The command line built beside these tests (`cargo test --workspace`
 /// builds it), or None.
 pub fn cli() -> Option<PathBuf> {
@@ -196,7 +163,7 @@ pub fn cli_apply(test: &str, picture: &Picture, args: &[&str]) -> Option<Picture
     };
     let dir = tempfile::tempdir().expect("a temporary folder");
     let (input, output) = (dir.path().join("in.exr"), dir.path().join("out.exr"));
-    aureole_io::write::write_linear(&input, &image_of(picture), Default::default())
+    aureole_io::write::write_linear(&input, &picture.to_image(), Default::default())
         .expect("the input is written");
     let run = std::process::Command::new(cli)
         .arg("apply")
@@ -213,7 +180,7 @@ pub fn cli_apply(test: &str, picture: &Picture, args: &[&str]) -> Option<Picture
     );
     let limits = aureole_io::limits::Limits::default_for_machine();
     let loaded = aureole_io::read::read_image(&output, limits).expect("the output is read");
-    Some(picture_of(&loaded.image, picture.channels))
+    Some(Picture::of_image(&loaded.image, picture.channels))
 }
 
 /// The first sample where `a` and `b` differ in their bits.
