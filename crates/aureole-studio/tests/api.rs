@@ -1440,3 +1440,38 @@ fn a_change_that_leaves_the_ghosts_keeps_them() {
         assert_eq!(kept(addr), reused);
     }
 }
+
+/// A drag of the stop's blades traces the ghosts no more: they are drawn
+/// again from the rays kept from the last render, to the bytes a studio
+/// that never saw the last camera gives.
+#[test]
+fn a_change_of_the_blades_draws_the_ghosts_from_the_rays_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    street(dir.path(), "street.exr", (64, 36));
+    let drawn_again = |addr| {
+        http(addr, "GET", "/api/status", "").json()["rays_reused"]
+            .as_u64()
+            .unwrap()
+    };
+    let render = |addr, config: &str| {
+        let reply = http(
+            addr,
+            "POST",
+            "/api/render",
+            &render_body("street.exr", config, 48, ""),
+        );
+        assert_eq!(reply.status, 200, "{}", reply.error());
+        reply.body
+    };
+    let seven = preset("camera-f8-7blade-ghosts");
+    let five = seven.replacen("blades = 7", "blades = 5", 1);
+    assert_ne!(five, seven);
+    let addr = server(dir.path());
+    render(addr, seven);
+    assert_eq!(drawn_again(addr), 0);
+    let kept = render(addr, &five);
+    assert_eq!(drawn_again(addr), 1);
+    let fresh = server(dir.path());
+    assert!(render(fresh, &five) == kept, "not the bytes traced afresh");
+    assert_eq!(drawn_again(fresh), 0);
+}

@@ -100,7 +100,7 @@ pub use kernel::{Extent, Kernel, Sending};
 pub use optics::{Aperture, Bloom, Corona, Effect, Eye, Filter, Halation, Measured, Vos};
 pub use pipeline::{
     Applied, ApplyOptions, Arithmetic, DisplayWindow, Frame, FrameOptions, GhostSummary,
-    GlareLayer, Method, Plan, ScaleSource, Session, Stage,
+    GlareLayer, KeptRays, Method, Plan, ScaleSource, Session, Stage,
 };
 pub use units::{Length, Unit};
 pub use view::{Projection, View};

@@ -4,8 +4,8 @@
 //! same bytes on every run and thread count.
 
 use aureole::{
-    ApplyOptions, Config, ConfigFile, DisplayWindow, Error, Frame, FrameOptions, Image, Layout,
-    Session, Stage,
+    ApplyOptions, Config, ConfigFile, DisplayWindow, Error, Frame, FrameOptions, Image, KeptRays,
+    Layout, Session, Stage,
 };
 
 /// A cemented achromat behind its stop: three surfaces that reflect, so
@@ -172,6 +172,51 @@ fn the_brightest_sources_are_traced_up_to_the_count_and_the_rest_left() {
     assert!((1.0..1.0 + 1e-5).contains(&kept), "{kept}");
     let bright = 90 * 160 + 120;
     assert!(luminance(&applied.image, bright) < luminance(&input, bright));
+}
+
+/// Rays kept from a trace through one stop draw the ghosts of another
+/// within the same circle (other blades, turned, rounded) to the bytes a
+/// fresh trace gives, without tracing; another f-number is traced anew,
+/// and a limit of 0 keeps nothing.
+#[test]
+fn kept_rays_draw_another_stops_ghosts_as_a_trace_does() {
+    let input = frame(night(120, 90, &[((80, 30), 1e6), ((20, 70), 3e5)]));
+    let camera = |aperture: &str, f_number: &str| {
+        let lens = ACHROMAT.replace("f_number = 4.0", &format!("f_number = {f_number}"));
+        config(&format!(
+            "{lens}\n[[effect]]\ntype = \"aperture\"\n{aperture}\n"
+        ))
+    };
+    let traced = |config: Config, kept: &mut KeptRays| {
+        let (ghosted, _) = Session::new(config)
+            .trace_ghosts_keeping(&input, kept, &mut |_, _| {})
+            .unwrap()
+            .unwrap();
+        ghosted.image().planes.clone()
+    };
+    let mut kept = KeptRays::new(u64::MAX);
+    traced(camera("blades = 7", "4.0"), &mut kept);
+    assert_eq!(kept.reused(), 0);
+    assert!(kept.bytes() > 0);
+    for (aperture, f_number, reused) in [
+        ("blades = 5", "4.0", 2),
+        ("blades = 6\nrotation_deg = 10.0", "4.0", 2),
+        ("blades = 7\nroundness = 0.5", "4.0", 2),
+        ("blades = 0", "4.0", 2),
+        ("blades = 7", "5.6", 0),
+        ("blades = 9", "5.6", 2),
+    ] {
+        let drawn = traced(camera(aperture, f_number), &mut kept);
+        assert_eq!(kept.reused(), reused, "{aperture} at f/{f_number}");
+        let fresh = traced(camera(aperture, f_number), &mut KeptRays::new(0));
+        assert!(
+            drawn == fresh,
+            "{aperture} at f/{f_number}: not the bytes traced"
+        );
+    }
+    let mut none = KeptRays::new(0);
+    traced(camera("blades = 7", "4.0"), &mut none);
+    assert_eq!(none.bytes(), 0);
 }
 
 #[test]

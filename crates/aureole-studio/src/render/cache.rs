@@ -53,6 +53,9 @@ impl Renderer {
         if let Ok(mut kept) = self.kept.try_lock() {
             kept.clear();
         }
+        if let Ok(mut rays) = self.rays.try_lock() {
+            *rays = self.no_rays();
+        }
     }
 
     /// The kept sessions, the one for `key` first: kept from before, or

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use aureole::config::ConfigFile;
 use aureole::image::{Image, Shape};
 use aureole::memory::Workload;
-use aureole::{ApplyOptions, Cancel, Config, Frame, GhostSummary, Method};
+use aureole::{ApplyOptions, Cancel, Config, Frame, GhostSummary, KeptRays, Method};
 use aureole_io::display::{meter, render, DisplayOptions, Exposure, ToneCurve};
 use aureole_io::kernel::log_picture_window;
 use serde::Deserialize;
@@ -22,7 +22,7 @@ mod views;
 use cache::{KeptSession, Loaded, Preview};
 use views::{kernel_profiles, linear_bytes, png, spread_overlay};
 
-use crate::budget::Budget;
+use crate::budget::{Budget, Lease};
 use crate::error::StudioError;
 use crate::locked;
 use crate::roots::Roots;
@@ -332,6 +332,12 @@ pub struct Renderer {
     ghosts: Mutex<Option<(GhostKey, (Frame, GhostSummary))>>,
     /// Renders whose ghosts were kept.
     ghosts_reused: std::sync::atomic::AtomicU64,
+    /// Renders whose ghosts were drawn from kept rays.
+    rays_reused: std::sync::atomic::AtomicU64,
+    /// The last preview's sources' rays, with their memory's lease: a
+    /// drag of the stop's blades, rotation or roundness draws the ghosts
+    /// again from them without tracing.
+    rays: Mutex<(KeptRays, Option<Lease>)>,
     /// Renders under way, and renders that ended cancelled.
     active: std::sync::atomic::AtomicUsize,
     cancelled: std::sync::atomic::AtomicU64,
@@ -350,6 +356,9 @@ pub struct Status {
     pub reused: u64,
     /// Renders whose lens ghosts were kept from the last.
     pub ghosts_reused: u64,
+    /// Renders whose lens ghosts were drawn again from the rays kept from
+    /// the last (a change of the stop's shape), not traced.
+    pub rays_reused: u64,
 }
 
 /// What a preview's lens ghosts depend on: the preview itself (held, so
@@ -375,6 +384,7 @@ impl Renderer {
     /// Renders from files under `roots`, within `budget`, which exports
     /// share.
     pub fn new(roots: Roots, budget: Arc<Budget>, device: Device) -> Renderer {
+        let rays_limit = budget.total() / 4;
         Renderer {
             roots,
             budget,
@@ -385,6 +395,8 @@ impl Renderer {
             running: Mutex::new(HashMap::new()),
             ghosts: Mutex::new(None),
             ghosts_reused: std::sync::atomic::AtomicU64::new(0),
+            rays_reused: std::sync::atomic::AtomicU64::new(0),
+            rays: Mutex::new((KeptRays::new(rays_limit), None)),
             active: std::sync::atomic::AtomicUsize::new(0),
             cancelled: std::sync::atomic::AtomicU64::new(0),
             reused: std::sync::atomic::AtomicU64::new(0),
@@ -418,6 +430,7 @@ impl Renderer {
             cancelled: self.cancelled.load(Ordering::SeqCst),
             reused: self.reused.load(Ordering::SeqCst),
             ghosts_reused: self.ghosts_reused.load(Ordering::SeqCst),
+            rays_reused: self.rays_reused.load(Ordering::SeqCst),
         }
     }
 
@@ -427,6 +440,7 @@ impl Renderer {
         &self,
         preview: &Arc<Frame>,
         session: &aureole::Session,
+        cancel: &Cancel,
     ) -> Result<Option<(Frame, GhostSummary)>, StudioError> {
         let Some(config) = session.config() else {
             return Ok(None);
@@ -447,11 +461,44 @@ impl Renderer {
                 return Ok(Some(ghosted.clone()));
             }
         }
-        let traced = session.trace_ghosts(preview, &mut |_, _| {})?;
+        let traced = self.trace_keeping_rays(preview, session, cancel)?;
         if let Some(ghosted) = &traced {
             *locked(&self.ghosts) = Some((key, ghosted.clone()));
         }
         Ok(traced)
+    }
+
+    /// The ghosts of `preview` traced by `session`, from the rays kept
+    /// where they serve, whose own are kept next, up to a quarter of the
+    /// budget and while the budget has room for them now (else none: they
+    /// would only make a job wait).
+    fn trace_keeping_rays(
+        &self,
+        preview: &Frame,
+        session: &aureole::Session,
+        cancel: &Cancel,
+    ) -> Result<Option<(Frame, GhostSummary)>, StudioError> {
+        // Taken out while tracing: a render beside this one traces its own.
+        let (mut rays, lease) = std::mem::replace(&mut *locked(&self.rays), self.no_rays());
+        drop(lease);
+        let traced = session.trace_ghosts_keeping(preview, &mut rays, &mut |_, _| {})?;
+        if rays.reused() > 0 {
+            self.rays_reused
+                .fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        }
+        let lease = self
+            .budget
+            .lease(rays.bytes(), cancel, Some(Duration::ZERO), || {})
+            .ok();
+        if lease.is_some() {
+            *locked(&self.rays) = (rays, lease);
+        }
+        Ok(traced)
+    }
+
+    /// No rays kept, and room for a quarter of the budget's.
+    fn no_rays(&self) -> (KeptRays, Option<Lease>) {
+        (KeptRays::new(self.budget.total() / 4), None)
     }
 
     fn render_counted(
@@ -514,7 +561,7 @@ impl Renderer {
                     return Err(StudioError::Internal("no session".into()));
                 };
                 kept.session.set_cancel_token(cancel.clone());
-                let ghosted = self.ghosts_of(&preview, &kept.session)?;
+                let ghosted = self.ghosts_of(&preview, &kept.session, &cancel)?;
                 let applied =
                     kept.session
                         .apply_after_ghosts(&preview, ghosted, &options, &mut |_, _| {})?;

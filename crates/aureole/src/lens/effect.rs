@@ -298,6 +298,16 @@ impl GhostOptics {
         })
     }
 
+    /// Whether rays traced through these optics are those of `other`:
+    /// the same lens, circle about the stop and wavelengths, whatever the
+    /// stop's opening within the circle ([`crate::lens::ghost::Rays`]).
+    pub fn traces_like(&self, other: &GhostOptics) -> bool {
+        self.lens == other.lens
+            && self.radius == other.radius
+            && self.focal_mm == other.focal_mm
+            && self.light == other.light
+    }
+
     /// The lens set out for tracing, its stop the camera's, its surfaces'
     /// reflectances tabulated at the light's wavelengths.
     pub fn layout(&self) -> Result<Layout<'_>> {

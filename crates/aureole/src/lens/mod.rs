@@ -29,6 +29,7 @@
 //! # Ok::<(), aureole::Error>(())
 //! ```
 
+mod bundle;
 pub mod canvas;
 pub mod coating;
 pub mod effect;

@@ -268,6 +268,16 @@ impl<'a> Layout<'a> {
             .is_none_or(|stop| stop.transmission(xy)[0] >= 0.5)
     }
 
+    /// Whether the stop's opening passes every point between `points`
+    /// (`Some(true)`) or none of them (`Some(false)`), where that is sure
+    /// ([`Pupil::convex_side`]); `None` where each must be tested.
+    pub fn opens_between(&self, points: &[[f64; 2]]) -> Option<bool> {
+        match &self.stop {
+            None => Some(true),
+            Some(stop) => stop.convex_side(points),
+        }
+    }
+
     /// The z of the first surface's vertex and its clear semi-aperture,
     /// mm: every ray that enters the lens passes there.
     pub fn entrance(&self) -> (f64, f64) {

@@ -14,7 +14,7 @@ use crate::error::Result;
 use crate::image::{Image, Layout as Planes, PixelLuminance};
 use crate::lens::canvas::Canvas;
 use crate::lens::effect::{GhostOptics, Ghosts};
-use crate::lens::ghost::{towards, trace, Sensor, Traced};
+use crate::lens::ghost::{towards, Rays, Sensor, Traced};
 use crate::lens::trace::{Layout, Path, Vector};
 
 /// Where a frame's display window lies in its pixels: a frame with
@@ -66,6 +66,72 @@ pub struct GhostSummary {
     pub f_number: f64,
     /// The ghosts' light over the traced sources' (luminance).
     pub light: f64,
+}
+
+/// The rays of a frame's sources, kept from one trace for the next
+/// ([`Rays`]): a change of the stop's blades, rotation or roundness draws
+/// the ghosts anew from them, the same bytes as traced, without tracing.
+/// Anything else the rays depend on (the lens, the f-number, the
+/// wavelengths, a source's place) traces again.
+#[derive(Debug, Clone, Default)]
+pub struct KeptRays {
+    /// What they were traced through.
+    optics: Option<GhostOptics>,
+    /// Each source's, the brightest first.
+    sources: Vec<std::sync::Arc<Rays>>,
+    /// The most bytes they may hold: sources beyond are traced each time.
+    limit: u64,
+    /// The sources of the last frame drawn from kept rays.
+    reused: usize,
+}
+
+impl KeptRays {
+    /// None kept yet, at most `limit` bytes of them.
+    pub fn new(limit: u64) -> KeptRays {
+        KeptRays {
+            limit,
+            ..KeptRays::default()
+        }
+    }
+
+    /// The bytes they hold.
+    pub fn bytes(&self) -> u64 {
+        self.sources.iter().map(|rays| rays.bytes()).sum()
+    }
+
+    /// How many of the last frame's sources were drawn from kept rays.
+    pub fn reused(&self) -> usize {
+        self.reused
+    }
+
+    /// The rays kept for a source in direction `field` through `optics`.
+    fn of(&self, optics: &GhostOptics, field: Vector) -> Option<std::sync::Arc<Rays>> {
+        let same = self
+            .optics
+            .as_ref()
+            .is_some_and(|kept| kept.traces_like(optics));
+        same.then(|| {
+            self.sources
+                .iter()
+                .find(|rays| rays.are_for(field, &optics.light))
+                .cloned()
+        })
+        .flatten()
+    }
+
+    /// Keeps `traced` (a frame's sources' rays through `optics`, the
+    /// brightest first) as far as the limit allows, instead of the last.
+    fn keep(&mut self, optics: &GhostOptics, traced: Vec<std::sync::Arc<Rays>>) {
+        let mut bytes = 0;
+        self.sources = traced
+            .into_iter()
+            .take_while(|rays| {
+                bytes += rays.bytes();
+                bytes <= self.limit
+            })
+            .collect();
+        self.optics = Some(optics.clone());
+    }
 }
 
 /// A bright source: touching pixels above the threshold.
@@ -202,8 +268,8 @@ fn share_out(
 pub(crate) fn add_ghosts(
     image: &Image,
     (scale, window): (f64, DisplayWindow),
-    ghosts: &Ghosts,
-    optics: &GhostOptics,
+    (ghosts, optics): (&Ghosts, &GhostOptics),
+    kept: &mut KeptRays,
     control: &mut Control,
 ) -> Result<(Image, GhostSummary)> {
     let layout = optics.layout()?;
@@ -220,9 +286,16 @@ pub(crate) fn add_ghosts(
     let cancel = control.cancel();
     let batch = rayon::current_num_threads().max(1);
     let mut done = 0;
+    let (mut rays, mut reused) = (Vec::with_capacity(traced), 0);
     for sources in found[..traced].chunks(batch) {
         control.check()?;
-        let traced_here: Vec<_> = sources
+        // Rays are kept for as many sources as the limit holds.
+        let keep = rays
+            .iter()
+            .map(|r: &std::sync::Arc<Rays>| r.bytes())
+            .sum::<u64>()
+            < kept.limit;
+        let traced_here: Vec<(Option<std::sync::Arc<Rays>>, bool, Traced)> = sources
             .par_iter()
             .map(|source| {
                 let target = (
@@ -231,24 +304,28 @@ pub(crate) fn add_ghosts(
                 );
                 // An anamorphic lens's two focal lengths: each way its own.
                 let field = aim(&layout, optics.focal_mm, target, green);
-                trace(
-                    &layout,
-                    field,
-                    &sensor,
-                    &optics.light,
-                    &mut Control::quiet(&cancel),
-                )
+                if let Some(rays) = kept.of(optics, field) {
+                    let drawn = rays.draw(&layout, &sensor, &optics.light, &cancel)?;
+                    return Ok((Some(rays), true, drawn));
+                }
+                let light = (&sensor, optics.light.as_slice());
+                let (drawn, rays) = Rays::trace_drawn(&layout, field, light, keep, &cancel)?;
+                Ok((rays.map(std::sync::Arc::new), false, drawn))
             })
             .collect::<Result<_>>()?;
         done += sources.len();
         control.report(done as f64 / traced as f64);
-        for (source, drawn) in sources.iter().zip(traced_here) {
+        for (source, (source_rays, kept_before, drawn)) in sources.iter().zip(traced_here) {
+            rays.extend(source_rays);
+            reused += usize::from(kept_before);
             let y_share = share_out(image, (&mut scene, &mut canvas), source, &drawn);
             ghost_light += source.luminance * y_share / (1.0 + y_share);
             source_light += source.luminance;
         }
     }
     control.check()?;
+    kept.keep(optics, rays);
+    kept.reused = reused;
     for (plane, ghosts) in scene.planes.iter_mut().zip(canvas.finish()) {
         for (value, ghost) in plane.iter_mut().zip(ghosts) {
             *value += ghost as f32;

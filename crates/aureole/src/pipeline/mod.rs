@@ -14,7 +14,7 @@ pub mod sphere;
 mod splat;
 mod threshold;
 
-pub use ghosts::{DisplayWindow, GhostSummary};
+pub use ghosts::{DisplayWindow, GhostSummary, KeptRays};
 pub use layers::GlareLayer;
 pub use options::{Applied, ApplyOptions, Arithmetic, Method};
 pub use plan::Plan;

@@ -4,7 +4,7 @@
 //! so that every front end gives the same bytes.
 
 use super::cost::Estimate;
-use super::ghosts::{self, DisplayWindow, GhostSummary};
+use super::ghosts::{self, DisplayWindow, GhostSummary, KeptRays};
 use super::options::{Applied, ApplyOptions, Arithmetic, Method};
 use super::plan::{DoubleRefused, Plan};
 use super::threshold::Threshold;
@@ -387,6 +387,20 @@ impl Session {
         frame: &Frame,
         progress: &mut dyn FnMut(Stage, f64),
     ) -> Result<Option<(Frame, GhostSummary)>> {
+        self.trace_ghosts_keeping(frame, &mut KeptRays::new(0), progress)
+    }
+
+    /// [`Session::trace_ghosts`], drawing each source's ghosts from the
+    /// rays `kept` holds for it where they are its rays through this lens
+    /// at this f-number (another stop's blades, rotation or roundness:
+    /// the same bytes as traced), and keeping this frame's in it: a front
+    /// end that changes the stop while the frame stays (the studio).
+    pub fn trace_ghosts_keeping(
+        &self,
+        frame: &Frame,
+        kept: &mut KeptRays,
+        progress: &mut dyn FnMut(Stage, f64),
+    ) -> Result<Option<(Frame, GhostSummary)>> {
         let Some(config) = self.config() else {
             return Ok(None);
         };
@@ -400,8 +414,8 @@ impl Session {
         let (scene, summary) = ghosts::add_ghosts(
             frame.image(),
             (frame.scale(), window),
-            traced,
-            &optics,
+            (traced, &optics),
+            kept,
             &mut control,
         )?;
         Ok(Some((frame.around(scene), summary)))

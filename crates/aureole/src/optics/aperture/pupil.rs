@@ -11,6 +11,7 @@
 use super::jinc;
 use std::f64::consts::{PI, TAU};
 
+mod inside;
 mod oval;
 
 /// A complex amplitude (re, im).
@@ -74,6 +75,10 @@ enum Outline {
         edges: Vec<Edge>,
         centroid: [f64; 2],
         reach: f64,
+        /// The radius of the circle about the centroid within every
+        /// edge's line (0 where the centroid is not inside them all): a
+        /// point within it is inside without its edges tested.
+        inner: f64,
         /// The vertices and pieces per side it was made from.
         made: (Vec<[f64; 2]>, usize),
     },
@@ -257,12 +262,25 @@ impl Pupil {
             }
         }
         edges.retain(|e| e.length > 0.0);
+        // The centroid's distance left of each edge's line.
+        let inner = edges
+            .iter()
+            .map(|e| {
+                let start = [
+                    e.middle[0] - e.delta[0] / 2.0,
+                    e.middle[1] - e.delta[1] / 2.0,
+                ];
+                (e.delta[0] * (cy - start[1]) - e.delta[1] * (cx - start[0])) / e.length
+            })
+            .fold(f64::INFINITY, f64::min)
+            .max(0.0);
         let sign = if transmits { 1.0 } else { -1.0 };
         self.elements.push(Element {
             shape: Outline::Polygon {
                 edges,
                 centroid: [cx, cy],
                 reach,
+                inner,
                 made,
             },
             weight: [sign, 0.0],
@@ -349,44 +367,6 @@ impl Pupil {
                     .any(|f| f.is_mirror_of(e, mirror, tolerance))
             })
         })
-    }
-
-    /// The amplitude the pupil transmits at `point` (mm).
-    pub fn transmission(&self, point: [f64; 2]) -> Amplitude {
-        let mut sum = [0.0, 0.0];
-        for element in &self.elements {
-            let within = |centre: &[f64; 2], radius: f64| {
-                let (dx, dy) = (point[0] - centre[0], point[1] - centre[1]);
-                dx * dx + dy * dy <= radius * radius
-            };
-            let inside = match &element.shape {
-                Outline::Disc { centre, radius } | Outline::Spot { centre, radius } => {
-                    within(centre, *radius)
-                }
-                // Counter-clockwise edges: inside lies left of every one.
-                Outline::Polygon {
-                    edges,
-                    centroid,
-                    reach,
-                    ..
-                } => {
-                    within(centroid, *reach)
-                        && edges.iter().all(|e| {
-                            let start = [
-                                e.middle[0] - e.delta[0] / 2.0,
-                                e.middle[1] - e.delta[1] / 2.0,
-                            ];
-                            e.delta[0] * (point[1] - start[1]) - e.delta[1] * (point[0] - start[0])
-                                >= 0.0
-                        })
-                }
-            };
-            if inside {
-                sum[0] += element.weight[0];
-                sum[1] += element.weight[1];
-            }
-        }
-        sum
     }
 
     /// Â(ν) at spatial frequency ν (cycles/mm).
