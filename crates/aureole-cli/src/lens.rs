@@ -97,6 +97,18 @@ pub fn run(args: &Args, quiet: bool) -> Result<(), Failure> {
     let paraxial = lens
         .paraxial()
         .map_err(|e| Failure::Usage(anyhow::anyhow!("{}: {e}", args.file.display())))?;
+    // Every output's folder before any is written: a refused picture
+    // after the lens was written, or after its ghosts were traced, would
+    // leave part of the work.
+    for out in [&args.output, &args.svg, &args.ghosts]
+        .into_iter()
+        .flatten()
+    {
+        aureole_io::job::check_folder(out)?;
+    }
+    if let Some(out) = &args.ghosts {
+        aureole_io::write::check_linear_output(out)?;
+    }
     if let Some(out) = &args.output {
         if out.extension().and_then(|e| e.to_str()) != Some("toml") {
             return Err(Failure::Usage(anyhow::anyhow!(

@@ -301,11 +301,12 @@ fn describe(
     )
 }
 
-/// Refuses an output whose extension we do not write before any work is
-/// done; `listed` names those we do.
+/// Refuses an output whose extension we do not write, or whose folder is
+/// missing or cannot be written, before any work is done; `listed` names
+/// the extensions we write.
 fn check_output(path: &Path, known: bool, listed: String) -> Result<(), Failure> {
     if known {
-        Ok(())
+        Ok(aureole_io::job::check_folder(path)?)
     } else {
         Err(aureole_io::Error::OutputFormat {
             path: path.to_path_buf(),

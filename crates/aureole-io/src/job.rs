@@ -27,6 +27,14 @@ pub fn check_output(output: &Path, input: Option<&Path>) -> Result<()> {
     if let Some(input) = input {
         refuse_overwrite(output, input)?;
     }
+    check_folder(output)
+}
+
+/// Refuses, before any work, an output that is not a plain file or whose
+/// folder is missing or cannot be written (a probe file is made and
+/// removed there): for outputs whose format is checked apart (kernels,
+/// plots, lenses).
+pub fn check_folder(output: &Path) -> Result<()> {
     let refuse = |reason: String| Error::Output {
         path: output.to_path_buf(),
         reason,

@@ -108,6 +108,23 @@ pub fn write_image_into(
     }
 }
 
+/// Refuses, before any work, a path whose extension names no linear
+/// format ([`write_linear`] writes those alone).
+pub fn check_linear_output(path: &Path) -> Result<()> {
+    match by_extension(path).map(|f| &f.encode) {
+        Some(Encoder::Linear(_)) => Ok(()),
+        _ => Err(linear_refused(path)),
+    }
+}
+
+fn linear_refused(path: &Path) -> Error {
+    Error::OutputFormat {
+        path: path.to_path_buf(),
+        extension: extension(path),
+        allowed: crate::formats::linear_outputs(),
+    }
+}
+
 /// Writes `image` as `.exr`, `.hdr` or `.pfm` by the extension of `path`.
 /// Returns what the format could not keep.
 pub fn write_linear(path: &Path, image: &Image, options: LinearOptions) -> Result<Vec<Note>> {
@@ -122,15 +139,8 @@ pub fn write_linear_into(
     options: LinearOptions,
     original: Original,
 ) -> Result<Vec<Note>> {
-    let encode = match by_extension(path).map(|f| &f.encode) {
-        Some(Encoder::Linear(encode)) => encode,
-        _ => {
-            return Err(Error::OutputFormat {
-                path: path.to_path_buf(),
-                extension: extension(path),
-                allowed: image_outputs(),
-            })
-        }
+    let Some(Encoder::Linear(encode)) = by_extension(path).map(|f| &f.encode) else {
+        return Err(linear_refused(path));
     };
     let colour = match image.layout {
         Layout::Luminance => vec![image.planes[0].as_slice()],

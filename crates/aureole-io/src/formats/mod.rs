@@ -388,6 +388,17 @@ pub fn image_outputs() -> String {
     )
 }
 
+/// The extensions a linear image may be written to, for messages:
+/// `.exr, .hdr, .pfm`.
+pub fn linear_outputs() -> String {
+    FORMATS
+        .iter()
+        .filter(|f| f.kind() == Kind::Linear)
+        .map(|f| format!(".{}", f.extensions[0]))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// The extensions a picture may be written to, with their depths.
 pub fn picture_outputs() -> String {
     FORMATS
