@@ -642,7 +642,7 @@ fn bad_arguments_get_one_clear_line_and_no_output() {
             "-o",
             nowhere.to_str().unwrap(),
         ],
-        1,
+        2,
         &["no-such-folder"],
         Some(&nowhere),
     );
