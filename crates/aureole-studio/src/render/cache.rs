@@ -9,7 +9,7 @@ use std::sync::atomic::Ordering;
 use aureole::{Cancel, Frame, FrameOptions, Image, Session};
 use aureole_io::limits::Limits;
 
-use super::{needs, parse_config, Renderer, Summary, DEMO, PATIENCE};
+use super::{needs, no_rays, parse_config, Renderer, Summary, DEMO, PATIENCE};
 use crate::budget::Lease;
 use crate::error::StudioError;
 use crate::locked;
@@ -54,7 +54,7 @@ impl Renderer {
             kept.clear();
         }
         if let Ok(mut rays) = self.rays.try_lock() {
-            *rays = self.no_rays();
+            *rays = no_rays(&self.budget);
         }
     }
 

@@ -345,6 +345,11 @@ pub struct Renderer {
     reused: std::sync::atomic::AtomicU64,
 }
 
+/// No rays kept, with room for a quarter of `budget`'s bytes of them.
+fn no_rays(budget: &Budget) -> (KeptRays, Option<Lease>) {
+    (KeptRays::new(budget.total() / 4), None)
+}
+
 /// What the renderer is doing, for `GET /api/status`.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct Status {
@@ -384,8 +389,8 @@ impl Renderer {
     /// Renders from files under `roots`, within `budget`, which exports
     /// share.
     pub fn new(roots: Roots, budget: Arc<Budget>, device: Device) -> Renderer {
-        let rays_limit = budget.total() / 4;
         Renderer {
+            rays: Mutex::new(no_rays(&budget)),
             roots,
             budget,
             device,
@@ -396,7 +401,6 @@ impl Renderer {
             ghosts: Mutex::new(None),
             ghosts_reused: std::sync::atomic::AtomicU64::new(0),
             rays_reused: std::sync::atomic::AtomicU64::new(0),
-            rays: Mutex::new((KeptRays::new(rays_limit), None)),
             active: std::sync::atomic::AtomicUsize::new(0),
             cancelled: std::sync::atomic::AtomicU64::new(0),
             reused: std::sync::atomic::AtomicU64::new(0),
@@ -479,7 +483,7 @@ impl Renderer {
         cancel: &Cancel,
     ) -> Result<Option<(Frame, GhostSummary)>, StudioError> {
         // Taken out while tracing: a render beside this one traces its own.
-        let (mut rays, lease) = std::mem::replace(&mut *locked(&self.rays), self.no_rays());
+        let (mut rays, lease) = std::mem::replace(&mut *locked(&self.rays), no_rays(&self.budget));
         drop(lease);
         let traced = session.trace_ghosts_keeping(preview, &mut rays, &mut |_, _| {})?;
         if rays.reused() > 0 {
@@ -494,11 +498,6 @@ impl Renderer {
             *locked(&self.rays) = (rays, lease);
         }
         Ok(traced)
-    }
-
-    /// No rays kept, and room for a quarter of the budget's.
-    fn no_rays(&self) -> (KeptRays, Option<Lease>) {
-        (KeptRays::new(self.budget.total() / 4), None)
     }
 
     fn render_counted(

@@ -8,7 +8,7 @@
 use std::borrow::Cow;
 
 use super::canvas::{Patch, Quads};
-use super::ghost::{mean_weight, Sensor};
+use super::ghost::Sensor;
 use super::passage::{may_pass, Square};
 use super::trace::{Arrival, Layout, Path, Ray, Route, Vector};
 use crate::control::Cancel;
@@ -172,6 +172,14 @@ impl<'l, 'a> Bundle<'l, 'a> {
     /// crossing.
     fn passes(&self, arrival: &Arrival) -> bool {
         arrival.margin >= 0.0 && arrival.stop.points().iter().all(|&p| self.layout.opens(p))
+    }
+
+    /// The light through every cell that arrives, per unit of the
+    /// source's irradiance: each cell's area times its rays' mean weight.
+    pub fn light(&self) -> f64 {
+        let mut light = 0.0;
+        self.for_each_cell(|corners, area| light += area * mean_weight(corners));
+        light
     }
 
     /// `visit(corners, area)` for every cell whose light arrives: a cell
@@ -447,4 +455,8 @@ pub(super) fn follow<T: Send>(
         path.insert(middle.min(path.len()), base);
     }
     Ok(followed)
+}
+
+fn mean_weight(corners: &[(Vector, f64); 4]) -> f64 {
+    corners.iter().map(|c| c.1).sum::<f64>() / 4.0
 }

@@ -67,14 +67,7 @@ fn direct_light_in(layout: &Layout, field: Vector, nm: f64, square: Option<Squar
     let Some(square) = square else {
         return 0.0;
     };
-    let mut light = 0.0;
-    Bundle::new(layout, route, field, square)
-        .for_each_cell(|corners, area| light += area * mean_weight(corners));
-    light
-}
-
-pub(super) fn mean_weight(corners: &[(Vector, f64); 4]) -> f64 {
-    corners.iter().map(|c| c.1).sum::<f64>() / 4.0
+    Bundle::new(layout, route, field, square).light()
 }
 
 /// Adds to `plane` (the sensor's pixels, rows downwards) the ghost of
@@ -486,9 +479,7 @@ fn assemble(
                     square: *square,
                     rays: Cow::Borrowed(rays),
                 };
-                let mut light = 0.0;
-                bundle.for_each_cell(|corners, area| light += area * mean_weight(corners));
-                light
+                bundle.light()
             })
         })
         .collect();

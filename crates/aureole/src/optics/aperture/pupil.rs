@@ -69,6 +69,19 @@ struct Edge {
     fan: Option<[f64; 2]>,
 }
 
+impl Edge {
+    /// The cross product of the edge's direction (start to end) and the
+    /// way from its start to `p`: positive left of its line, where a
+    /// counter-clockwise polygon's inside lies; |delta| times the distance.
+    fn cross(&self, p: [f64; 2]) -> f64 {
+        let start = [
+            self.middle[0] - self.delta[0] / 2.0,
+            self.middle[1] - self.delta[1] / 2.0,
+        ];
+        self.delta[0] * (p[1] - start[1]) - self.delta[1] * (p[0] - start[0])
+    }
+}
+
 #[derive(Debug, Clone)]
 enum Outline {
     Polygon {
@@ -265,13 +278,7 @@ impl Pupil {
         // The centroid's distance left of each edge's line.
         let inner = edges
             .iter()
-            .map(|e| {
-                let start = [
-                    e.middle[0] - e.delta[0] / 2.0,
-                    e.middle[1] - e.delta[1] / 2.0,
-                ];
-                (e.delta[0] * (cy - start[1]) - e.delta[1] * (cx - start[0])) / e.length
-            })
+            .map(|e| e.cross([cx, cy]) / e.length)
             .fold(f64::INFINITY, f64::min)
             .max(0.0);
         let sign = if transmits { 1.0 } else { -1.0 };

@@ -23,13 +23,7 @@ impl Pupil {
             Outline::Polygon { edges, reach, .. } => {
                 let tolerance = 1e-9 * reach;
                 // Each point's distance left of each edge's line.
-                let left = |e: &Edge, p: &[f64; 2]| {
-                    let start = [
-                        e.middle[0] - e.delta[0] / 2.0,
-                        e.middle[1] - e.delta[1] / 2.0,
-                    ];
-                    (e.delta[0] * (p[1] - start[1]) - e.delta[1] * (p[0] - start[0])) / e.length
-                };
+                let left = |e: &Edge, p: &[f64; 2]| e.cross(*p) / e.length;
                 if edges
                     .iter()
                     .any(|e| points.iter().all(|p| left(e, p) <= -tolerance))
@@ -82,15 +76,7 @@ impl Pupil {
                     let d2 = squared(centroid);
                     d2 <= reach * reach
                         && (d2 < inner * inner * (1.0 - 1e-9)
-                            || edges.iter().all(|e| {
-                                let start = [
-                                    e.middle[0] - e.delta[0] / 2.0,
-                                    e.middle[1] - e.delta[1] / 2.0,
-                                ];
-                                e.delta[0] * (point[1] - start[1])
-                                    - e.delta[1] * (point[0] - start[0])
-                                    >= 0.0
-                            }))
+                            || edges.iter().all(|e| e.cross(point) >= 0.0))
                 }
             };
             if inside {
@@ -119,13 +105,7 @@ mod tests {
     /// its disc), tested edge by edge.
     fn inside_by_edges(pupil: &Pupil, p: [f64; 2]) -> bool {
         pupil.elements.iter().all(|element| match &element.shape {
-            Outline::Polygon { edges, .. } => edges.iter().all(|e| {
-                let start = [
-                    e.middle[0] - e.delta[0] / 2.0,
-                    e.middle[1] - e.delta[1] / 2.0,
-                ];
-                e.delta[0] * (p[1] - start[1]) - e.delta[1] * (p[0] - start[0]) >= 0.0
-            }),
+            Outline::Polygon { edges, .. } => edges.iter().all(|e| e.cross(p) >= 0.0),
             Outline::Disc { centre, radius } | Outline::Spot { centre, radius } => {
                 (p[0] - centre[0]).powi(2) + (p[1] - centre[1]).powi(2) <= radius * radius
             }
