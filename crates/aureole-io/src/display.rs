@@ -220,31 +220,30 @@ pub fn meter(image: &Image, scale: f64) -> Metering {
     };
     // Every pass over the samples runs on every core: the studio meters
     // each preview it answers.
-    let sampled: Vec<(f64, f64)> = (0..n)
+    let (mut ls, mut ms): (Vec<f64>, Vec<f64>) = (0..n)
         .into_par_iter()
         .step_by(stride)
         .map(|i| {
             let cd = |v: f32| (f64::from(v) * scale).max(0.0);
             (cd(luminance.at(i)), cd(brightest(i)))
         })
-        .filter(|(l, m)| l.is_finite() && m.is_finite())
-        .collect();
-    let all: Vec<f64> = sampled.par_iter().map(|s| s.0).collect();
-    let top = percentile(&all, 0.999);
-    let lit: Vec<f64> = all
-        .par_iter()
-        .copied()
-        .filter(|&l| l >= top / 1000.0)
-        .collect();
-    let median = percentile(&lit, 0.5);
-    let sources_above = (10.0 * median).max(percentile(&all, 0.98));
-    let others: Vec<f64> = sampled
-        .par_iter()
-        .filter(|s| s.0 <= sources_above)
-        .map(|s| s.1)
-        .collect();
+        .unzip();
+    let finite = |(l, m): (&f64, &f64)| l.is_finite() && m.is_finite();
+    if !ls.par_iter().zip(&ms).all(finite) {
+        (ls, ms) = ls
+            .into_iter()
+            .zip(ms)
+            .filter(|(l, m)| finite((l, m)))
+            .unzip();
+    }
+    let all = |i: usize| Some(ls[i]);
+    let [top, brightest_2] = quantiles(ls.len(), all, [0.999, 0.98]);
+    let lit = |i: usize| Some(ls[i]).filter(|&l| l >= top / 1000.0);
+    let [median] = quantiles(ls.len(), lit, [0.5]);
+    let sources_above = (10.0 * median).max(brightest_2);
+    let others = |i: usize| (ls[i] <= sources_above).then_some(ms[i]);
     // Just inside 1 %, so that sampling never tips it over.
-    let highlights = percentile(&others, 0.991);
+    let [highlights] = quantiles(ls.len(), others, [0.991]);
     Metering {
         median,
         sources_above,
@@ -253,20 +252,26 @@ pub fn meter(image: &Image, scale: f64) -> Metering {
 }
 
 /// The `q` quantile (0…1) of `values`, 0 when empty: the value of rank
-/// round((n − 1)·q) in `f64::total_cmp`'s order. Many values are counted
-/// by the top 16 bits of that order's key on every core first (sign,
-/// exponent and 4 bits of mantissa: a sixteenth of a binade), and the rank
-/// found among the values of its bin alone.
+/// round((n − 1)·q) in `f64::total_cmp`'s order.
+#[cfg(test)]
 fn percentile(values: &[f64], q: f64) -> f64 {
-    if values.is_empty() {
-        return 0.0;
-    }
-    let at = ((values.len() - 1) as f64 * q).round() as usize;
-    let select =
-        |mut among: Vec<f64>, rank: usize| *among.select_nth_unstable_by(rank, f64::total_cmp).1;
-    if values.len() < 1 << 16 {
-        return select(values.to_vec(), at);
-    }
+    let [found] = quantiles(values.len(), |i| Some(values[i]), [q]);
+    found
+}
+
+/// The quantiles `qs` (0…1) of the values `value` gives for the indices
+/// below `len` (`None`: left out), each 0 when there are none: the value
+/// of rank round((n − 1)·q) in `f64::total_cmp`'s order. Many values are
+/// counted by the top 16 bits of that order's key first, a few
+/// histograms on every core (sign, exponent and 4 bits of mantissa: a
+/// sixteenth of a binade), and each rank found among the values of its
+/// bin alone; no list of the values is made.
+fn quantiles<const Q: usize>(
+    len: usize,
+    value: impl Fn(usize) -> Option<f64> + Sync,
+    qs: [f64; Q],
+) -> [f64; Q] {
+    const BINS: usize = 1 << 16;
     // total_cmp's order as unsigned integers: negatives reversed below
     // the positives.
     let bin = |v: f64| {
@@ -278,37 +283,61 @@ fn percentile(values: &[f64], q: f64) -> f64 {
         };
         (key >> 48) as usize
     };
-    let counts = values
-        .par_chunks(1 << 15)
-        .map(|chunk| {
-            let mut counts = vec![0usize; 1 << 16];
-            for &v in chunk {
+    let select =
+        |mut among: Vec<f64>, rank: usize| *among.select_nth_unstable_by(rank, f64::total_cmp).1;
+    let chunk = len.div_ceil(2 * rayon::current_num_threads()).max(1 << 14);
+    let (kept, counts) = (0..len.div_ceil(chunk))
+        .into_par_iter()
+        .map(|c| {
+            let mut counts = vec![0u32; BINS];
+            let mut kept = 0;
+            for v in (c * chunk..len.min((c + 1) * chunk)).filter_map(&value) {
                 counts[bin(v)] += 1;
+                kept += 1;
             }
-            counts
+            (kept, counts)
         })
         .reduce(
-            || vec![0usize; 1 << 16],
-            |mut a, b| {
+            || (0, vec![0u32; BINS]),
+            |(kept_a, mut a), (kept_b, b)| {
                 for (a, b) in a.iter_mut().zip(b) {
                     *a += b;
                 }
-                a
+                (kept_a + kept_b, a)
             },
         );
-    let mut below = 0;
-    for (b, &count) in counts.iter().enumerate() {
-        if at < below + count {
-            let among = values
-                .par_iter()
-                .copied()
-                .filter(|&v| bin(v) == b)
-                .collect();
-            return select(among, at - below);
-        }
-        below += count;
+    let rank = |q: f64| ((kept.max(1) - 1) as f64 * q).round() as usize;
+    if kept == 0 {
+        return [0.0; Q];
     }
-    0.0
+    if kept < BINS {
+        let values = gather(len, &value, |_| true);
+        return qs.map(|q| select(values.clone(), rank(q)));
+    }
+    qs.map(|q| {
+        let at = rank(q);
+        let mut below = 0;
+        for (b, &count) in counts.iter().enumerate() {
+            let count = count as usize;
+            if at < below + count {
+                return select(gather(len, &value, |v| bin(v) == b), at - below);
+            }
+            below += count;
+        }
+        0.0
+    })
+}
+
+/// The values `value` gives for the indices below `len` that `keep`.
+fn gather(
+    len: usize,
+    value: &(impl Fn(usize) -> Option<f64> + Sync),
+    keep: impl Fn(f64) -> bool + Sync,
+) -> Vec<f64> {
+    (0..len)
+        .into_par_iter()
+        .filter_map(|i| value(i).filter(|&v| keep(v)))
+        .collect()
 }
 
 /// The exposed level (1 = white) from which `curve` shows the top 8-bit
@@ -518,5 +547,65 @@ mod tests {
     fn a_black_frame_meters_to_the_darkest_white() {
         let image = Image::filled(8, 8, Layout::Rgb, 0.0);
         assert_eq!(meter(&image, 1.0).white(ToneCurve::Filmic), DARKEST_WHITE);
+    }
+
+    #[test]
+    fn the_meter_is_its_definition_on_sorted_samples() {
+        // Below and above the sample count where values are binned first,
+        // with pixels that are not numbers or infinite, left out.
+        let sorted_quantile = |mut values: Vec<f64>, q: f64| {
+            values.sort_by(f64::total_cmp);
+            values
+                .get(((values.len().max(1) - 1) as f64 * q).round() as usize)
+                .copied()
+                .unwrap_or(0.0)
+        };
+        let mut seed = 7u64;
+        let mut unit = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (w, h) in [(90, 70), (400, 300)] {
+            let mut image = Image::filled(w, h, Layout::Rgb, 0.0);
+            for i in 0..w * h {
+                for c in 0..3 {
+                    image.planes[c][i] = match i % 997 {
+                        0 => f32::NAN,
+                        1 => f32::INFINITY,
+                        2..=9 => 5e4 * (1.0 + unit() as f32),
+                        _ => (10f64.powf(unit() * 4.0 - 2.0) * (0.5 + unit())) as f32,
+                    };
+                }
+            }
+            let scale = 3.0;
+            let luminance = PixelLuminance::of(&image);
+            let samples: Vec<(f64, f64)> = (0..w * h)
+                .map(|i| {
+                    let m = image.planes.iter().map(|p| p[i]).fold(f32::MIN, f32::max);
+                    let cd = |v: f32| (f64::from(v) * scale).max(0.0);
+                    (cd(luminance.at(i)), cd(m))
+                })
+                .filter(|(l, m)| l.is_finite() && m.is_finite())
+                .collect();
+            let all: Vec<f64> = samples.iter().map(|s| s.0).collect();
+            let top = sorted_quantile(all.clone(), 0.999);
+            let lit = all.iter().copied().filter(|&l| l >= top / 1000.0).collect();
+            let median = sorted_quantile(lit, 0.5);
+            let sources_above = (10.0 * median).max(sorted_quantile(all, 0.98));
+            let others = samples
+                .iter()
+                .filter(|s| s.0 <= sources_above)
+                .map(|s| s.1)
+                .collect();
+            let metering = meter(&image, scale);
+            assert_eq!(metering.median.to_bits(), median.to_bits(), "{w}x{h}");
+            assert_eq!(metering.sources_above.to_bits(), sources_above.to_bits());
+            assert_eq!(
+                metering.highlights.to_bits(),
+                sorted_quantile(others, 0.991).to_bits()
+            );
+        }
     }
 }

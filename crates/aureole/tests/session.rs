@@ -135,6 +135,30 @@ fn a_frame_sequence_builds_the_kernel_once_per_size() {
 }
 
 #[test]
+fn a_plan_prepared_beforehand_is_the_one_applied() {
+    let image = street(40, 20, Layout::Rgb);
+    let mut prepared = Session::new(config("paper-fig5-both"));
+    prepared.prepare(&frame(image.clone())).unwrap();
+    assert_eq!(prepared.plan().unwrap().size(), (40, 20));
+    let mut built = false;
+    let applied = prepared
+        .apply(
+            &frame(image.clone()),
+            &ApplyOptions::default(),
+            &mut |stage, _| built |= stage == Stage::BuildingKernel,
+        )
+        .unwrap();
+    assert!(!built, "the prepared plan was built again");
+    let fresh = through(&mut Session::new(config("paper-fig5-both")), &image);
+    assert_eq!(applied.image, fresh.image);
+    // Another size replaces it.
+    prepared
+        .prepare(&frame(street(30, 20, Layout::Rgb)))
+        .unwrap();
+    assert_eq!(prepared.plan().unwrap().size(), (30, 20));
+}
+
+#[test]
 fn a_kernel_given_is_applied_at_every_size_and_kept() {
     let kernel = config("paper-fig4-bloom")
         .kernel(&aureole::Extent::new(15, 15).unwrap())

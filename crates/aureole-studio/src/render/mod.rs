@@ -472,6 +472,29 @@ impl Renderer {
         Ok(traced)
     }
 
+    /// [`Renderer::ghosts_of`] `preview`, its kernel built for it
+    /// meanwhile: neither needs the other, and each leaves cores idle in
+    /// its parts that run alone.
+    fn ghosts_beside_kernel(
+        &self,
+        preview: &Arc<Frame>,
+        session: &mut aureole::Session,
+        cancel: &Cancel,
+    ) -> Result<Option<(Frame, GhostSummary)>, StudioError> {
+        let Some(config) = session.config().filter(|c| c.ghosts.is_some()) else {
+            return Ok(None);
+        };
+        let mut tracing = aureole::Session::new(config.clone());
+        tracing.set_cancel_token(cancel.clone());
+        let (ghosted, prepared) = rayon::join(
+            || self.ghosts_of(preview, &tracing, cancel),
+            || session.prepare(preview),
+        );
+        let ghosted = ghosted?;
+        prepared?;
+        Ok(ghosted)
+    }
+
     /// The ghosts of `preview` traced by `session`, from the rays kept
     /// where they serve, whose own are kept next, up to a quarter of the
     /// budget and while the budget has room for them now (else none: they
@@ -560,7 +583,7 @@ impl Renderer {
                     return Err(StudioError::Internal("no session".into()));
                 };
                 kept.session.set_cancel_token(cancel.clone());
-                let ghosted = self.ghosts_of(&preview, &kept.session, &cancel)?;
+                let ghosted = self.ghosts_beside_kernel(&preview, &mut kept.session, &cancel)?;
                 let applied =
                     kept.session
                         .apply_after_ghosts(&preview, ghosted, &options, &mut |_, _| {})?;

@@ -154,74 +154,100 @@ impl Canvas {
     }
 
     /// The sensor's own pixels, one plane per channel: every level
-    /// interpolated bilinearly onto them and added, in order.
+    /// interpolated bilinearly onto them and added, in order, rows side
+    /// by side.
     pub fn finish(self) -> Vec<Vec<f64>> {
+        use rayon::prelude::*;
         let (width, height) = (self.sensor.width, self.sensor.height);
         let mut levels = self.levels.into_iter();
         let first = levels.next().unwrap_or_default();
-        let mut planes: Vec<Vec<f64>> = first
+        let coarser: Vec<Vec<Vec<f64>>> = levels.collect();
+        first
             .into_iter()
-            .map(|p| {
-                if p.is_empty() {
+            .enumerate()
+            .map(|(channel, plane)| {
+                let mut plane = if plane.is_empty() {
                     vec![0.0; width * height]
                 } else {
-                    p
+                    plane
+                };
+                let drawn: Vec<Upsampled> = coarser
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, level)| !level[channel].is_empty())
+                    .map(|(index, level)| Upsampled::new(&level[channel], &self.sensor, index + 1))
+                    .collect();
+                if !drawn.is_empty() {
+                    plane
+                        .par_chunks_mut(width)
+                        .enumerate()
+                        .for_each(|(y, row)| {
+                            for level in &drawn {
+                                level.add_row(y, row);
+                            }
+                        });
                 }
+                plane
             })
-            .collect();
-        for (index, level) in levels.enumerate() {
-            let coarse = at_level(&self.sensor, index + 1);
-            for (plane, values) in planes.iter_mut().zip(level) {
-                if !values.is_empty() {
-                    upsample(
-                        &values,
-                        (coarse.width, coarse.height),
-                        index + 1,
-                        plane,
-                        width,
-                    );
-                }
-            }
-        }
-        planes
+            .collect()
     }
 }
 
-/// Adds to `fine` (`width` across) the plane `coarse` of pixels 2^level
-/// as wide, interpolated bilinearly between its pixels' centres (held to
-/// the edge beyond the outer ones) and divided among the fine pixels each
-/// covers: its light is kept, every coarse pixel's shares summing to one.
-fn upsample(
-    coarse: &[f64],
-    (cw, ch): (usize, usize),
-    level: usize,
-    fine: &mut [f64],
-    width: usize,
-) {
-    let size = (1usize << level) as f64;
-    let per_pixel = 1.0 / (size * size);
-    // Where a fine pixel's centre falls between two coarse ones, and how
-    // far: coarse i and i + 1 by (1 − f, f), held at the edges.
-    let between = |k: usize, n: usize| {
-        let at = (k as f64 + 0.5) / size - 0.5;
-        if at <= 0.0 {
-            (0, 0, 0.0)
-        } else if at >= (n - 1) as f64 {
-            (n - 1, n - 1, 0.0)
-        } else {
-            let i = at as usize;
-            (i, i + 1, at - i as f64)
+/// A plane of pixels 2^level as wide as the sensor's, to be interpolated
+/// bilinearly between its pixels' centres (held to the edge beyond the
+/// outer ones) and divided among the fine pixels each covers: its light
+/// is kept, every coarse pixel's shares summing to one.
+struct Upsampled<'a> {
+    coarse: &'a [f64],
+    /// The coarse plane's width and height.
+    size: (usize, usize),
+    /// 2^level.
+    scale: f64,
+    /// Per fine column: the coarse columns it lies between, and how far.
+    columns: Vec<(usize, usize, f64)>,
+}
+
+impl Upsampled<'_> {
+    fn new<'a>(coarse: &'a [f64], sensor: &Sensor, level: usize) -> Upsampled<'a> {
+        let at = at_level(sensor, level);
+        let scale = (1usize << level) as f64;
+        let columns = (0..sensor.width)
+            .map(|x| between(x, at.width, scale))
+            .collect();
+        Upsampled {
+            coarse,
+            size: (at.width, at.height),
+            scale,
+            columns,
         }
-    };
-    let columns: Vec<(usize, usize, f64)> = (0..width).map(|x| between(x, cw)).collect();
-    for (y, row) in fine.chunks_mut(width).enumerate() {
-        let (r0, r1, fy) = between(y, ch);
-        let (a, b) = (&coarse[r0 * cw..][..cw], &coarse[r1 * cw..][..cw]);
-        for (value, &(c0, c1, fx)) in row.iter_mut().zip(&columns) {
+    }
+
+    /// Adds the plane's share to the fine pixels of row `y`.
+    fn add_row(&self, y: usize, row: &mut [f64]) {
+        let (cw, ch) = self.size;
+        let per_pixel = 1.0 / (self.scale * self.scale);
+        let (r0, r1, fy) = between(y, ch, self.scale);
+        let (a, b) = (&self.coarse[r0 * cw..][..cw], &self.coarse[r1 * cw..][..cw]);
+        for (value, &(c0, c1, fx)) in row.iter_mut().zip(&self.columns) {
             let top = a[c0] + fx * (a[c1] - a[c0]);
             let bottom = b[c0] + fx * (b[c1] - b[c0]);
             *value += per_pixel * (top + fy * (bottom - top));
         }
+    }
+}
+
+/// Where fine pixel `k`'s centre falls between two of `n` coarse ones
+/// `size` times as wide, and how far: coarse i and i + 1 by (1 − f, f),
+/// held at the edges.
+fn between(k: usize, n: usize, size: f64) -> (usize, usize, f64) {
+    let at = (k as f64 + 0.5) / size - 0.5;
+    if at <= 0.0 {
+        (0, 0, 0.0)
+    } else if at >= (n - 1) as f64 {
+        (n - 1, n - 1, 0.0)
+    } else {
+        let i = at as usize;
+        (i, i + 1, at - i as f64)
     }
 }
 
@@ -306,13 +332,10 @@ mod tests {
                 let mut values = vec![0.0; coarse.width * coarse.height];
                 values[y * coarse.width + x] = 1.0;
                 let mut fine = vec![0.0; 128 * 64];
-                upsample(
-                    &values,
-                    (coarse.width, coarse.height),
-                    level,
-                    &mut fine,
-                    128,
-                );
+                let upsampled = Upsampled::new(&values, &sensor, level);
+                for (y, row) in fine.chunks_mut(128).enumerate() {
+                    upsampled.add_row(y, row);
+                }
                 let sum: f64 = fine.iter().sum();
                 assert!((sum - 1.0).abs() < 1e-12, "level {level} at {x},{y}: {sum}");
             }

@@ -473,19 +473,41 @@ impl Session {
                 return self.spread_on_sphere(frame, options, &view, progress);
             }
         }
-        let size = (image.width, image.height);
-        if self.plan.as_ref().is_some_and(|p| p.size() != size) {
-            self.release_plan();
-        }
-        let plan = match self.plan.take() {
-            Some(plan) => plan,
-            None => self.build_plan(image, progress)?,
-        };
+        let plan = self.plan_for(image, progress)?;
         let plan = self.plan.insert(plan);
         let mut report = |f| progress(Stage::Convolving, f);
         let mut control = Control::new(&self.cancel, &mut report);
         let recycled = std::mem::take(&mut self.recycled);
         plan.apply_with(image, frame.scale(), options, recycled, &mut control)
+    }
+
+    /// Builds the kernel and its plan for `frame`'s size now, when the
+    /// last was for another or none was built: a front end may build it
+    /// beside other work on the frame (its ghosts). Nothing is built for
+    /// a view over the sphere, which has no one kernel.
+    pub fn prepare(&mut self, frame: &Frame) -> Result<()> {
+        let image = frame.image();
+        if let Some(config) = self.config() {
+            if config.camera.view(image.width, image.height)?.is_some() {
+                return Ok(());
+            }
+        }
+        let plan = self.plan_for(image, &mut |_, _| {})?;
+        self.plan = Some(plan);
+        Ok(())
+    }
+
+    /// The plan for `image`'s size, taken out: the one held, or one built
+    /// when that is for another size or none is held.
+    fn plan_for(&mut self, image: &Image, progress: &mut dyn FnMut(Stage, f64)) -> Result<Plan> {
+        let size = (image.width, image.height);
+        if self.plan.as_ref().is_some_and(|p| p.size() != size) {
+            self.release_plan();
+        }
+        match self.plan.take() {
+            Some(plan) => Ok(plan),
+            None => self.build_plan(image, progress),
+        }
     }
 
     /// `frame` through the eye over the sphere of directions `view` gives
