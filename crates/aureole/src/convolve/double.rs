@@ -81,6 +81,7 @@ impl Convolver {
                 plane,
                 size,
                 centre,
+                hole: None,
             };
             let rows: Vec<(usize, Vec<f64>)> = (0..size.1)
                 .into_par_iter()

@@ -63,7 +63,9 @@ impl Near {
     }
 
     /// Kernel plane `plane` less its window (and centre): what the
-    /// transform carries for the lamps.
+    /// transform carries for the lamps. The CPU's engine leaves the
+    /// window out as it places the rows (`Placement::hole`) instead.
+    #[cfg(feature = "gpu")]
     pub fn far_plane(&self, plane: &[f32], (kw, kh): (usize, usize)) -> Vec<f32> {
         let (cx, cy, r) = (kw / 2, kh / 2, self.radius);
         let mut far = plane.to_vec();

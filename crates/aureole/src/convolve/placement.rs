@@ -10,19 +10,42 @@ pub(crate) struct Placement<'a> {
     /// Width, height.
     pub size: (usize, usize),
     pub centre: Centre,
+    /// The radius of a square about the centre left out (the lamps'
+    /// window, which they add apart), if any.
+    pub hole: Option<usize>,
 }
 
 impl Placement<'_> {
     /// Kernel row `j`, wrapped into a row of the period (`out`, zeros
-    /// elsewhere); the centre weight left out where the engine applies it
-    /// itself.
+    /// elsewhere); the centre weight (or the hole) left out where the
+    /// engine applies it itself.
     pub fn row<T: From<f32> + Default + Copy>(&self, j: usize, out: &mut [T]) {
         let (kw, kh) = self.size;
         let px = out.len();
         let cx = kw / 2;
-        out.iter_mut().for_each(|v| *v = T::default());
-        for (i, &v) in self.plane[j * kw..(j + 1) * kw].iter().enumerate() {
-            out[(i + px - cx) % px] = T::from(v);
+        let row = &self.plane[j * kw..(j + 1) * kw];
+        let at = |i: usize| (i + px - cx) % px;
+        if kw <= px {
+            // Two runs, the centre's left and right halves, without a
+            // division per value.
+            let (left, right) = row.split_at(cx);
+            out[kw - cx..px - cx].fill(T::default());
+            for (o, &v) in out[px - cx..].iter_mut().zip(left) {
+                *o = T::from(v);
+            }
+            for (o, &v) in out[..kw - cx].iter_mut().zip(right) {
+                *o = T::from(v);
+            }
+        } else {
+            out.fill(T::default());
+            for (i, &v) in row.iter().enumerate() {
+                out[at(i)] = T::from(v);
+            }
+        }
+        if let Some(r) = self.hole.filter(|&r| j.abs_diff(kh / 2) <= r) {
+            for i in cx - r..=cx + r {
+                out[at(i)] = T::default();
+            }
         }
         if self.centre == Centre::Leave && j == kh / 2 {
             out[0] = T::default();
@@ -43,6 +66,7 @@ impl Placement<'_> {
                     plane,
                     size,
                     centre,
+                    hole: None,
                 }
                 .left_out()
             })
@@ -56,6 +80,45 @@ impl Placement<'_> {
         match self.centre {
             Centre::Leave => self.plane[(kh / 2) * kw + kw / 2],
             Centre::Include => 0.0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_row_lands_where_its_index_wraps_without_its_hole_and_centre() {
+        let (kw, kh) = (7, 5);
+        let plane: Vec<f32> = (0..kw * kh).map(|i| i as f32 + 1.0).collect();
+        for px in [7, 8, 12] {
+            for (centre, hole) in [
+                (Centre::Include, None),
+                (Centre::Leave, None),
+                (Centre::Include, Some(1)),
+            ] {
+                let placed = Placement {
+                    plane: &plane,
+                    size: (kw, kh),
+                    centre,
+                    hole,
+                };
+                for j in 0..kh {
+                    let mut expected = vec![0.0f64; px];
+                    for i in 0..kw {
+                        let left_out = hole
+                            .is_some_and(|r| i.abs_diff(3) <= r && j.abs_diff(2) <= r)
+                            || (centre == Centre::Leave && (i, j) == (3, 2));
+                        if !left_out {
+                            expected[(i + px - 3) % px] = f64::from(plane[j * kw + i]);
+                        }
+                    }
+                    let mut out = vec![-1.0f64; px];
+                    placed.row(j, &mut out);
+                    assert_eq!(out, expected, "px {px}, row {j}, {centre:?}, {hole:?}");
+                }
+            }
         }
     }
 }

@@ -90,11 +90,13 @@ impl Convolver {
         (row_fft, full_column): (&dyn RealToComplex<f32>, &dyn Fft<f32>),
         control: &mut Control,
     ) -> Result<PlaneSpectrum> {
-        let rest = near.far_plane(plane, self.kernel_size);
+        // The plane less its window (and centre), placed as it is read:
+        // what the transform carries for the lamps.
         let placed = Placement {
-            plane: &rest,
+            plane,
             size: self.kernel_size,
             centre: Centre::Include,
+            hole: Some(near.radius),
         };
         let far = kernel_spectrum(row_fft, full_column, &self.grid, &placed, control)?;
         let window = self.window_rows(near.window(k), near.radius, row_fft)?;
@@ -149,6 +151,7 @@ impl Convolver {
                 plane,
                 size: self.kernel_size,
                 centre: self.centre,
+                hole: None,
             };
             let mut part = control.part(k as f64 * share, (k + 1) as f64 * share);
             let whole = kernel_spectrum(&*row_fft, &*full_column, &self.grid, &placed, &mut part)?;
