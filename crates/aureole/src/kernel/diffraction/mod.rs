@@ -200,11 +200,20 @@ fn held_share(
     // The fields are the pattern's energy per pixel (Parseval: each
     // wavelength's whole pattern holds its weight), so dividing by the
     // weights leaves each plane the share of the light the extent holds;
-    // the rest falls beyond it.
-    for (plane, total) in result.iter_mut().zip(weights_total) {
-        plane.par_iter_mut().for_each(|v| *v /= total);
-    }
-    if optics.orders.len() > 1 {
+    // the rest falls beyond it. Without a filter, each plane's sum is
+    // taken as it is divided, its chunks in cache.
+    let filtered = optics.orders.len() > 1;
+    let sums: Option<Vec<f64>> = (!filtered).then(|| {
+        result
+            .iter_mut()
+            .zip(weights_total)
+            .map(|(plane, total)| chunked_sum(plane, Some(*total)))
+            .collect()
+    });
+    if filtered {
+        for (plane, total) in result.iter_mut().zip(weights_total) {
+            plane.par_iter_mut().for_each(|v| *v /= total);
+        }
         result = orders::through_filter(
             optics,
             spectrum,
@@ -226,18 +235,33 @@ fn held_share(
     // The far field's asymptotic terms may add up to a hair more than the
     // pupil's light over a wide extent (2·10⁻⁴ for a vaned mirror over
     // 128 px): a kernel never makes light.
-    for plane in &mut result {
-        let total: f64 = plane
-            .par_chunks(1 << 16)
-            .map(|chunk| chunk.iter().sum::<f64>())
-            .collect::<Vec<f64>>()
-            .iter()
-            .sum();
+    for (k, plane) in result.iter_mut().enumerate() {
+        let total = match &sums {
+            Some(sums) => sums[k],
+            None => chunked_sum(plane, None),
+        };
         if total > 1.0 {
             plane.par_iter_mut().for_each(|v| *v /= total);
         }
     }
     Ok(result)
+}
+
+/// The sum of `plane`, by chunks of 2¹⁶ values on every core (the same
+/// sum for any number of them), each chunk divided by `divisor` first
+/// where there is one.
+fn chunked_sum(plane: &mut [f64], divisor: Option<f64>) -> f64 {
+    plane
+        .par_chunks_mut(1 << 16)
+        .map(|chunk| {
+            if let Some(divisor) = divisor {
+                chunk.iter_mut().for_each(|v| *v /= divisor);
+            }
+            chunk.iter().sum::<f64>()
+        })
+        .collect::<Vec<f64>>()
+        .iter()
+        .sum()
 }
 
 /// The rows below the first `computed` of each plane (`width` wide) as the
@@ -251,9 +275,15 @@ fn mirror_below(planes: &mut [Vec<f64>], width: usize, (cx, cy): (usize, usize),
             .enumerate()
             .for_each(|(k, row)| {
                 let mirror = &top[(2 * cy - computed - k) * width..][..width];
-                for (i, value) in row.iter_mut().enumerate() {
-                    if let Some(m) = (2 * cx).checked_sub(i).filter(|&m| m < width) {
-                        *value = mirror[m];
+                // Column i mirrors column 2cx − i, where that lies in the row.
+                let first = (2 * cx + 1).saturating_sub(width);
+                let last = (2 * cx).min(width - 1);
+                if first <= last {
+                    for (value, m) in row[first..=last]
+                        .iter_mut()
+                        .zip(mirror[2 * cx - last..=2 * cx - first].iter().rev())
+                    {
+                        *value = *m;
                     }
                 }
             });
