@@ -12,6 +12,7 @@ use super::ghost::Sensor;
 use super::passage::{may_pass, Square};
 use super::trace::{Arrival, Layout, Path, Ray, Route, Vector};
 use crate::control::Cancel;
+use crate::optics::aperture::pupil::{Crossing, Side};
 
 /// Cells across the square of the pupil a path's light passes, where
 /// its bundle is traced.
@@ -266,20 +267,21 @@ impl<'l, 'a> Bundle<'l, 'a> {
         // Every point is a mean of the corners with weights of 0 or more:
         // margins of 0 or more at the corners pass them all, and below 0
         // none; an opening that is sure to pass, or to stop, the corners'
-        // crossings does the same to theirs. Those tests are left out.
+        // crossings does the same to theirs. Those tests are left out, and
+        // a crossing across the opening's rim meets only the edges there.
         let margins_pass = corners.iter().all(|c| c.margin >= 0.0);
         if corners.iter().all(|c| c.margin < 0.0) {
             return;
         }
-        let mut tested: Vec<&[Bilinear; 2]> = Vec::with_capacity(crossings);
+        let mut tested: Vec<(&[Bilinear; 2], Crossing)> = Vec::with_capacity(crossings);
         for (n, xy) in stop[..crossings].iter().enumerate() {
             match self
                 .layout
-                .opens_between(&corners.map(|c| c.stop.points()[n]))
+                .side_between(&corners.map(|c| c.stop.points()[n]))
             {
-                Some(true) => {}
-                Some(false) => return,
-                None => tested.push(xy),
+                Side::Within => {}
+                Side::Beyond => return,
+                Side::Across(crossing) => tested.push((xy, crossing)),
             }
         }
         let piece = |t: f64| ((t * PIECES as f64) as usize).min(PIECES - 1);
@@ -297,7 +299,7 @@ impl<'l, 'a> Bundle<'l, 'a> {
             let passes = (margins_pass || margin.at(centre) >= 0.0)
                 && tested
                     .iter()
-                    .all(|[x, y]| self.layout.opens([x.at(centre), y.at(centre)]));
+                    .all(|([x, y], crossing)| crossing.opens([x.at(centre), y.at(centre)]));
             if passes {
                 passing[piece(centre.1) * PIECES + piece(centre.0)] += 1;
             }

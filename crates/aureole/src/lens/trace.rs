@@ -9,7 +9,7 @@
 //! again.
 
 use super::{coating, Coating, Lens};
-use crate::optics::aperture::pupil::Pupil;
+use crate::optics::aperture::pupil::{Pupil, Side};
 
 /// A point or a direction: x, y across the axis, z along it (mm, from the
 /// first surface's vertex, towards the image).
@@ -268,13 +268,12 @@ impl<'a> Layout<'a> {
             .is_none_or(|stop| stop.transmission(xy)[0] >= 0.5)
     }
 
-    /// Whether the stop's opening passes every point between `points`
-    /// (`Some(true)`) or none of them (`Some(false)`), where that is sure
-    /// ([`Pupil::convex_side`]); `None` where each must be tested.
-    pub fn opens_between(&self, points: &[[f64; 2]]) -> Option<bool> {
+    /// Where the stop's opening lies against the points between
+    /// `points` ([`Pupil::side`]): all passed, none, or each to be tested.
+    pub fn side_between(&self, points: &[[f64; 2]]) -> Side<'_> {
         match &self.stop {
-            None => Some(true),
-            Some(stop) => stop.convex_side(points),
+            None => Side::Within,
+            Some(stop) => stop.side(points),
         }
     }
 

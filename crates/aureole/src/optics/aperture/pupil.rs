@@ -14,6 +14,8 @@ use std::f64::consts::{PI, TAU};
 mod inside;
 mod oval;
 
+pub use inside::{Crossing, Side};
+
 /// A complex amplitude (re, im).
 pub type Amplitude = [f64; 2];
 

@@ -4,23 +4,66 @@
 
 use super::{Amplitude, Edge, Outline, Pupil};
 
+/// Where a set of points lies against a pupil's opening (where it
+/// transmits half or more): [`Pupil::side`].
+pub enum Side<'a> {
+    /// All within it, and every mean of them with weights of 0 or more.
+    Within,
+    /// All beyond one line that bounds it, and every such mean.
+    Beyond,
+    /// Neither is sure: each mean is tested by [`Crossing::opens`].
+    Across(Crossing<'a>),
+}
+
+/// How the means of a set of points that lies across a pupil's opening
+/// are tested: for one transmitting polygon, against only the edges
+/// whose lines pass between the points (one or two of a stop's blades),
+/// the others passing them all by far more than a test's rounding.
+pub struct Crossing<'a> {
+    pupil: &'a Pupil,
+    /// The polygon's centroid and reach, and the edges to test.
+    polygon: Option<([f64; 2], f64, Vec<&'a Edge>)>,
+}
+
+impl Crossing<'_> {
+    /// Whether the pupil opens at `point`, a mean with weights of 0 or
+    /// more of the points this was made for: the answer of
+    /// `transmission(point)[0] >= 0.5`.
+    pub fn opens(&self, point: [f64; 2]) -> bool {
+        match &self.polygon {
+            Some((centroid, reach, edges)) => {
+                let (dx, dy) = (point[0] - centroid[0], point[1] - centroid[1]);
+                dx * dx + dy * dy <= reach * reach && edges.iter().all(|e| e.cross(point) >= 0.0)
+            }
+            None => self.pupil.transmission(point)[0] >= 0.5,
+        }
+    }
+}
+
 impl Pupil {
-    /// Where `points` lie, for a pupil whose opening (where it transmits
-    /// half or more) is one convex region, a single transmitting polygon
-    /// (the points left of all its edges) or disc: all
-    /// within its opening (`Some(true)`), all beyond one line that bounds
-    /// it (`Some(false)`), each by a margin far above the rounding of a
-    /// test, so that every mean of them with weights of 0 or more lies
-    /// there too; `None` where neither holds, or for another pupil.
-    pub fn convex_side(&self, points: &[[f64; 2]]) -> Option<bool> {
+    /// Where `points` lie against the opening ([`Side`]). Only an opening
+    /// that is one convex region, a single transmitting polygon (the
+    /// points left of all its edges) or disc, is ever sure, and each
+    /// point must lie by a margin far above the rounding of a test, so
+    /// that every mean of them with weights of 0 or more lies there too.
+    pub fn side(&self, points: &[[f64; 2]]) -> Side<'_> {
+        let across = Side::Across(Crossing {
+            pupil: self,
+            polygon: None,
+        });
         let [only] = self.elements.as_slice() else {
-            return None;
+            return across;
         };
         if only.weight[0] < 0.5 {
-            return None;
+            return across;
         }
         match &only.shape {
-            Outline::Polygon { edges, reach, .. } => {
+            Outline::Polygon {
+                edges,
+                centroid,
+                reach,
+                ..
+            } => {
                 let tolerance = 1e-9 * reach;
                 // Each point's distance left of each edge's line.
                 let left = |e: &Edge, p: &[f64; 2]| e.cross(*p) / e.length;
@@ -28,25 +71,32 @@ impl Pupil {
                     .iter()
                     .any(|e| points.iter().all(|p| left(e, p) <= -tolerance))
                 {
-                    Some(false)
-                } else if edges
+                    return Side::Beyond;
+                }
+                let cut: Vec<&Edge> = edges
                     .iter()
-                    .all(|e| points.iter().all(|p| left(e, p) >= tolerance))
-                {
-                    Some(true)
+                    .filter(|e| !points.iter().all(|p| left(e, p) >= tolerance))
+                    .collect();
+                if cut.is_empty() {
+                    Side::Within
                 } else {
-                    None
+                    Side::Across(Crossing {
+                        pupil: self,
+                        polygon: Some((*centroid, *reach, cut)),
+                    })
                 }
             }
             Outline::Disc { centre, radius } | Outline::Spot { centre, radius } => {
                 let within = radius * (1.0 - 1e-9);
-                points
-                    .iter()
-                    .all(|p| {
-                        let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
-                        dx * dx + dy * dy <= within * within
-                    })
-                    .then_some(true)
+                let all = points.iter().all(|p| {
+                    let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
+                    dx * dx + dy * dy <= within * within
+                });
+                if all {
+                    Side::Within
+                } else {
+                    across
+                }
             }
         }
     }
@@ -148,8 +198,8 @@ mod tests {
     }
 
     /// Where the opening is sure of a cell's four corners, every mean of
-    /// them lies on the same side; cells across its edge are left to be
-    /// tested point by point.
+    /// them lies on the same side; across its edge, each mean is tested
+    /// against the edges between them as against the whole pupil.
     #[test]
     fn every_point_between_corners_it_is_sure_of_lies_where_they_do() {
         let mut seen = [0usize; 3];
@@ -157,18 +207,22 @@ mod tests {
             for centre in points(4_000) {
                 let corners = [[0.0, 0.0], [0.07, 0.01], [0.08, 0.09], [-0.01, 0.06]]
                     .map(|d| [centre[0] + d[0], centre[1] + d[1]]);
-                let sure = pupil.convex_side(&corners);
-                seen[match sure {
-                    Some(true) => 0,
-                    Some(false) => 1,
-                    None => 2,
+                let side = pupil.side(&corners);
+                seen[match side {
+                    Side::Within => 0,
+                    Side::Beyond => 1,
+                    Side::Across(_) => 2,
                 }] += 1;
-                let Some(side) = sure else { continue };
                 for k in 0..64 {
                     let (s, t) = ((k % 8) as f64 / 7.0, (k / 8) as f64 / 7.0);
                     let w = [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t];
                     let p = [0, 1].map(|a| (0..4).map(|c| w[c] * corners[c][a]).sum::<f64>());
-                    assert_eq!(pupil.transmission(p)[0] >= 0.5, side, "{p:?} {corners:?}");
+                    let opens = match &side {
+                        Side::Within => true,
+                        Side::Beyond => false,
+                        Side::Across(crossing) => crossing.opens(p),
+                    };
+                    assert_eq!(pupil.transmission(p)[0] >= 0.5, opens, "{p:?} {corners:?}");
                 }
             }
         }
@@ -176,6 +230,6 @@ mod tests {
         // A pupil of more than one element is never sure.
         let mut obstructed = stop(0, 0.0, 0.0);
         obstructed.add_disc([0.0, 0.0], 0.3, false);
-        assert_eq!(obstructed.convex_side(&[[0.9, 0.0]; 4]), None);
+        assert!(matches!(obstructed.side(&[[0.9, 0.0]; 4]), Side::Across(_)));
     }
 }
