@@ -327,10 +327,9 @@ pub(crate) fn add_ghosts(
     kept.keep(optics, rays);
     kept.reused = reused;
     for (plane, ghosts) in scene.planes.iter_mut().zip(canvas.finish()) {
-        plane
-            .par_iter_mut()
-            .zip(ghosts)
-            .for_each(|(value, ghost)| *value += ghost as f32);
+        for (value, ghost) in plane.iter_mut().zip(ghosts) {
+            *value += ghost as f32;
+        }
     }
     control.report(1.0);
     Ok((
