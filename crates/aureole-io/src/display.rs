@@ -265,7 +265,7 @@ fn percentile(values: &[f64], q: f64) -> f64 {
 /// counted by the top 16 bits of that order's key first, a few
 /// histograms on every core (sign, exponent and 4 bits of mantissa: a
 /// sixteenth of a binade), and each rank found among the values of its
-/// bin alone; no list of the values is made.
+/// bin alone: only that bin's values are gathered, never all of them.
 fn quantiles<const Q: usize>(
     len: usize,
     value: impl Fn(usize) -> Option<f64> + Sync,
@@ -306,10 +306,10 @@ fn quantiles<const Q: usize>(
                 (kept_a + kept_b, a)
             },
         );
-    let rank = |q: f64| ((kept.max(1) - 1) as f64 * q).round() as usize;
     if kept == 0 {
         return [0.0; Q];
     }
+    let rank = |q: f64| ((kept - 1) as f64 * q).round() as usize;
     if kept < BINS {
         let values = gather(len, &value, |_| true);
         return qs.map(|q| select(values.clone(), rank(q)));
