@@ -70,10 +70,6 @@ fn psf_writes_a_pfm_of_its_light_centred_at_half_the_size() {
     assert_eq!(plane[24 * 64 + 32], peak);
 }
 
-/// A kernel beyond --max-memory is refused from the estimate, before any
-/// large buffer: one line naming the size, the need and the limit, and no
-/// file. The estimate is the library's (`Workload::estimate_kernel`), which
-/// lies above the measured peaks of the 4K presets (docs/cli.md).
 /// An output's missing folder is named before any work: before the
 /// kernel is sized against the memory, and before a lens writes any of
 /// its outputs or traces its ghosts.
@@ -81,41 +77,51 @@ fn psf_writes_a_pfm_of_its_light_centred_at_half_the_size() {
 fn outputs_whose_folder_is_missing_are_refused_before_any_work() {
     let dir = tempfile::tempdir().unwrap();
     let nowhere = dir.path().join("nowhere").join("k.pfm");
-    let refused = aureole()
-        .args(["psf", "--preset", "star-filter-6pt", "--size", "16000x9000"])
-        .args(["--image-width", "8000", "--max-memory", "1M", "-o"])
-        .arg(&nowhere)
-        .assert()
-        .code(2)
-        .get_output()
-        .stderr
-        .clone();
-    let line = one_line(&refused);
-    assert!(
-        line.contains("k.pfm") && line.contains("does not exist"),
-        "{line}"
+    assert_refused(
+        &[
+            "psf",
+            "--preset",
+            "star-filter-6pt",
+            "--size",
+            "16000x9000",
+            "--image-width",
+            "8000",
+            "--max-memory",
+            "1M",
+            "-o",
+            nowhere.to_str().unwrap(),
+        ],
+        2,
+        &["k.pfm", "does not exist"],
+        Some(&nowhere),
     );
     let toml = dir.path().join("lens.toml");
     for (ghosts, expected) in [
         (dir.path().join("nowhere").join("g.exr"), "does not exist"),
         (dir.path().join("g.png"), "allowed: .exr, .hdr, .pfm"),
     ] {
-        let refused = aureole()
-            .args(["lens", "double-gauss-50mm-f1.4", "-o"])
-            .arg(&toml)
-            .arg("--ghosts")
-            .arg(&ghosts)
-            .assert()
-            .failure()
-            .get_output()
-            .stderr
-            .clone();
-        let line = one_line(&refused);
-        assert!(line.contains(expected), "{line}");
-        assert!(!toml.exists() && !ghosts.exists());
+        let (toml_arg, ghosts_arg) = (toml.to_str().unwrap(), ghosts.to_str().unwrap());
+        assert_refused(
+            &[
+                "lens",
+                "double-gauss-50mm-f1.4",
+                "-o",
+                toml_arg,
+                "--ghosts",
+                ghosts_arg,
+            ],
+            2,
+            &[expected],
+            Some(&ghosts),
+        );
+        assert!(!toml.exists());
     }
 }
 
+/// A kernel beyond --max-memory is refused from the estimate, before any
+/// large buffer: one line naming the size, the need and the limit, and no
+/// file. The estimate is the library's (`Workload::estimate_kernel`), which
+/// lies above the measured peaks of the 4K presets (docs/cli.md).
 #[test]
 fn psf_refuses_a_kernel_beyond_max_memory_before_building_it() {
     let dir = tempfile::tempdir().unwrap();

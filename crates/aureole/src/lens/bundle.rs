@@ -91,20 +91,14 @@ impl<'l, 'a> Bundle<'l, 'a> {
     /// rays is stopped is traced.
     fn beside(&self, route: Route, traced: &[Option<Arrival>]) -> Bundle<'l, 'a> {
         let (side, coarse) = (GRID + 1, GRID / STRIDE + 1);
-        let mut bundle = Bundle {
-            layout: self.layout,
-            route,
-            field: self.field,
-            square: self.square,
-            rays: Cow::Owned(vec![None; side * side]),
-        };
+        let mut rays: BundleRays = vec![None; side * side];
         let mut missing = Vec::new();
         for j in 0..side {
             for i in 0..side {
                 let k = j * side + i;
                 let (a, b) = (i / STRIDE, j / STRIDE);
                 if i % STRIDE == 0 && j % STRIDE == 0 {
-                    bundle.rays.to_mut()[k] = traced[b * coarse + a];
+                    rays[k] = traced[b * coarse + a];
                     continue;
                 }
                 let (s, t) = (
@@ -138,25 +132,33 @@ impl<'l, 'a> Bundle<'l, 'a> {
                     .zip(about)
                     .and_then(|(ray, about)| moved(&ray, &about))
                 {
-                    Some(ray) => bundle.rays.to_mut()[k] = Some(ray),
+                    Some(ray) => rays[k] = Some(ray),
                     None => missing.push(k),
                 }
             }
         }
+        // The same square and source: the same starting rays.
         let starts: Vec<_> = missing
             .iter()
-            .map(|&k| bundle.collimated((k % side) as f64, (k / side) as f64))
+            .map(|&k| self.collimated((k % side) as f64, (k / side) as f64))
             .collect();
-        let traced = self.layout.follow_unclipped_all(&bundle.route, &starts);
-        let rays = bundle.rays.to_mut();
-        for (&k, ray) in missing.iter().zip(traced) {
+        for (&k, ray) in missing
+            .iter()
+            .zip(self.layout.follow_unclipped_all(&route, &starts))
+        {
             rays[k] = ray;
         }
-        bundle
+        Bundle {
+            layout: self.layout,
+            route,
+            field: self.field,
+            square: self.square,
+            rays: Cow::Owned(rays),
+        }
     }
 
     /// The ray at grid position (i, j), fractional within a cell.
-    fn collimated(&self, i: f64, j: f64) -> super::trace::Ray {
+    fn collimated(&self, i: f64, j: f64) -> Ray {
         let pupil = self.square.point(GRID, i, j);
         self.layout.collimated(self.field, pupil)
     }

@@ -154,8 +154,8 @@ impl Canvas {
     }
 
     /// The sensor's own pixels, one plane per channel: every level
-    /// interpolated bilinearly onto them and added, in order, rows side
-    /// by side.
+    /// interpolated bilinearly onto them and added, in order, row by row
+    /// (one pass over each plane).
     pub fn finish(self) -> Vec<Vec<f64>> {
         let (width, height) = (self.sensor.width, self.sensor.height);
         let mut levels = self.levels.into_iter();

@@ -468,10 +468,8 @@ impl Session {
         progress: &mut dyn FnMut(Stage, f64),
     ) -> Result<Applied> {
         let image = frame.image();
-        if let Some(config) = self.config() {
-            if let Some(view) = config.camera.view(image.width, image.height)? {
-                return self.spread_on_sphere(frame, options, &view, progress);
-            }
+        if let Some(view) = self.sphere(image)? {
+            return self.spread_on_sphere(frame, options, &view, progress);
         }
         let plan = self.plan_for(image, progress)?;
         let plan = self.plan.insert(plan);
@@ -487,14 +485,21 @@ impl Session {
     /// a view over the sphere, which has no one kernel.
     pub fn prepare(&mut self, frame: &Frame) -> Result<()> {
         let image = frame.image();
-        if let Some(config) = self.config() {
-            if config.camera.view(image.width, image.height)?.is_some() {
-                return Ok(());
-            }
+        if self.sphere(image)?.is_none() {
+            let plan = self.plan_for(image, &mut |_, _| {})?;
+            self.plan = Some(plan);
         }
-        let plan = self.plan_for(image, &mut |_, _| {})?;
-        self.plan = Some(plan);
         Ok(())
+    }
+
+    /// The view over the sphere of directions the camera gives `image`'s
+    /// pixels, where its projection is given: no one kernel in pixels
+    /// holds there.
+    fn sphere(&self, image: &Image) -> Result<Option<crate::view::View>> {
+        match self.config() {
+            Some(config) => config.camera.view(image.width, image.height),
+            None => Ok(None),
+        }
     }
 
     /// The plan for `image`'s size, taken out: the one held, or one built

@@ -200,20 +200,14 @@ fn held_share(
     // The fields are the pattern's energy per pixel (Parseval: each
     // wavelength's whole pattern holds its weight), so dividing by the
     // weights leaves each plane the share of the light the extent holds;
-    // the rest falls beyond it. Without a filter, each plane's sum is
-    // taken as it is divided, its chunks in cache.
-    let filtered = optics.orders.len() > 1;
-    let sums: Option<Vec<f64>> = (!filtered).then(|| {
-        result
-            .iter_mut()
-            .zip(weights_total)
-            .map(|(plane, total)| chunked_sum(plane, Some(*total)))
-            .collect()
-    });
-    if filtered {
-        for (plane, total) in result.iter_mut().zip(weights_total) {
-            plane.par_iter_mut().for_each(|v| *v /= total);
-        }
+    // the rest falls beyond it. Each plane's sum is taken as it is
+    // divided, its chunks in cache.
+    let mut sums: Vec<f64> = result
+        .iter_mut()
+        .zip(weights_total)
+        .map(|(plane, total)| chunked_sum(plane, Some(*total)))
+        .collect();
+    if optics.orders.len() > 1 {
         result = orders::through_filter(
             optics,
             spectrum,
@@ -231,15 +225,15 @@ fn held_share(
                 plane.par_iter_mut().for_each(|v| *v /= passed);
             }
         }
+        sums = result
+            .iter_mut()
+            .map(|plane| chunked_sum(plane, None))
+            .collect();
     }
     // The far field's asymptotic terms may add up to a hair more than the
     // pupil's light over a wide extent (2·10⁻⁴ for a vaned mirror over
     // 128 px): a kernel never makes light.
-    for (k, plane) in result.iter_mut().enumerate() {
-        let total = match &sums {
-            Some(sums) => sums[k],
-            None => chunked_sum(plane, None),
-        };
+    for (plane, total) in result.iter_mut().zip(sums) {
         if total > 1.0 {
             plane.par_iter_mut().for_each(|v| *v /= total);
         }

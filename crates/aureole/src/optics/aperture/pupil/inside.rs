@@ -67,16 +67,15 @@ impl Pupil {
                 let tolerance = 1e-9 * reach;
                 // Each point's distance left of each edge's line.
                 let left = |e: &Edge, p: &[f64; 2]| e.cross(*p) / e.length;
-                if edges
-                    .iter()
-                    .any(|e| points.iter().all(|p| left(e, p) <= -tolerance))
-                {
-                    return Side::Beyond;
+                let mut cut: Vec<&Edge> = Vec::new();
+                for e in edges {
+                    if points.iter().all(|p| left(e, p) <= -tolerance) {
+                        return Side::Beyond;
+                    }
+                    if !points.iter().all(|p| left(e, p) >= tolerance) {
+                        cut.push(e);
+                    }
                 }
-                let cut: Vec<&Edge> = edges
-                    .iter()
-                    .filter(|e| !points.iter().all(|p| left(e, p) >= tolerance))
-                    .collect();
                 if cut.is_empty() {
                     Side::Within
                 } else {
